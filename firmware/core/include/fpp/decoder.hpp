@@ -1,0 +1,82 @@
+#pragma once
+// Fringe decoding: camera frames in, projector coordinates per camera pixel out.
+// Batch (`decode`) and streaming (`StreamingDecoder`, frames pushed one at a
+// time as they arrive) give bit-identical results.
+//
+// Conventions: projector coordinates in projector pixels, pixel centres on
+// integers (spec/capture-set.md); intensities in camera DN; NaN where invalid.
+
+#include "fpp/capture_set.hpp"
+#include "fpp/image.hpp"
+#include "fpp/pattern_block.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace fpp {
+
+struct DecodeOptions {
+    // A pixel is valid only if the modulation B of every phase block it uses is
+    // at least this fraction of the frame's full scale (255 or 65535).
+    double min_modulation = 0.02;
+    // A sample at or above this fraction of full scale (255 or 65535) counts as
+    // saturated. 0.999 catches 255 in 8-bit frames and the MSB-aligned maxima
+    // of 10- and 12-bit sensors in 16-bit frames (65472, 65520).
+    double saturation = 0.999;
+    // Largest tolerated disagreement, in periods of the finer block, between
+    // a coarse cue and the fine phase before a pixel is flagged inconsistent.
+    double max_unwrap_disagreement = 0.35;
+    // Worker threads for per-pixel loops; 0 = all cores.
+    int threads = 0;
+
+    // Throws std::invalid_argument naming the field if a value is out of range.
+    void validate() const;
+};
+
+// Per-pixel flags in DecodeResult::mask.
+enum DecodeFlag : std::uint8_t {
+    kDecodeValid = 1 << 0,
+    kDecodeLowModulation = 1 << 1,
+    kDecodeSaturated = 1 << 2,
+    kDecodeUnwrapInconsistent = 1 << 3,
+    kDecodeNoCue = 1 << 4, // e.g. spatial unwrapping region without a centerline
+};
+
+struct DecodeResult {
+    Size camera;
+    Image<float> proj_x;     // empty if the sequence codes no x
+    Image<float> proj_y;     // empty if the sequence codes no y
+    Image<float> modulation; // B of the finest phase block (first coded axis), DN
+    Image<float> mean;       // A of the same block, DN
+    Image<std::uint8_t> mask; // DecodeFlag bits; kDecodeValid set where every coded axis is valid
+    std::string method_x;    // how x was unwrapped, e.g. "complementary-gray"
+    std::string method_y;
+};
+
+class StreamingDecoder {
+public:
+    StreamingDecoder(const Sequence& sequence, Size camera, Size projector,
+                     const DecodeOptions& options = {});
+    ~StreamingDecoder();
+    StreamingDecoder(StreamingDecoder&&) noexcept;
+    StreamingDecoder& operator=(StreamingDecoder&&) noexcept;
+
+    // Feeds the next frame in capture order. Throws std::invalid_argument on a
+    // frame of the wrong size, a bit depth differing from the first frame, or
+    // more frames than the sequence has.
+    void push(const Frame& frame);
+    int frames_received() const;
+    int frames_expected() const;
+    // Completes decoding; throws std::logic_error if frames are missing.
+    DecodeResult finish();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// Batch form: the whole capture set at once.
+DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options = {});
+
+} // namespace fpp

@@ -1,0 +1,70 @@
+#pragma once
+// A small owning image: contiguous rows, interleaved channels, no padding.
+// Pixel (x, y) has its centre at integer coordinates (x, y).
+
+#include <cassert>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace fpp {
+
+struct Size {
+    int width = 0;
+    int height = 0;
+    friend bool operator==(const Size&, const Size&) = default;
+    std::size_t area() const { return std::size_t(width) * std::size_t(height); }
+};
+
+template <class T> class Image {
+public:
+    Image() = default;
+    Image(int width, int height, int channels = 1, T fill = T{})
+        : width_(width), height_(height), channels_(channels),
+          data_(std::size_t(width) * std::size_t(height) * std::size_t(channels), fill) {}
+    Image(Size size, int channels = 1, T fill = T{})
+        : Image(size.width, size.height, channels, fill) {}
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    int channels() const { return channels_; }
+    Size size() const { return {width_, height_}; }
+    bool empty() const { return data_.empty(); }
+    std::size_t pixel_count() const { return std::size_t(width_) * std::size_t(height_); }
+
+    T* data() { return data_.data(); }
+    const T* data() const { return data_.data(); }
+    T* row(int y) { return data_.data() + std::size_t(y) * std::size_t(width_) * channels_; }
+    const T* row(int y) const {
+        return data_.data() + std::size_t(y) * std::size_t(width_) * channels_;
+    }
+    T& at(int x, int y, int c = 0) {
+        assert(x >= 0 && x < width_ && y >= 0 && y < height_ && c >= 0 && c < channels_);
+        return row(y)[std::size_t(x) * channels_ + c];
+    }
+    const T& at(int x, int y, int c = 0) const {
+        assert(x >= 0 && x < width_ && y >= 0 && y < height_ && c >= 0 && c < channels_);
+        return row(y)[std::size_t(x) * channels_ + c];
+    }
+    std::vector<T>& storage() { return data_; }
+    const std::vector<T>& storage() const { return data_; }
+
+private:
+    int width_ = 0;
+    int height_ = 0;
+    int channels_ = 1;
+    std::vector<T> data_;
+};
+
+// A camera frame as captured: 8-bit or 16-bit samples, single channel.
+// 8-bit frames are stored in u8, 16-bit in u16; exactly one is non-empty.
+struct Frame {
+    int bit_depth = 8; // 8 or 16 (container depth; a 12-bit sensor uses 16)
+    Image<std::uint8_t> u8;
+    Image<std::uint16_t> u16;
+
+    Size size() const { return bit_depth == 8 ? u8.size() : u16.size(); }
+    int max_value() const { return bit_depth == 8 ? 255 : 65535; }
+};
+
+} // namespace fpp

@@ -1,0 +1,47 @@
+#pragma once
+// Pinhole camera with skew and Brown-Conrady distortion (OpenCV's formula,
+// the paper's eq. 3), used for the camera and for the projector (an inverse
+// camera).
+//
+//   normalised:  (xn, yn) = (X/Z, Y/Z) in the device's own frame (mm)
+//   distorted:   r2 = xn^2 + yn^2
+//                xd = xn (1 + k1 r2 + k2 r2^2 + k3 r2^3 + k4 r2^4) + 2 p1 xn yn + p2 (r2 + 2 xn^2)
+//                     + s1 r2 + s2 r2^2
+//                yd = yn (1 + k1 r2 + k2 r2^2 + k3 r2^3 + k4 r2^4) + p1 (r2 + 2 yn^2) + 2 p2 xn yn
+//                     + s3 r2 + s4 r2^2
+//   pixel:       u = fu xd + skew yd + cu,  v = fv yd + cv   (pixel centres on integers)
+//
+// k4 (8th-order radial) and s1..s4 (thin prism) are not part of the calibrated
+// model (OpenCV's 5-coefficient model); the simulator uses them to create
+// distortion that a stereo calibration cannot absorb.
+
+#include <array>
+
+namespace fpp {
+
+using Vec2 = std::array<double, 2>;
+using Vec3 = std::array<double, 3>;
+using Mat3 = std::array<double, 9>; // row-major
+
+struct LensModel {
+    double fu = 1, fv = 1, cu = 0, cv = 0, skew = 0;
+    double k1 = 0, k2 = 0, k3 = 0, p1 = 0, p2 = 0;
+    double k4 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0; // outside the calibrated model
+
+    // Normalised undistorted -> normalised distorted.
+    Vec2 distort(Vec2 n) const;
+    // Inverse of distort, by Newton iterations to ~1e-12; returns false if it
+    // does not converge (far outside the lens's valid field).
+    bool undistort(Vec2 d, Vec2& n) const;
+    // Point in the device frame (mm, Z > 0) -> pixel.
+    Vec2 project(const Vec3& p) const;
+    // Pixel -> normalised undistorted coordinates (the ray is (x, y, 1)).
+    bool pixel_to_normalised(Vec2 pixel, Vec2& n) const;
+};
+
+// Rotation from Euler angles in degrees, R = Rz(c) * Ry(b) * Rx(a).
+Mat3 rotation_from_euler_deg(double a, double b, double c);
+Vec3 mul(const Mat3& m, const Vec3& v);
+Mat3 transpose(const Mat3& m);
+
+} // namespace fpp

@@ -1,0 +1,44 @@
+#pragma once
+// Test helpers: where test data lives, temporary folders.
+
+#include <filesystem>
+#include <string>
+
+namespace fpp::test {
+
+// The shared folder beside the checkout (env FPP_SHARED_DIR overrides).
+std::filesystem::path shared_dir();
+// shared_dir()/datasets/<name>; empty path if absent.
+std::filesystem::path dataset(const std::string& relative);
+// The source tree (for board/sim/*.yaml).
+std::filesystem::path source_dir();
+// True when running in CI (env CI=true): missing real data is then a failure.
+bool in_ci();
+
+// A fresh empty folder, removed with its contents on destruction.
+class TempDir {
+public:
+    TempDir();
+    ~TempDir();
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+    std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+private:
+    std::filesystem::path path_;
+};
+
+} // namespace fpp::test
+
+// Skips the test with a clear message when a real dataset is absent; in CI
+// (where ../shared is always present) its absence is a failure instead.
+#define FPP_REQUIRE_DATASET(path_expr)                                                       \
+    do {                                                                                     \
+        if (!std::filesystem::exists(path_expr)) {                                           \
+            if (::fpp::test::in_ci()) {                                                      \
+                FAIL() << "real dataset missing in CI: " << (path_expr);                     \
+            }                                                                                \
+            GTEST_SKIP() << "real dataset not found (set FPP_SHARED_DIR): " << (path_expr);  \
+        }                                                                                    \
+    } while (0)
