@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <string>
 #include <string_view>
 
 namespace fpp {
@@ -20,5 +21,22 @@ void write_file_atomically(const std::filesystem::path& target, std::string_view
 
 // fsync a file or directory by path (throws IoError on failure).
 void fsync_path(const std::filesystem::path& path);
+
+// Writes `bytes` straight to `path` (created or truncated) and fsyncs it, with
+// no temporary file: for files inside a folder that is published as a whole by
+// write_folder_atomically. Throws IoError.
+void write_file_synced(const std::filesystem::path& path, std::string_view bytes);
+
+// Folder counterpart of write_atomically: calls `write` with a fresh empty
+// temporary folder beside `target`, fsyncs it, then renames it to `target`,
+// which must not exist (IoError otherwise, also if it appears meanwhile). On
+// any exception the temporary folder and its contents are removed. `write`
+// must fsync the files it creates (write_file_synced and the *_synced image
+// writers do).
+void write_folder_atomically(const std::filesystem::path& target,
+                             const std::function<void(const std::filesystem::path& temp)>& write);
+
+// "what: strerror(err)", with a plain explanation added for a full disk.
+std::string describe_errno(const std::string& what, int err);
 
 } // namespace fpp

@@ -14,6 +14,9 @@
 // k4 (8th-order radial) and s1..s4 (thin prism) are not part of the calibrated
 // model (OpenCV's 5-coefficient model); the simulator uses them to create
 // distortion that a stereo calibration cannot absorb.
+//
+// Rotations: R = Rz(c) Ry(b) Rx(a) for Euler angles (a, b, c) in degrees, i.e.
+// rotate about x first, then y, then z (fixed axes). X_p = R X_c + t.
 
 #include <array>
 
@@ -22,6 +25,7 @@ namespace fpp {
 using Vec2 = std::array<double, 2>;
 using Vec3 = std::array<double, 3>;
 using Mat3 = std::array<double, 9>; // row-major
+using Mat2 = std::array<double, 4>; // row-major
 
 struct LensModel {
     double fu = 1, fv = 1, cu = 0, cv = 0, skew = 0;
@@ -30,6 +34,11 @@ struct LensModel {
 
     // Normalised undistorted -> normalised distorted.
     Vec2 distort(Vec2 n) const;
+    // d(distorted)/d(undistorted) at n, row-major [dxd/dxn, dxd/dyn, dyd/dxn, dyd/dyn].
+    Mat2 distortion_jacobian(Vec2 n) const;
+    // Normalised distorted <-> pixel (the linear part only).
+    Vec2 distorted_to_pixel(Vec2 d) const;
+    Vec2 pixel_to_distorted(Vec2 pixel) const;
     // Inverse of distort, by Newton iterations to ~1e-12; returns false if it
     // does not converge (far outside the lens's valid field).
     bool undistort(Vec2 d, Vec2& n) const;
@@ -43,5 +52,6 @@ struct LensModel {
 Mat3 rotation_from_euler_deg(double a, double b, double c);
 Vec3 mul(const Mat3& m, const Vec3& v);
 Mat3 transpose(const Mat3& m);
+Mat3 mul(const Mat3& a, const Mat3& b);
 
 } // namespace fpp

@@ -1,0 +1,27 @@
+#pragma once
+// Small helpers shared by the subcommands.
+
+#include "fpp/pattern_block.hpp"
+#include "fpp/image.hpp"
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+
+namespace fpp::calib {
+
+// A standard sequence name (fpp/sequences.hpp) or the path of a YAML file
+// holding a `sequence:` list.
+Sequence sequence_from_argument(const std::string& name_or_path, Size projector);
+
+class Stopwatch {
+public:
+    double seconds() const {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    }
+
+private:
+    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+} // namespace fpp::calib

@@ -1,0 +1,17 @@
+#pragma once
+// Subcommands of fpp-calib. Each registers itself on the app and returns the
+// action to run when it is the chosen subcommand.
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace fpp::calib {
+
+using Action = std::function<int()>;
+
+Action add_simulate_command(CLI::App& app);
+Action add_decode_command(CLI::App& app);
+Action add_demo_command(CLI::App& app);
+
+} // namespace fpp::calib

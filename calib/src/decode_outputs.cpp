@@ -1,0 +1,114 @@
+#include "decode_outputs.hpp"
+
+#include "fpp/decode_accuracy.hpp"
+#include "fpp/false_colour.hpp"
+#include "fpp/image_io.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+namespace fpp::calib {
+
+namespace {
+
+std::optional<double> finest_period(const Sequence& sequence, Axis axis) {
+    std::optional<double> best;
+    for (const auto& block : sequence)
+        if (const auto* phase = std::get_if<PhaseBlock>(&block); phase && phase->axis == axis)
+            best = best ? std::min(*best, phase->period) : phase->period;
+    return best;
+}
+
+// 1st and 99th percentiles of the finite values, for a preview's colour range.
+std::pair<float, float> robust_range(const Image<float>& values) {
+    std::vector<float> finite;
+    finite.reserve(values.pixel_count() / 16 + 1);
+    const auto& v = values.storage();
+    for (std::size_t i = 0; i < v.size(); i += 16)
+        if (std::isfinite(v[i])) finite.push_back(v[i]);
+    if (finite.empty()) return {0.0f, 1.0f};
+    std::sort(finite.begin(), finite.end());
+    return {finite[finite.size() / 100], finite[finite.size() * 99 / 100]};
+}
+
+std::string fixed(double v, int digits) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+    return buf;
+}
+
+} // namespace
+
+void write_decode_images(const std::filesystem::path& folder, const DecodeResult& result,
+                         const CaptureManifest& manifest) {
+    std::filesystem::create_directories(folder);
+    if (!result.proj_x.empty()) {
+        write_tiff(folder / "proj_x.tiff", result.proj_x);
+        write_png(folder / "proj_x.png",
+                  false_colour(result.proj_x, 0.0f, float(manifest.projector.width - 1)));
+    }
+    if (!result.proj_y.empty()) {
+        write_tiff(folder / "proj_y.tiff", result.proj_y);
+        write_png(folder / "proj_y.png",
+                  false_colour(result.proj_y, 0.0f, float(manifest.projector.height - 1)));
+    }
+    write_tiff(folder / "modulation.tiff", result.modulation);
+    const auto [lo, hi] = robust_range(result.modulation);
+    write_png(folder / "modulation.png", false_colour(result.modulation, 0.0f, std::max(hi, lo + 1.0f)));
+
+    Image<std::uint8_t> mask(result.camera, 1, 0);
+    for (std::size_t i = 0; i < mask.pixel_count(); ++i)
+        mask.data()[i] = (result.mask.data()[i] & kDecodeValid) ? 255 : 0;
+    write_png(folder / "mask.png", mask);
+    write_png(folder / "flags.png", result.mask);
+}
+
+std::string decode_summary(const DecodeResult& result, const CaptureSet& capture,
+                           double decode_seconds) {
+    const auto& m = capture.manifest;
+    std::ostringstream md;
+    md << "# Decode of " << capture.folder.filename().string() << "\n\n";
+    md << "- camera " << m.camera.width << " x " << m.camera.height << ", projector "
+       << m.projector.width << " x " << m.projector.height << ", " << m.frames.size()
+       << " frames, " << (capture.frames.empty() ? 0 : capture.frames.front().bit_depth)
+       << "-bit\n";
+    std::size_t valid = 0;
+    for (std::size_t i = 0; i < result.mask.pixel_count(); ++i)
+        valid += (result.mask.data()[i] & kDecodeValid) != 0;
+    md << "- decoded pixels: " << valid << " of " << result.mask.pixel_count() << " ("
+       << fixed(100.0 * double(valid) / double(result.mask.pixel_count()), 2) << " %)\n";
+    md << "- decode time: " << fixed(decode_seconds * 1000.0, 1) << " ms\n";
+    if (!result.method_x.empty()) md << "- x unwrapped by: " << result.method_x << "\n";
+    if (!result.method_y.empty()) md << "- y unwrapped by: " << result.method_y << "\n";
+
+    if (!m.truth) {
+        md << "\nNo ground truth in this capture set: no error figures.\n";
+        return md.str();
+    }
+    const Image<float> truth = read_tiff_float(capture.folder / m.truth->projector);
+    md << "\n## Error against ground truth (projector pixels)\n\n";
+    md << "Error = decoded minus true projector coordinate of the surface point seen by the "
+          "pixel centre. Unwrapping errors are pixels off by more than half the finest "
+          "period; RMS, mean and percentiles exclude them.\n\n";
+    md << "| axis | period | coverage | RMS | mean abs | p99 abs | max abs | unwrapping errors "
+          "| decoded without light |\n";
+    md << "|---|---|---|---|---|---|---|---|---|\n";
+    for (int axis = 0; axis < 2; ++axis) {
+        const Image<float>& decoded = axis == 0 ? result.proj_x : result.proj_y;
+        const auto period = finest_period(m.sequence, axis == 0 ? Axis::x : Axis::y);
+        if (decoded.empty() || !period) continue;
+        const AxisAccuracy a = compare_to_truth(decoded, truth, axis, *period);
+        md << "| " << (axis == 0 ? "x" : "y") << " | " << fixed(*period, 2) << " | "
+           << fixed(100.0 * a.coverage(), 2) << " % | " << fixed(a.rms_px, 4) << " | "
+           << fixed(a.mean_abs_px, 4) << " | " << fixed(a.p99_abs_px, 4) << " | "
+           << fixed(a.max_abs_px, 4) << " | " << a.unwrap_errors << " ("
+           << fixed(100.0 * a.unwrap_error_rate(), 4) << " %) | " << a.false_valid << " |\n";
+    }
+    return md.str();
+}
+
+} // namespace fpp::calib

@@ -1,0 +1,44 @@
+// fpp-calib: the host tool of the fpp scanner (simulation, decoding; later
+// calibration and reconstruction).
+
+#include "commands.hpp"
+
+#include "fpp/error.hpp"
+
+#include <iostream>
+#include <map>
+
+int main(int argc, char** argv) {
+    CLI::App app{"fpp-calib: host tool of the fpp fringe-projection scanner"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "fpp-calib 0.1.0");
+
+    std::map<CLI::App*, fpp::calib::Action> actions;
+    auto add = [&](fpp::calib::Action (*adder)(CLI::App&)) {
+        const auto before = app.get_subcommands({});
+        auto action = adder(app);
+        for (auto* sub : app.get_subcommands({}))
+            if (std::find(before.begin(), before.end(), sub) == before.end())
+                actions[sub] = std::move(action);
+    };
+    add(fpp::calib::add_simulate_command);
+    add(fpp::calib::add_decode_command);
+    add(fpp::calib::add_demo_command);
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+
+    try {
+        for (auto* sub : app.get_subcommands()) return actions.at(sub)();
+    } catch (const fpp::InputError& e) {
+        std::cerr << "fpp-calib: error: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "fpp-calib: error: " << e.what() << "\n";
+        return 1;
+    }
+    return 1;
+}

@@ -1,0 +1,216 @@
+// Decoding speed at the paper's camera resolution (1600x1200), against two
+// baselines measured in the same run:
+//   - a plain copy of the same input bytes (memory bandwidth), and
+//   - OpenCV's structured_light PSP wrapped phase on the same 3-step frames.
+// Prints the ratios at the end. Targets: fpp's 3-step wrapped phase at least
+// 10x faster than OpenCV's PSP; full decode within 2x of the copy.
+
+#include "fpp/decoder.hpp"
+#include "fpp/patterns.hpp"
+#include "fpp/sim/renderer.hpp"
+#include "fpp/sim/rig.hpp"
+#include "fpp/sim/scene.hpp"
+
+#include <benchmark/benchmark.h>
+#include <opencv2/core.hpp>
+#include <opencv2/structured_light.hpp>
+
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+// 8-step phase (period 20) + complementary Gray code (6 bits + 1), x axis.
+fpp::Sequence full_sequence() {
+    fpp::PhaseBlock phase;
+    phase.axis = fpp::Axis::x;
+    phase.period = 20.0;
+    phase.steps = 8;
+    fpp::GrayBlock gray;
+    gray.axis = fpp::Axis::x;
+    gray.period = 20.0;
+    gray.bits = 6;
+    gray.complementary = true;
+    return {phase, gray};
+}
+
+// One period across the projector: decodes without unwrapping, so the work is
+// the wrapped phase (plus its conversion to projector pixels), as OpenCV's PSP.
+fpp::Sequence three_step_sequence() {
+    fpp::PhaseBlock phase;
+    phase.axis = fpp::Axis::x;
+    phase.period = 1280.0;
+    phase.steps = 3;
+    return {phase};
+}
+
+struct Fixture {
+    fpp::CaptureSet full;
+    fpp::CaptureSet three;
+    std::size_t full_bytes = 0;
+
+    static const Fixture& get() {
+        static const Fixture f;
+        return f;
+    }
+
+private:
+    static fpp::CaptureSet make(const fpp::Sequence& sequence) {
+        const fpp::sim::Rig rig = fpp::sim::Rig::paper();
+        const fpp::sim::SimulatedCapture sim =
+            fpp::sim::simulate(rig, fpp::sim::named_scene("plane"), sequence, 1);
+        fpp::CaptureSet set;
+        set.manifest = sim.manifest;
+        set.frames = sim.frames;
+        return set;
+    }
+    Fixture() : full(make(full_sequence())), three(make(three_step_sequence())) {
+        for (const auto& f : full.frames) full_bytes += f.u8.pixel_count();
+    }
+};
+
+void BM_CopyInput(benchmark::State& state) {
+    const auto& fx = Fixture::get();
+    std::vector<std::uint8_t> dst(fx.full_bytes);
+    for (auto _ : state) {
+        std::size_t offset = 0;
+        for (const auto& f : fx.full.frames) {
+            std::memcpy(dst.data() + offset, f.u8.data(), f.u8.pixel_count());
+            offset += f.u8.pixel_count();
+        }
+        benchmark::DoNotOptimize(dst.data());
+        benchmark::ClobberMemory();
+    }
+    state.SetBytesProcessed(std::int64_t(state.iterations()) * std::int64_t(fx.full_bytes));
+}
+
+void BM_DecodeBatch(benchmark::State& state) {
+    const auto& fx = Fixture::get();
+    for (auto _ : state) {
+        auto result = fpp::decode(fx.full);
+        benchmark::DoNotOptimize(result.proj_x.data());
+    }
+    state.SetBytesProcessed(std::int64_t(state.iterations()) * std::int64_t(fx.full_bytes));
+}
+
+void BM_StreamingPushPerFrame(benchmark::State& state) {
+    const auto& fx = Fixture::get();
+    const auto& m = fx.full.manifest;
+    const int frames = int(fx.full.frames.size());
+    for (auto _ : state) {
+        state.PauseTiming();
+        fpp::StreamingDecoder decoder(m.sequence, m.camera, m.projector);
+        state.ResumeTiming();
+        for (const auto& f : fx.full.frames) decoder.push(f);
+        state.PauseTiming();
+        auto result = decoder.finish();
+        benchmark::DoNotOptimize(result.proj_x.data());
+        state.ResumeTiming();
+    }
+    // Report the time of one push.
+    state.counters["frames"] = frames;
+    state.SetItemsProcessed(std::int64_t(state.iterations()) * frames);
+}
+
+void BM_StreamingFinish(benchmark::State& state) {
+    const auto& fx = Fixture::get();
+    const auto& m = fx.full.manifest;
+    for (auto _ : state) {
+        state.PauseTiming();
+        fpp::StreamingDecoder decoder(m.sequence, m.camera, m.projector);
+        for (const auto& f : fx.full.frames) decoder.push(f);
+        state.ResumeTiming();
+        auto result = decoder.finish();
+        benchmark::DoNotOptimize(result.proj_x.data());
+    }
+}
+
+void BM_Fpp3StepWrappedPhase(benchmark::State& state) {
+    const auto& fx = Fixture::get();
+    for (auto _ : state) {
+        auto result = fpp::decode(fx.three);
+        benchmark::DoNotOptimize(result.proj_x.data());
+    }
+}
+
+void BM_OpenCV3StepPSP(benchmark::State& state) {
+    const auto& fx = Fixture::get();
+    const auto& m = fx.three.manifest;
+    auto params = cv::makePtr<cv::structured_light::SinusoidalPattern::Params>();
+    params->width = m.projector.width;
+    params->height = m.projector.height;
+    params->nbrOfPeriods = 1;
+    params->shiftValue = static_cast<float>(2 * CV_PI / 3);
+    params->methodId = cv::structured_light::PSP;
+    params->horizontal = false;
+    params->setMarkers = false;
+    auto psp = cv::structured_light::SinusoidalPattern::create(params);
+    std::vector<cv::Mat> frames;
+    for (const auto& f : fx.three.frames)
+        frames.emplace_back(f.u8.height(), f.u8.width(), CV_8UC1,
+                            const_cast<std::uint8_t*>(f.u8.data()));
+    cv::Mat wrapped, shadow;
+    for (auto _ : state) {
+        psp->computePhaseMap(frames, wrapped, shadow);
+        benchmark::DoNotOptimize(wrapped.data);
+    }
+}
+
+BENCHMARK(BM_CopyInput)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DecodeBatch)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamingPushPerFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamingFinish)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Fpp3StepWrappedPhase)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_OpenCV3StepPSP)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Keeps each benchmark's real time per iteration for the ratio summary.
+class RatioReporter : public benchmark::ConsoleReporter {
+public:
+    void ReportRuns(const std::vector<Run>& runs) override {
+        for (const auto& run : runs)
+            if (run.run_type == Run::RT_Iteration && run.iterations > 0)
+                seconds_[run.run_name.function_name] =
+                    run.real_accumulated_time / double(run.iterations);
+        ConsoleReporter::ReportRuns(runs);
+    }
+    double get(const std::string& name) const {
+        auto it = seconds_.find(name);
+        return it == seconds_.end() ? 0.0 : it->second;
+    }
+
+private:
+    std::map<std::string, double> seconds_;
+};
+
+} // namespace
+
+int main(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    RatioReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    benchmark::Shutdown();
+
+    const double copy = reporter.get("BM_CopyInput");
+    const double batch = reporter.get("BM_DecodeBatch");
+    const double pushes = reporter.get("BM_StreamingPushPerFrame");
+    const double finish = reporter.get("BM_StreamingFinish");
+    const double fpp3 = reporter.get("BM_Fpp3StepWrappedPhase");
+    const double cv3 = reporter.get("BM_OpenCV3StepPSP");
+    const int frames = int(Fixture::get().full.frames.size());
+    std::printf("\nsummary (1600x1200, 8-step phase + complementary Gray, %d frames, 8-bit)\n",
+                frames);
+    if (copy > 0 && batch > 0)
+        std::printf("  full decode / copy of input : %.2f (target <= 2)  [%.2f ms vs %.2f ms]\n",
+                    batch / copy, batch * 1e3, copy * 1e3);
+    if (pushes > 0)
+        std::printf("  streaming push per frame    : %.2f ms; finish %.2f ms\n",
+                    pushes * 1e3 / frames, finish * 1e3);
+    if (fpp3 > 0 && cv3 > 0)
+        std::printf("  OpenCV PSP / fpp, 3-step    : %.1fx (target >= 10)  [%.2f ms vs %.2f ms]\n",
+                    cv3 / fpp3, cv3 * 1e3, fpp3 * 1e3);
+    return 0;
+}

@@ -1,0 +1,149 @@
+// fpp-calib simulate and decode, run as a person would: exit codes, files
+// written, and nothing written on bad input.
+
+#include "test_support.hpp"
+
+#include "fpp/decode_accuracy.hpp"
+#include "fpp/image_io.hpp"
+#include "fpp/sim/rig.hpp"
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+using fpp::test::TempDir;
+namespace fs = std::filesystem;
+
+struct ToolRun {
+    int exit_code = -1;
+    std::string output; // stdout and stderr
+};
+
+std::string quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+ToolRun run_calib(const std::string& args, const TempDir& scratch) {
+    const fs::path log = scratch / "tool.log";
+    const std::string cmd = quote(FPP_CALIB_EXE) + " " + args + " > " + quote(log.string()) + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    ToolRun run;
+    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(log);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    run.output = ss.str();
+    return run;
+}
+
+// The paper rig with the camera shrunk 4x (same field of view) so that a
+// whole simulate-and-decode round trip takes a fraction of a second.
+fs::path write_small_rig(const TempDir& dir) {
+    fpp::sim::Rig rig = fpp::sim::Rig::paper();
+    rig.name = "paper-quarter";
+    rig.camera_size = {400, 300};
+    rig.camera.fu /= 4;
+    rig.camera.fv /= 4;
+    rig.camera.skew /= 4;
+    rig.camera.cu = (rig.camera.cu + 0.5) / 4 - 0.5;
+    rig.camera.cv = (rig.camera.cv + 0.5) / 4 - 0.5;
+    const fs::path path = dir / "rig.yaml";
+    std::ofstream(path) << fpp::sim::rig_to_yaml(rig);
+    return path;
+}
+
+TEST(CliDecode, SimulatedPlaneDecodesToGroundTruth) {
+    TempDir dir;
+    const fs::path rig = write_small_rig(dir);
+    const fs::path capture = dir / "capture";
+    const fs::path out = dir / "decoded";
+    auto sim = run_calib("simulate --rig " + quote(rig.string()) +
+                             " --scene plane --sequence gray-xy --out " + quote(capture.string()),
+                         dir);
+    ASSERT_EQ(sim.exit_code, 0) << sim.output;
+    auto dec = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
+    ASSERT_EQ(dec.exit_code, 0) << dec.output;
+
+    for (const char* name : {"proj_x.tiff", "proj_y.tiff", "modulation.tiff", "mask.png",
+                             "flags.png", "proj_x.png", "proj_y.png", "modulation.png", "decode.md"})
+        EXPECT_TRUE(fs::exists(out / name)) << name;
+
+    const auto truth = fpp::read_tiff_float(capture / "truth_proj.tiff");
+    const auto px = fpp::read_tiff_float(out / "proj_x.tiff");
+    const auto py = fpp::read_tiff_float(out / "proj_y.tiff");
+    ASSERT_EQ(px.size(), (fpp::Size{400, 300}));
+    const auto ax = fpp::compare_to_truth(px, truth, 0, 20.0);
+    const auto ay = fpp::compare_to_truth(py, truth, 1, 20.0);
+    EXPECT_EQ(ax.unwrap_errors, 0u);
+    EXPECT_EQ(ay.unwrap_errors, 0u);
+    EXPECT_LT(ax.rms_px, 0.02);
+    EXPECT_LT(ay.rms_px, 0.02);
+    EXPECT_GT(ax.coverage(), 0.98);
+    EXPECT_NE(dec.output.find("Error against ground truth"), std::string::npos) << dec.output;
+}
+
+TEST(CliDecode, MalformedManifestExitsNonZeroAndWritesNothing) {
+    TempDir dir;
+    const fs::path capture = dir / "bad";
+    fs::create_directories(capture);
+    std::ofstream(capture / "capture.yaml") << "format: fpp-capture/1\n"
+                                               "camera: {width: 4, height: 4}\n"
+                                               "projector: {width: 8, height: 8}\n"
+                                               "frames: [a.png, b.png, c.png]\n"
+                                               "sequence:\n"
+                                               "  - {pattern: phase, axis: x, period: -2.0, steps: 3}\n";
+    const fs::path out = dir / "out";
+    auto run = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_NE(run.output.find("capture.yaml"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("period"), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CliDecode, MissingFrameNamesTheFrame) {
+    TempDir dir;
+    const fs::path rig = write_small_rig(dir);
+    const fs::path capture = dir / "capture";
+    ASSERT_EQ(run_calib("simulate --rig " + quote(rig.string()) +
+                            " --scene plane --sequence gray-x --out " + quote(capture.string()),
+                        dir)
+                  .exit_code,
+              0);
+    fs::remove(capture / "005.png");
+    const fs::path out = dir / "out";
+    auto run = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_NE(run.output.find("005.png"), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CliSimulate, RefusesToOverwriteACaptureSet) {
+    TempDir dir;
+    const fs::path rig = write_small_rig(dir);
+    const fs::path capture = dir / "capture";
+    fs::create_directories(capture);
+    auto run = run_calib("simulate --rig " + quote(rig.string()) + " --out " + quote(capture.string()),
+                         dir);
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_NE(run.output.find("already exists"), std::string::npos) << run.output;
+    EXPECT_TRUE(fs::is_empty(capture));
+}
+
+TEST(CliSimulate, UnknownSceneIsAnError) {
+    TempDir dir;
+    auto run = run_calib("simulate --scene no-such-scene --out " + quote((dir / "c").string()), dir);
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_NE(run.output.find("no-such-scene"), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(dir / "c"));
+}
+
+} // namespace
