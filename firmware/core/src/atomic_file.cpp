@@ -54,12 +54,20 @@ std::string unique_suffix() {
     return std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
 }
 
+// ".<name><tag><unique>": hidden, and recognisably tied to its target.
+std::string hidden_name(const fs::path& target, const char* tag) {
+    std::string name(".");
+    name += target.filename().string();
+    name += tag;
+    name += unique_suffix();
+    return name;
+}
+
 // Creates an empty temporary file beside `target` and returns its path.
 fs::path create_temp_beside(const fs::path& target) {
     const fs::path folder = folder_of(target);
     for (int attempt = 0; attempt < 100; ++attempt) {
-        fs::path temp =
-            folder / ("." + target.filename().string() + ".tmp-" + unique_suffix());
+        fs::path temp = folder / hidden_name(target, ".tmp-");
         const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd >= 0) {
             UniqueFd owner(fd);
@@ -159,8 +167,7 @@ void write_folder_atomically(const std::filesystem::path& target,
     const fs::path parent = folder_of(target);
     fs::path temp;
     for (int attempt = 0; attempt < 100 && temp.empty(); ++attempt) {
-        fs::path candidate =
-            parent / ("." + target.filename().string() + ".partial-" + unique_suffix());
+        fs::path candidate = parent / hidden_name(target, ".partial-");
         if (::mkdir(candidate.c_str(), 0777) == 0) {
             temp = candidate;
         } else if (errno != EEXIST) {

@@ -39,7 +39,8 @@ Vec2 LensModel::pixel_to_distorted(Vec2 pixel) const {
 }
 
 bool LensModel::undistort(Vec2 d, Vec2& n) const {
-    if (!std::isfinite(d[0]) || !std::isfinite(d[1])) return false;
+    if (!std::isfinite(d[0]) || !std::isfinite(d[1]))
+        return false;
     // Newton on F(x) = distort(x) - d from x = d, with step halving whenever a
     // full step does not reduce the residual (strong higher-order terms such
     // as k3 = 5 can overshoot near the field edge).
@@ -47,11 +48,11 @@ bool LensModel::undistort(Vec2 d, Vec2& n) const {
     auto residual = [&](const Vec2& at, Vec2& f) {
         const Vec2 dd = distort(at);
         f = {dd[0] - d[0], dd[1] - d[1]};
-        return std::hypot(f[0], f[1]);
+        return std::sqrt(f[0] * f[0] + f[1] * f[1]);
     };
     Vec2 f{};
     double res = residual(x, f);
-    const double scale = 1 + std::hypot(d[0], d[1]);
+    const double scale = 1 + std::sqrt(d[0] * d[0] + d[1] * d[1]);
     bool converged = false;
     for (int iter = 0; iter < 60 && !converged; ++iter) {
         if (res <= 1e-15 * scale) {
@@ -60,7 +61,8 @@ bool LensModel::undistort(Vec2 d, Vec2& n) const {
         }
         const Mat2 J = distortion_jacobian(x);
         const double det = J[0] * J[3] - J[1] * J[2];
-        if (!(std::fabs(det) > 1e-12)) return false;
+        if (!(std::fabs(det) > 1e-12))
+            return false;
         const Vec2 step{(J[3] * f[0] - J[1] * f[1]) / det, (-J[2] * f[0] + J[0] * f[1]) / det};
         double lambda = 1;
         Vec2 trial{};
@@ -70,10 +72,11 @@ bool LensModel::undistort(Vec2 d, Vec2& n) const {
         for (;; ++halvings) {
             trial = {x[0] - lambda * step[0], x[1] - lambda * step[1]};
             res_trial = residual(trial, ftrial);
-            if (res_trial < res || halvings >= 40) break;
+            if (res_trial < res || halvings >= 40)
+                break;
             lambda *= 0.5;
         }
-        const double step_norm = lambda * std::hypot(step[0], step[1]);
+        const double step_norm = lambda * std::sqrt(step[0] * step[0] + step[1] * step[1]);
         if (!(res_trial < res)) {
             // No decrease possible: we are at the rounding floor (or stuck).
             converged = res <= 1e-12 * scale;
@@ -82,15 +85,20 @@ bool LensModel::undistort(Vec2 d, Vec2& n) const {
         x = trial;
         f = ftrial;
         res = res_trial;
-        if (step_norm <= 1e-16 * (1 + std::hypot(x[0], x[1]))) converged = res <= 1e-12 * scale;
-        if (!(std::hypot(x[0], x[1]) < 1e6)) return false;
+        if (step_norm <= 1e-16 * (1 + std::sqrt(x[0] * x[0] + x[1] * x[1])))
+            converged = res <= 1e-12 * scale;
+        if (!(std::sqrt(x[0] * x[0] + x[1] * x[1]) < 1e6))
+            return false;
     }
-    if (!converged && res <= 1e-12 * scale) converged = true;
-    if (!converged) return false;
+    if (!converged && res <= 1e-12 * scale)
+        converged = true;
+    if (!converged)
+        return false;
     // Reject solutions in a folded part of the distortion (far outside the
     // field): there the mapping is not one-to-one and the root is not the ray.
     const Mat2 J = distortion_jacobian(x);
-    if (!(J[0] * J[3] - J[1] * J[2] > 0) || !(J[0] > 0) || !(J[3] > 0)) return false;
+    if (!(J[0] * J[3] - J[1] * J[2] > 0) || !(J[0] > 0) || !(J[3] > 0))
+        return false;
     n = x;
     return true;
 }
@@ -120,7 +128,9 @@ Vec3 mul(const Mat3& m, const Vec3& v) {
             m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
 }
 
-Mat3 transpose(const Mat3& m) { return {m[0], m[3], m[6], m[1], m[4], m[7], m[2], m[5], m[8]}; }
+Mat3 transpose(const Mat3& m) {
+    return {m[0], m[3], m[6], m[1], m[4], m[7], m[2], m[5], m[8]};
+}
 
 Mat3 mul(const Mat3& a, const Mat3& b) {
     Mat3 r{};

@@ -5,6 +5,21 @@
 //
 // Conventions: projector coordinates in projector pixels, pixel centres on
 // integers (spec/capture-set.md); intensities in camera DN; NaN where invalid.
+//
+// The unwrapping method of each axis follows from the sequence:
+//   phase + gray block of the same period  -> "gray" / "complementary-gray"
+//                                             ("inverse-" prefix with inverse frames)
+//   several phase blocks, coarsest covers the projector extent -> "multi-period"
+//   several phase blocks otherwise (2 or 3, beat covers the extent) -> "heterodyne"
+//   one phase block covering the extent    -> "direct"
+//   one phase block + centerline           -> "centerline" (spatial unwrapping made
+//                                             absolute by the centerline pixels)
+// Gray planes are thresholded against (white + black) / 2 when the sequence has
+// both, against their inverse frames when present, else against the mean A of
+// the phase block they index. A sequence that cannot be decoded (no phase
+// block, a phase block without a usable cue, a gray block without a phase
+// block of its period, ...) makes the constructor / decode() throw
+// std::invalid_argument.
 
 #include "fpp/capture_set.hpp"
 #include "fpp/image.hpp"
@@ -58,17 +73,23 @@ class StreamingDecoder {
 public:
     StreamingDecoder(const Sequence& sequence, Size camera, Size projector,
                      const DecodeOptions& options = {});
+    // Same, reusing the image memory of a previous result (scan after scan:
+    // no page faults or zero-filling of fresh images).
+    StreamingDecoder(const Sequence& sequence, Size camera, Size projector,
+                     const DecodeOptions& options, DecodeResult&& recycled);
     ~StreamingDecoder();
     StreamingDecoder(StreamingDecoder&&) noexcept;
     StreamingDecoder& operator=(StreamingDecoder&&) noexcept;
 
     // Feeds the next frame in capture order. Throws std::invalid_argument on a
     // frame of the wrong size, a bit depth differing from the first frame, or
-    // more frames than the sequence has.
+    // more frames than the sequence has. The frame is not referenced after
+    // push() returns (frames needed later are copied).
     void push(const Frame& frame);
     int frames_received() const;
     int frames_expected() const;
-    // Completes decoding; throws std::logic_error if frames are missing.
+    // Completes decoding; throws std::logic_error if frames are missing or
+    // if called twice. The decoder is spent afterwards.
     DecodeResult finish();
 
 private:
@@ -78,5 +99,8 @@ private:
 
 // Batch form: the whole capture set at once.
 DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options = {});
+// Same, writing into `result` and reusing its images' memory when their size
+// fits (bit-identical output to the form above).
+void decode(const CaptureSet& capture, DecodeResult& result, const DecodeOptions& options = {});
 
 } // namespace fpp

@@ -16,13 +16,14 @@
 namespace fpp::sim {
 
 struct SensorModel {
-    int bit_depth = 8;                   // 8, 10, 12 or 16 significant bits; >8 written MSB-aligned in 16-bit PNG
-    double white_level = 200.0;          // DN (at bit_depth) for albedo 1 facing the projector at reference distance, pattern full on
-    double ambient = 0.0;                // DN of ambient light on albedo 1 (also in projector shadows)
-    double read_noise_dn = 0.0;          // Gaussian sigma, DN
-    double gain_e_per_dn = 0.0;          // shot noise: electrons per DN; 0 = off
-    double defocus_sigma_px = 0.0;       // camera blur, Gaussian sigma in camera pixels
-    double reference_distance_mm = 0.0;  // inverse-square falloff from the projector; 0 = off
+    int bit_depth = 8; // 8, 10, 12 or 16 significant bits; >8 written MSB-aligned in 16-bit PNG
+    double white_level = 200.0; // DN (at bit_depth) for albedo 1 facing the projector at reference
+                                // distance, pattern full on
+    double ambient = 0.0;       // DN of ambient light on albedo 1 (also in projector shadows)
+    double read_noise_dn = 0.0; // Gaussian sigma, DN
+    double gain_e_per_dn = 0.0; // shot noise: electrons per DN; 0 = off
+    double defocus_sigma_px = 0.0;      // camera blur, Gaussian sigma in camera pixels
+    double reference_distance_mm = 0.0; // inverse-square falloff from the projector; 0 = off
 };
 
 struct ProjectorOptics {
@@ -47,12 +48,23 @@ struct Rig {
     Vec3 projector_centre_in_camera() const; // -R^T t
     // Same geometry, all effects outside the stereo model off, no noise.
     Rig without_effects() const;
+    // The camera with `factor` x `factor` pixel binning (smaller images with
+    // the same field of view and distortion; fast tests). Pixel centres on
+    // integers: c' = (c + 0.5) / factor - 0.5.
+    Rig binned_camera(int factor) const;
+    // Full-scale DN at the sensor's bit depth (2^bit_depth - 1).
+    double full_scale_dn() const;
+    // Throws InputError(origin, field, ...) if a value is out of range.
+    void validate(const std::filesystem::path& origin = "rig") const;
 };
 
-// YAML rig files under board/sim/. Throws InputError naming file and field.
+// YAML rig files under board/sim/ (schema: the comment at the top of
+// board/sim/paper-rig.yaml). Throws InputError naming file and field.
 Rig load_rig(const std::filesystem::path& path);
 std::string rig_to_yaml(const Rig& rig);
 // board/sim/paper-rig.yaml in the source tree.
 std::filesystem::path default_rig_path();
+// board/sim/paper-rig-effects.yaml in the source tree.
+std::filesystem::path effects_rig_path();
 
 } // namespace fpp::sim

@@ -1,0 +1,483 @@
+#include "decode_engine.hpp"
+
+#include "decode_kernels.hpp"
+#include "unwrap_spatial.hpp"
+#include "unwrap_temporal.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+namespace fpp::detail {
+
+namespace {
+
+constexpr std::size_t kAlign = 64;
+constexpr int kMaxBlocksPerAxis = 16;
+
+std::uint8_t axis_bit(int axis) { return static_cast<std::uint8_t>(1u << axis); }
+
+} // namespace
+
+namespace {
+AxisConstants axis_constants(const Plan& plan, int a) {
+    AxisConstants c;
+    const AxisPlan& ap = plan.axes[a];
+    if (!ap.coded) return c;
+    if (ap.method == UnwrapMethod::gray) {
+        const GrayInfo& g = plan.grays[static_cast<std::size_t>(ap.gray)];
+        const double period = g.block.period;
+        const double unit = g.block.complementary ? period / 2.0 : period;
+        c.gray.period = static_cast<float>(period);
+        c.gray.unit = static_cast<float>(unit);
+        c.gray.complementary = g.block.complementary;
+        c.gray.max_code = static_cast<std::uint32_t>(std::floor((ap.extent - 1.0) / unit));
+        // Code errors only happen where the camera pixel straddles a code edge
+        // (blur and noise of about a projector pixel).
+        c.gray.edge_band = static_cast<float>(std::min(period / 4.0, std::max(1.5, period / 8.0)));
+        c.repair.period = static_cast<float>(period);
+        c.repair.tolerance = static_cast<float>(period / 8.0);
+        c.repair.max_slope = static_cast<float>(period / 4.0);
+    }
+    if (ap.method == UnwrapMethod::centerline) {
+        const CenterlineInfo& cl = plan.centerlines[static_cast<std::size_t>(ap.centerline)];
+        c.centerline.period =
+            static_cast<float>(plan.phases[static_cast<std::size_t>(ap.phases[0])].block.period);
+        c.centerline.position = cl.block.position;
+        c.centerline.half_width = cl.block.width / 2.0;
+        c.centerline.sat_bit = axis_bit(a);
+    }
+    if (ap.method == UnwrapMethod::heterodyne) {
+        for (const auto& level : ap.levels) {
+            HeterodyneStep s;
+            s.period = static_cast<float>(level.period);
+            for (int j = 0; j < 3; ++j) s.coef[j] = static_cast<float>(level.coef[j]);
+            s.single = level.single;
+            c.heterodyne.push_back(s);
+        }
+    }
+    return c;
+}
+} // namespace
+
+DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
+                           DecodeResult* recycled)
+    : plan_(std::move(plan)), options_(options), mode_(mode), pool_(options.threads) {
+    width_ = plan_.camera.width;
+    height_ = plan_.camera.height;
+    full_ = mode_ == Mode::streaming || plan_.needs_full_storage;
+    const std::size_t area = plan_.camera.area();
+    for (int a = 0; a < 2; ++a) constants_[a] = axis_constants(plan_, a);
+    single_decider_ = (plan_.axes[0].coded != plan_.axes[1].coded) && !plan_.needs_full_storage;
+
+    for (int a = 0; a < 2; ++a)
+        if (plan_.axes[a].phases.size() > static_cast<std::size_t>(kMaxBlocksPerAxis))
+            throw std::invalid_argument("cannot decode sequence: more than 16 phase blocks on axis " +
+                                        std::string(a == 0 ? "x" : "y"));
+
+    allocate_result(recycled);
+    const int report_axis = plan_.axes[0].coded ? 0 : 1;
+    const int report = plan_.axes[report_axis].report_phase;
+
+    phase_state_.resize(plan_.phases.size());
+    for (std::size_t b = 0; b < plan_.phases.size(); ++b) {
+        if (!plan_.phases[b].used) continue;
+        PhaseState& ps = phase_state_[b];
+        ps.fraction = make_plane(float_store_, full_);
+        if (static_cast<int>(b) == report) {
+            ps.modulation.full = result_.modulation.data();
+            ps.mean.full = result_.mean.data();
+        } else {
+            ps.modulation = make_plane(float_store_, full_);
+            ps.mean = make_plane(float_store_, full_);
+        }
+        if (plan_.phases[b].thresholds) ps.threshold = make_plane(u16_store_, full_);
+    }
+    code_.resize(plan_.grays.size());
+    for (std::size_t g = 0; g < plan_.grays.size(); ++g) code_[g] = make_plane(u16_store_, full_);
+    line_.resize(plan_.centerlines.size());
+    for (std::size_t c = 0; c < plan_.centerlines.size(); ++c)
+        if (plan_.centerlines[c].phase >= 0) line_[c] = make_plane(u8_store_, full_);
+    if (plan_.uses_white_black) white_black_ = make_plane(u16_store_, full_);
+    sat_ = make_plane(u8_store_, full_);
+
+    for (int a = 0; a < 2; ++a) {
+        const AxisPlan& ap = plan_.axes[a];
+        if (!ap.coded) continue;
+        if (ap.method == UnwrapMethod::gray &&
+            !plan_.grays[static_cast<std::size_t>(ap.gray)].block.complementary) {
+            gray_estimate_[a] = make_plane(float_store_, true).full;
+            gray_edge_[a] = make_plane(u8_store_, true).full;
+        }
+        if (ap.method == UnwrapMethod::centerline && region_ == nullptr) {
+            i32_store_.push_back(std::make_unique_for_overwrite<std::int32_t[]>(area));
+            region_ = i32_store_.back().get();
+            i32_store_.push_back(std::make_unique_for_overwrite<std::int32_t[]>(area));
+            queue_next_ = i32_store_.back().get();
+        }
+    }
+    if (!full_)
+        for (int w = 0; w < pool_.size(); ++w)
+            local_rows_.push_back(std::make_unique<std::byte[]>(local_bytes_ + kAlign));
+
+    frame_base_.assign(static_cast<std::size_t>(plan_.frame_count), nullptr);
+    if (mode_ == Mode::streaming)
+        for (int s = 0; s < plan_.slot_count; ++s)
+            slots_.push_back(std::make_unique_for_overwrite<std::uint16_t[]>(area));
+    step_begin_.assign(static_cast<std::size_t>(plan_.frame_count), 0);
+    step_end_.assign(static_cast<std::size_t>(plan_.frame_count), 0);
+    for (int t = 0, s = 0; t < plan_.frame_count; ++t) {
+        step_begin_[static_cast<std::size_t>(t)] = s;
+        while (s < static_cast<int>(plan_.steps.size()) &&
+               plan_.steps[static_cast<std::size_t>(s)].trigger == t)
+            ++s;
+        step_end_[static_cast<std::size_t>(t)] = s;
+    }
+}
+
+void DecodeEngine::allocate_result(DecodeResult* recycled) {
+    // Images of a previous result are reused when their size fits; fresh ones
+    // are zero-filled by Image, so build them on all threads at once.
+    const Size size = plan_.camera;
+    auto fits = [&](const auto& img) { return img.size() == size && img.channels() == 1; };
+    result_.camera = size;
+    std::vector<Image<float>*> fresh;
+    bool fresh_mask = true;
+    auto adopt = [&](Image<float>& mine, Image<float>* old) {
+        if (old != nullptr && fits(*old))
+            mine = std::move(*old);
+        else
+            fresh.push_back(&mine);
+    };
+    adopt(result_.modulation, recycled != nullptr ? &recycled->modulation : nullptr);
+    adopt(result_.mean, recycled != nullptr ? &recycled->mean : nullptr);
+    for (int a = 0; a < 2; ++a) {
+        if (!plan_.axes[a].coded) continue;
+        Image<float>* old = nullptr;
+        if (recycled != nullptr) old = a == 0 ? &recycled->proj_x : &recycled->proj_y;
+        // A recycled image of the other axis is as good.
+        if (recycled != nullptr && (old->empty() || !fits(*old)))
+            old = a == 0 ? &recycled->proj_y : &recycled->proj_x;
+        adopt(a == 0 ? result_.proj_x : result_.proj_y, old);
+    }
+    if (recycled != nullptr && fits(recycled->mask)) {
+        result_.mask = std::move(recycled->mask);
+        fresh_mask = false;
+    }
+    const int jobs = static_cast<int>(fresh.size()) + (fresh_mask ? 1 : 0);
+    pool_.parallel_for(jobs, 1, [&](int b, int e, int) {
+        for (int j = b; j < e; ++j) {
+            if (j < static_cast<int>(fresh.size()))
+                *fresh[static_cast<std::size_t>(j)] = Image<float>(size);
+            else
+                result_.mask = Image<std::uint8_t>(size);
+        }
+    });
+    for (int a = 0; a < 2; ++a) {
+        if (!plan_.axes[a].coded) continue;
+        proj_[a] = (a == 0 ? result_.proj_x : result_.proj_y).data();
+        (a == 0 ? result_.method_x : result_.method_y) = plan_.axes[a].name;
+    }
+}
+
+template <class T>
+PlaneRef<T> DecodeEngine::make_plane(std::vector<std::unique_ptr<T[]>>& store, bool full) {
+    PlaneRef<T> p;
+    if (full) {
+        store.push_back(std::make_unique_for_overwrite<T[]>(plan_.camera.area()));
+        p.full = store.back().get();
+    } else {
+        local_bytes_ = (local_bytes_ + kAlign - 1) / kAlign * kAlign;
+        p.local = local_bytes_;
+        local_bytes_ += static_cast<std::size_t>(width_) * sizeof(T);
+    }
+    return p;
+}
+
+std::byte* DecodeEngine::local_buffer(int worker) const {
+    if (local_rows_.empty()) return nullptr;
+    std::byte* base = local_rows_[static_cast<std::size_t>(worker)].get();
+    const auto addr = reinterpret_cast<std::uintptr_t>(base);
+    return base + ((kAlign - addr % kAlign) % kAlign);
+}
+
+void DecodeEngine::check_frame(const Frame& frame, int index) const {
+    const std::string where = "frame " + std::to_string(index) + ": ";
+    if (frame.bit_depth != 8 && frame.bit_depth != 16)
+        throw std::invalid_argument(where + "bit depth must be 8 or 16, got " +
+                                    std::to_string(frame.bit_depth));
+    const bool eight = frame.bit_depth == 8;
+    const int channels = eight ? frame.u8.channels() : frame.u16.channels();
+    const bool empty = eight ? frame.u8.empty() : frame.u16.empty();
+    if (empty) throw std::invalid_argument(where + "no pixel data for its bit depth");
+    if (channels != 1) throw std::invalid_argument(where + "must have one channel");
+    if (frame.size() != plan_.camera)
+        throw std::invalid_argument(where + "size " + std::to_string(frame.size().width) + "x" +
+                                    std::to_string(frame.size().height) +
+                                    " differs from the camera size " +
+                                    std::to_string(plan_.camera.width) + "x" +
+                                    std::to_string(plan_.camera.height));
+    if (depth_ != 0 && frame.bit_depth != depth_)
+        throw std::invalid_argument(where + "bit depth " + std::to_string(frame.bit_depth) +
+                                    " differs from the first frame's " + std::to_string(depth_));
+}
+
+void DecodeEngine::set_depth(int bit_depth) {
+    depth_ = bit_depth;
+    const double full_scale = bit_depth == 8 ? 255.0 : 65535.0;
+    const double level = std::clamp(std::ceil(options_.saturation * full_scale), 0.0, full_scale);
+    sat_level_ = static_cast<std::uint16_t>(level);
+    min_modulation_dn_ = static_cast<float>(options_.min_modulation * full_scale);
+}
+
+template <class T>
+FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, int y, std::byte* local) const {
+    const int w = width_;
+    const std::size_t offset = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+    const T* in = s.frame >= 0
+                      ? static_cast<const T*>(frame_base_[static_cast<std::size_t>(s.frame)]) + offset
+                      : nullptr;
+    const T level = static_cast<T>(sat_level_);
+    if (in != nullptr) saturation_row(in, w, level, s.sat_bits, s.sat_first, row(sat_, y, local));
+    switch (s.kind) {
+    case StepKind::phase_frame: {
+        const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(s.index)];
+        const PhaseState& ps = phase_state_[static_cast<std::size_t>(s.index)];
+        phase_frame_row(in, w, p.cos_w[static_cast<std::size_t>(s.k)],
+                        p.sin_w[static_cast<std::size_t>(s.k)], s.first, row(ps.fraction, y, local),
+                        row(ps.modulation, y, local), row(ps.mean, y, local));
+        break;
+    }
+    case StepKind::phase_finish: {
+        const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(s.index)];
+        const PhaseState& ps = phase_state_[static_cast<std::size_t>(s.index)];
+        const float n = static_cast<float>(p.block.steps);
+        phase_finish_row(w, 2.0f / n, 1.0f / n, p.offset_fraction, row(ps.fraction, y, local),
+                         row(ps.modulation, y, local), row(ps.mean, y, local));
+        if (p.thresholds) mean_threshold_row(row(ps.mean, y, local), w, row(ps.threshold, y, local));
+        break;
+    }
+    case StepKind::white_black_frame:
+        white_black_row(in, w, s.first, row(white_black_, y, local));
+        break;
+    case StepKind::gray_threshold: {
+        const GrayInfo& g = plan_.grays[static_cast<std::size_t>(s.index)];
+        const auto bit = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
+        std::uint16_t* code = row(code_[static_cast<std::size_t>(s.index)], y, local);
+        const std::uint16_t* threshold =
+            g.threshold == GrayThreshold::white_black
+                ? row(white_black_, y, local)
+                : row(phase_state_[static_cast<std::size_t>(g.phase)].threshold, y, local);
+        gray_threshold_row(in, w, threshold, bit, s.first, code);
+        break;
+    }
+    case StepKind::gray_inverse: {
+        const GrayInfo& g = plan_.grays[static_cast<std::size_t>(s.index)];
+        const T* inverse =
+            static_cast<const T*>(frame_base_[static_cast<std::size_t>(s.frame2)]) + offset;
+        saturation_row(inverse, w, level, s.sat_bits, false, row(sat_, y, local));
+        const auto bit = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
+        gray_inverse_row(in, inverse, w, bit, s.first,
+                         row(code_[static_cast<std::size_t>(s.index)], y, local));
+        break;
+    }
+    case StepKind::centerline_bit: {
+        const CenterlineInfo& c = plan_.centerlines[static_cast<std::size_t>(s.index)];
+        centerline_row(in, w,
+                       row(phase_state_[static_cast<std::size_t>(c.phase)].threshold, y, local),
+                       row(line_[static_cast<std::size_t>(s.index)], y, local));
+        break;
+    }
+    }
+}
+
+void DecodeEngine::run_step_any(const Step& step, int y, std::byte* local) const {
+    if (depth_ == 8)
+        run_step<std::uint8_t>(step, y, local);
+    else
+        run_step<std::uint16_t>(step, y, local);
+}
+
+FPP_VECTOR_CLONES void DecodeEngine::finish_row(int y, std::byte* local, bool with_valid) {
+    const int w = width_;
+    const std::size_t offset = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+    std::uint8_t* mask = result_.mask.data() + offset;
+    const std::uint8_t* sat = row(sat_, y, local);
+    bool first = true;
+    for (int a = 0; a < 2; ++a) {
+        const AxisPlan& ap = plan_.axes[a];
+        if (!ap.coded) continue;
+        const AxisConstants& k = constants_[a];
+        PixelChecks checks;
+        checks.min_modulation = min_modulation_dn_;
+        checks.max_disagreement = static_cast<float>(options_.max_unwrap_disagreement);
+        checks.sat_bit = axis_bit(a);
+        checks.valid_flag = single_decider_ ? std::uint8_t{kDecodeValid} : std::uint8_t{0};
+        PhaseRow rows[kMaxBlocksPerAxis];
+        const int count = static_cast<int>(ap.phases.size());
+        for (int i = 0; i < count; ++i) {
+            const int b = ap.phases[static_cast<std::size_t>(i)];
+            const PhaseState& ps = phase_state_[static_cast<std::size_t>(b)];
+            rows[i].fraction = row(ps.fraction, y, local);
+            rows[i].modulation = row(ps.modulation, y, local);
+            rows[i].period = static_cast<float>(plan_.phases[static_cast<std::size_t>(b)].block.period);
+        }
+        float* out = proj_[a] + offset;
+        switch (ap.method) {
+        case UnwrapMethod::direct:
+            unwrap_direct_row(w, rows[0], ap.extent, sat, checks, first, out, mask);
+            break;
+        case UnwrapMethod::multi_period:
+            unwrap_multi_period_row(w, rows, count, ap.extent, sat, checks, first, out, mask);
+            break;
+        case UnwrapMethod::heterodyne:
+            unwrap_heterodyne_row(w, rows, count, k.heterodyne, ap.extent, sat, checks, first, out,
+                                  mask);
+            break;
+        case UnwrapMethod::gray:
+            unwrap_gray_row(w, rows[0], row(code_[static_cast<std::size_t>(ap.gray)], y, local),
+                            k.gray, sat, checks, first, out, mask,
+                            gray_estimate_[a] != nullptr ? gray_estimate_[a] + offset : nullptr,
+                            gray_edge_[a] != nullptr ? gray_edge_[a] + offset : nullptr);
+            break;
+        case UnwrapMethod::centerline:
+            flag_row(w, rows[0], sat, checks, first, mask);
+            break;
+        }
+        first = false;
+    }
+    if (with_valid && !single_decider_) valid_row_at(y);
+}
+
+void DecodeEngine::valid_row_at(int y) {
+    const std::size_t offset = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_);
+    const float* coords[2];
+    int count = 0;
+    for (int a = 0; a < 2; ++a)
+        if (proj_[a] != nullptr) coords[count++] = proj_[a] + offset;
+    valid_row(width_, coords, count, result_.mask.data() + offset);
+}
+
+void DecodeEngine::global_stages() {
+    const int grain = std::max(1, height_ / (8 * pool_.size()));
+    for (int a = 0; a < 2; ++a) {
+        const AxisPlan& ap = plan_.axes[a];
+        if (!ap.coded) continue;
+        if (gray_estimate_[a] != nullptr) {
+            pool_.parallel_for(height_, grain, [&](int y0, int y1, int) {
+                repair_plain_gray_rows(plan_.camera, y0, y1, gray_estimate_[a], gray_edge_[a],
+                                       constants_[a].repair, proj_[a], result_.mask.data());
+            });
+        }
+        if (ap.method == UnwrapMethod::centerline) {
+            const int b = ap.phases[0];
+            const PhaseState& ps = phase_state_[static_cast<std::size_t>(b)];
+            CenterlineParams params = constants_[a].centerline;
+            params.min_modulation = min_modulation_dn_;
+            unwrap_centerline(plan_.camera, ps.fraction.full, ps.modulation.full, sat_.full,
+                              line_[static_cast<std::size_t>(ap.centerline)].full, params, region_,
+                              queue_next_, proj_[a], result_.mask.data());
+        }
+    }
+    pool_.parallel_for(height_, grain, [&](int y0, int y1, int) {
+        for (int y = y0; y < y1; ++y) valid_row_at(y);
+    });
+}
+
+void DecodeEngine::push(const Frame& frame) {
+    if (mode_ != Mode::streaming) throw std::logic_error("push() on a batch decoder");
+    if (finished_) throw std::logic_error("push() after finish()");
+    if (received_ >= plan_.frame_count)
+        throw std::invalid_argument("push(): the sequence has only " +
+                                    std::to_string(plan_.frame_count) + " frames");
+    check_frame(frame, received_);
+    if (depth_ == 0) set_depth(frame.bit_depth);
+    const int t = received_;
+    const void* data = frame.bit_depth == 8 ? static_cast<const void*>(frame.u8.data())
+                                            : static_cast<const void*>(frame.u16.data());
+    frame_base_[static_cast<std::size_t>(t)] = data;
+    const int slot = plan_.frame_slot[static_cast<std::size_t>(t)];
+    void* slot_data = slot >= 0 ? slots_[static_cast<std::size_t>(slot)].get() : nullptr;
+    const std::size_t row_bytes =
+        static_cast<std::size_t>(width_) * static_cast<std::size_t>(frame.bit_depth / 8);
+    const int begin = step_begin_[static_cast<std::size_t>(t)];
+    const int end = step_end_[static_cast<std::size_t>(t)];
+    if (slot_data != nullptr || begin < end) {
+        const int grain = std::max(1, height_ / (8 * pool_.size()));
+        pool_.parallel_for(height_, grain, [&](int y0, int y1, int worker) {
+            std::byte* local = local_buffer(worker);
+            for (int y = y0; y < y1; ++y) {
+                if (slot_data != nullptr)
+                    std::memcpy(static_cast<std::byte*>(slot_data) + static_cast<std::size_t>(y) * row_bytes,
+                                static_cast<const std::byte*>(data) + static_cast<std::size_t>(y) * row_bytes,
+                                row_bytes);
+                for (int s = begin; s < end; ++s)
+                    run_step_any(plan_.steps[static_cast<std::size_t>(s)], y, local);
+            }
+        });
+    }
+    frame_base_[static_cast<std::size_t>(t)] = slot_data;
+    ++received_;
+}
+
+DecodeResult DecodeEngine::finish() {
+    if (finished_) throw std::logic_error("finish() called twice");
+    if (received_ < plan_.frame_count)
+        throw std::logic_error("finish(): " + std::to_string(received_) + " of " +
+                               std::to_string(plan_.frame_count) + " frames received");
+    const bool neighbourhood = plan_.needs_full_storage;
+    const int grain = std::max(1, height_ / (8 * pool_.size()));
+    pool_.parallel_for(height_, grain, [&](int y0, int y1, int worker) {
+        std::byte* local = local_buffer(worker);
+        for (int y = y0; y < y1; ++y) finish_row(y, local, !neighbourhood);
+    });
+    if (neighbourhood) global_stages();
+    finished_ = true;
+    return std::move(result_);
+}
+
+DecodeResult DecodeEngine::run_batch(const std::vector<Frame>& frames) {
+    if (mode_ != Mode::batch) throw std::logic_error("run_batch() on a streaming decoder");
+    if (finished_) throw std::logic_error("run_batch() called twice");
+    if (static_cast<int>(frames.size()) != plan_.frame_count)
+        throw std::invalid_argument("the capture has " + std::to_string(frames.size()) +
+                                    " frames but its sequence needs " +
+                                    std::to_string(plan_.frame_count));
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+        check_frame(frames[f], static_cast<int>(f));
+        if (depth_ == 0) set_depth(frames[f].bit_depth);
+        frame_base_[f] = frames[f].bit_depth == 8 ? static_cast<const void*>(frames[f].u8.data())
+                                                  : static_cast<const void*>(frames[f].u16.data());
+    }
+    const bool neighbourhood = plan_.needs_full_storage;
+    // Small chunks of rows: every frame's row and the state of a row stay in cache.
+    const int grain = std::max(1, std::min(8, height_ / (8 * pool_.size())));
+    const std::size_t row_bytes =
+        static_cast<std::size_t>(width_) * static_cast<std::size_t>(depth_ / 8);
+    pool_.parallel_for(height_, grain, [&](int y0, int y1, int worker) {
+        std::byte* local = local_buffer(worker);
+        for (int y = y0; y < y1; ++y) {
+            // Every step reads a different frame, more streams than the
+            // hardware prefetcher follows: fetch each frame's next row while
+            // this row's step for that frame runs.
+            const std::size_t next = static_cast<std::size_t>(std::min(y + 1, y1 - 1)) * row_bytes;
+            for (const Step& s : plan_.steps) {
+                for (int f : {s.frame, s.frame2}) {
+                    if (f < 0) continue;
+                    const char* p = static_cast<const char*>(frame_base_[static_cast<std::size_t>(f)]) + next;
+                    for (std::size_t b = 0; b < row_bytes; b += 64) __builtin_prefetch(p + b);
+                }
+                run_step_any(s, y, local);
+            }
+            finish_row(y, local, !neighbourhood);
+        }
+    });
+    if (neighbourhood) global_stages();
+    received_ = plan_.frame_count;
+    finished_ = true;
+    return std::move(result_);
+}
+
+} // namespace fpp::detail

@@ -1,0 +1,334 @@
+// Rig: the paper's Table 1, its geometry facts, the YAML files under
+// board/sim/ and the strictness of the rig reader.
+
+#include "fpp/error.hpp"
+#include "fpp/sim/rig.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+using fpp::Vec2;
+using fpp::Vec3;
+using fpp::sim::Rig;
+
+Vec2 projector_pixel(const Rig& rig, const Vec3& camera_point) {
+    const Vec3 r = fpp::mul(rig.R, camera_point);
+    return rig.projector.project({r[0] + rig.t[0], r[1] + rig.t[1], r[2] + rig.t[2]});
+}
+
+// Fraction of the camera field (every `step` pixels, corners included) whose
+// point at depth Z falls inside the projector image.
+double fraction_lit_at_depth(const Rig& rig, double Z, int step) {
+    long inside = 0, total = 0;
+    const int W = rig.camera_size.width, H = rig.camera_size.height;
+    for (int v = 0; v <= H; v += step)
+        for (int u = 0; u <= W; u += step) {
+            const double pu = std::min(u, W - 1), pv = std::min(v, H - 1);
+            Vec2 n{};
+            if (!rig.camera.pixel_to_normalised({pu, pv}, n))
+                continue;
+            const Vec2 p = projector_pixel(rig, {n[0] * Z, n[1] * Z, Z});
+            ++total;
+            if (p[0] >= -0.5 && p[0] <= rig.projector_size.width - 0.5 && p[1] >= -0.5 &&
+                p[1] <= rig.projector_size.height - 0.5)
+                ++inside;
+        }
+    return static_cast<double>(inside) / static_cast<double>(total);
+}
+
+void expect_same_lens(const fpp::LensModel& a, const fpp::LensModel& b) {
+    EXPECT_EQ(a.fu, b.fu);
+    EXPECT_EQ(a.fv, b.fv);
+    EXPECT_EQ(a.cu, b.cu);
+    EXPECT_EQ(a.cv, b.cv);
+    EXPECT_EQ(a.skew, b.skew);
+    EXPECT_EQ(a.k1, b.k1);
+    EXPECT_EQ(a.k2, b.k2);
+    EXPECT_EQ(a.k3, b.k3);
+    EXPECT_EQ(a.p1, b.p1);
+    EXPECT_EQ(a.p2, b.p2);
+    EXPECT_EQ(a.k4, b.k4);
+    EXPECT_EQ(a.s1, b.s1);
+    EXPECT_EQ(a.s2, b.s2);
+    EXPECT_EQ(a.s3, b.s3);
+    EXPECT_EQ(a.s4, b.s4);
+}
+
+void expect_same_geometry(const Rig& a, const Rig& b, double rotation_tolerance) {
+    EXPECT_EQ(a.camera_size, b.camera_size);
+    EXPECT_EQ(a.projector_size, b.projector_size);
+    expect_same_lens(a.camera, b.camera);
+    expect_same_lens(a.projector, b.projector);
+    for (int i = 0; i < 9; ++i)
+        EXPECT_NEAR(a.R[i], b.R[i], rotation_tolerance);
+    for (int i = 0; i < 3; ++i)
+        EXPECT_EQ(a.t[i], b.t[i]);
+}
+
+void expect_same_rig(const Rig& a, const Rig& b, double rotation_tolerance) {
+    expect_same_geometry(a, b, rotation_tolerance);
+    EXPECT_EQ(a.sensor.bit_depth, b.sensor.bit_depth);
+    EXPECT_EQ(a.sensor.white_level, b.sensor.white_level);
+    EXPECT_EQ(a.sensor.ambient, b.sensor.ambient);
+    EXPECT_EQ(a.sensor.read_noise_dn, b.sensor.read_noise_dn);
+    EXPECT_EQ(a.sensor.gain_e_per_dn, b.sensor.gain_e_per_dn);
+    EXPECT_EQ(a.sensor.defocus_sigma_px, b.sensor.defocus_sigma_px);
+    EXPECT_EQ(a.sensor.reference_distance_mm, b.sensor.reference_distance_mm);
+    EXPECT_EQ(a.projector_optics.gamma, b.projector_optics.gamma);
+    EXPECT_EQ(a.projector_optics.black_level, b.projector_optics.black_level);
+    EXPECT_EQ(a.projector_optics.defocus_sigma_px, b.projector_optics.defocus_sigma_px);
+}
+
+TEST(SimRig, PaperRigIsTable1) {
+    const Rig r = Rig::paper();
+    EXPECT_EQ(r.camera_size, (fpp::Size{1600, 1200}));
+    EXPECT_EQ(r.projector_size, (fpp::Size{1280, 800}));
+    EXPECT_EQ(r.camera.fu, 2698.42);
+    EXPECT_EQ(r.camera.fv, 2701.55);
+    EXPECT_EQ(r.camera.cu, 794.59);
+    EXPECT_EQ(r.camera.cv, 594.32);
+    EXPECT_EQ(r.camera.skew, 0.84);
+    EXPECT_EQ(r.camera.k1, -0.12);
+    EXPECT_EQ(r.camera.k2, -0.52);
+    EXPECT_EQ(r.camera.k3, 5.08);
+    EXPECT_EQ(r.camera.p1, 0.0011);
+    EXPECT_EQ(r.camera.p2, 0.0006);
+    EXPECT_EQ(r.projector.fu, 1949.18);
+    EXPECT_EQ(r.projector.fv, 1953.15);
+    EXPECT_EQ(r.projector.cu, 632.42);
+    EXPECT_EQ(r.projector.cv, 799.67);
+    EXPECT_EQ(r.projector.skew, 0.83);
+    EXPECT_EQ(r.projector.k1, 0.002);
+    EXPECT_EQ(r.projector.k2, -0.077);
+    EXPECT_EQ(r.projector.k3, -0.033);
+    EXPECT_EQ(r.projector.p1, 0.0004);
+    EXPECT_EQ(r.projector.p2, 0.0002);
+    const fpp::Mat3 R = fpp::rotation_from_euler_deg(-0.42, 19.08, 0.36);
+    for (int i = 0; i < 9; ++i)
+        EXPECT_EQ(r.R[i], R[i]);
+    EXPECT_EQ(r.t, (Vec3{-163.71, -116.73, 135.41}));
+    // Effects off: ideal 8-bit, noise-free.
+    EXPECT_EQ(r.sensor.bit_depth, 8);
+    EXPECT_EQ(r.sensor.read_noise_dn, 0);
+    EXPECT_EQ(r.sensor.gain_e_per_dn, 0);
+    EXPECT_EQ(r.projector_optics.gamma, 1);
+    EXPECT_EQ(r.projector.k4, 0);
+    EXPECT_EQ(r.projector.s1, 0);
+}
+
+TEST(SimRig, ProjectorCentreSitsRightOfAndBelowTheCamera) {
+    // -R^T t with R = Rz Ry Rx: about (200, 116, -73) mm in the camera frame.
+    const Vec3 c = Rig::paper().projector_centre_in_camera();
+    EXPECT_NEAR(c[0], 199.67, 0.01);
+    EXPECT_NEAR(c[1], 116.24, 0.01);
+    EXPECT_NEAR(c[2], -73.37, 0.01);
+    // And it is the point that the projector frame puts at its origin.
+    const Vec3 p = fpp::mul(Rig::paper().R, c);
+    const Vec3 t = Rig::paper().t;
+    for (int i = 0; i < 3; ++i)
+        EXPECT_NEAR(p[i] + t[i], 0, 1e-12);
+}
+
+TEST(SimRig, ProjectorLightsTheCameraFieldOverTheCalibrationVolume) {
+    const Rig rig = Rig::paper();
+    // The whole camera field is inside the projector image from 450 to 490 mm
+    // (the plane scenes sit at 480 mm) ...
+    for (double Z = 450; Z <= 490; Z += 5)
+        EXPECT_EQ(fraction_lit_at_depth(rig, Z, 10), 1.0) << Z;
+    // ... but not over the whole 400-560 mm volume: at the far end the bottom
+    // rows of the camera fall below the projector image, at the near end a
+    // sliver of the top corner above it.
+    EXPECT_LT(fraction_lit_at_depth(rig, 440, 10), 1.0);
+    EXPECT_LT(fraction_lit_at_depth(rig, 500, 10), 1.0);
+    for (double Z = 400; Z <= 560; Z += 20)
+        EXPECT_GT(fraction_lit_at_depth(rig, Z, 10), 0.93) << Z;
+    EXPECT_LT(fraction_lit_at_depth(rig, 560, 10), 0.94);
+    // The field's lateral extent at 480 mm matches the paper's volume (about 270 x 200 mm).
+    Vec2 a{}, b{};
+    ASSERT_TRUE(rig.camera.pixel_to_normalised({-0.5, 599.5}, a));
+    ASSERT_TRUE(rig.camera.pixel_to_normalised({1599.5, 599.5}, b));
+    EXPECT_NEAR((b[0] - a[0]) * 480, 285, 5);
+}
+
+TEST(SimRig, PaperRigYamlIsTheBuiltInRig) {
+    const Rig from_file = fpp::sim::load_rig(fpp::sim::default_rig_path());
+    EXPECT_EQ(from_file.name, "paper-rig");
+    expect_same_rig(from_file, Rig::paper(), 0.0);
+    EXPECT_EQ(from_file.sensor.white_level, 240);
+}
+
+TEST(SimRig, EffectsRigHasTheDocumentedEffects) {
+    const Rig e = fpp::sim::load_rig(fpp::sim::effects_rig_path());
+    const Rig base = e.without_effects();
+    // Same geometry as the paper's.
+    expect_same_geometry(base, Rig::paper(), 0.0);
+    EXPECT_EQ(e.projector_optics.gamma, 2.2);
+    EXPECT_NEAR(e.projector_optics.defocus_sigma_px, 0.8, 1e-12);
+    EXPECT_NEAR(e.sensor.defocus_sigma_px, 0.5, 1e-12);
+    EXPECT_EQ(e.sensor.read_noise_dn, 1.0);
+    EXPECT_GT(e.sensor.gain_e_per_dn, 0);
+    EXPECT_GT(e.sensor.ambient, 0);
+    EXPECT_EQ(e.sensor.bit_depth, 8);
+    // The unmodelled projector distortion moves the image by a few tenths of a
+    // projector pixel at the field edge and by nothing at the principal point.
+    auto shift = [&](double u, double v) {
+        Vec2 n{};
+        EXPECT_TRUE(base.projector.pixel_to_normalised({u, v}, n));
+        const Vec2 p = e.projector.project({n[0], n[1], 1});
+        return std::hypot(p[0] - u, p[1] - v);
+    };
+    EXPECT_LT(shift(632.42, 799.67), 1e-9);
+    const double corner = std::max(shift(0, 0), shift(1279, 0));
+    EXPECT_GT(corner, 0.2);
+    EXPECT_LT(corner, 0.7);
+    EXPECT_GT(shift(640, 0), 0.05);
+}
+
+TEST(SimRig, YamlRoundTripWithARotationMatrix) {
+    fpp::test::TempDir dir;
+    Rig r = fpp::sim::load_rig(fpp::sim::effects_rig_path());
+    r.name = "round \"trip\"";
+    r.sensor.bit_depth = 12;
+    const auto path = dir / "rig.yaml";
+    std::ofstream(path) << fpp::sim::rig_to_yaml(r);
+    const Rig back = fpp::sim::load_rig(path);
+    EXPECT_EQ(back.name, r.name);
+    expect_same_rig(back, r, 0.0);
+}
+
+TEST(SimRig, BinnedCameraKeepsTheRays) {
+    const Rig r = Rig::paper();
+    const Rig b = r.binned_camera(4);
+    EXPECT_EQ(b.camera_size, (fpp::Size{400, 300}));
+    const Vec3 p{31.5, -22.25, 470};
+    const Vec2 full = r.camera.project(p), binned = b.camera.project(p);
+    EXPECT_NEAR(binned[0], (full[0] + 0.5) / 4 - 0.5, 1e-9);
+    EXPECT_NEAR(binned[1], (full[1] + 0.5) / 4 - 0.5, 1e-9);
+}
+
+// ---- rejections -----------------------------------------------------------
+
+std::string paper_yaml() {
+    std::ifstream in(fpp::sim::default_rig_path());
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+// Replaces the first occurrence of `from` in the body (after the schema comment).
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+    const auto body = text.find("\nformat:");
+    EXPECT_NE(body, std::string::npos);
+    const auto pos = text.find(from, body);
+    EXPECT_NE(pos, std::string::npos) << from;
+    if (pos != std::string::npos)
+        text.replace(pos, from.size(), to);
+    return text;
+}
+
+// Loads `yaml` from a file and expects an InputError naming that file and `field`.
+void expect_rejected(const std::string& yaml, const std::string& field) {
+    fpp::test::TempDir dir;
+    const auto path = dir / "bad-rig.yaml";
+    std::ofstream(path) << yaml;
+    try {
+        fpp::sim::load_rig(path);
+        ADD_FAILURE() << "accepted a rig with a bad " << field;
+    } catch (const fpp::InputError& e) {
+        EXPECT_EQ(e.file(), path);
+        EXPECT_EQ(e.field(), field) << e.what();
+        EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+}
+
+TEST(SimRigYaml, RejectsUnknownKeys) {
+    expect_rejected(paper_yaml() + "colour: blue\n", "colour");
+    expect_rejected(replaced(paper_yaml(), "  skew: 0.84\n", "  skew: 0.84\n  skwe: 1\n"),
+                    "camera.skwe");
+    expect_rejected(replaced(paper_yaml(), "p2: 0.0006}", "p2: 0.0006, k4: 0.1}"),
+                    "camera.distortion.k4");
+    expect_rejected(
+        replaced(paper_yaml(), "  white_level: 240\n", "  white_level: 240\n  iso: 100\n"),
+        "sensor.iso");
+}
+
+TEST(SimRigYaml, RejectsMissingFields) {
+    expect_rejected(replaced(paper_yaml(), "  focal_px: [2698.42, 2701.55]\n", ""),
+                    "camera.focal_px");
+    expect_rejected(replaced(paper_yaml(), "  white_level: 240\n", ""), "sensor.white_level");
+    expect_rejected(replaced(paper_yaml(), "k3: -0.033, ", ""), "projector.distortion.k3");
+    expect_rejected(replaced(paper_yaml(), "  translation_mm: [-163.71, -116.73, 135.41]\n", ""),
+                    "extrinsics.translation_mm");
+    expect_rejected(replaced(paper_yaml(), "format: fpp-rig/1\n", ""), "format");
+}
+
+TEST(SimRigYaml, RejectsNonFiniteNumbers) {
+    expect_rejected(replaced(paper_yaml(), "skew: 0.84", "skew: .nan"), "camera.skew");
+    expect_rejected(replaced(paper_yaml(), "k1: 0.002", "k1: nan"), "projector.distortion.k1");
+    expect_rejected(replaced(paper_yaml(), "[-163.71, -116.73, 135.41]", "[-163.71, .inf, 135.41]"),
+                    "extrinsics.translation_mm[1]");
+    expect_rejected(replaced(paper_yaml(), "[-0.42, 19.08, 0.36]", "[-0.42, 19.08, -inf]"),
+                    "extrinsics.euler_deg[2]");
+}
+
+TEST(SimRigYaml, RejectsBadValues) {
+    expect_rejected(replaced(paper_yaml(), "format: fpp-rig/1", "format: fpp-rig/2"), "format");
+    expect_rejected(replaced(paper_yaml(), "bit_depth: 8", "bit_depth: 9"), "sensor.bit_depth");
+    expect_rejected(replaced(paper_yaml(), "bit_depth: 8", "bit_depth: 8.5"), "sensor.bit_depth");
+    expect_rejected(replaced(paper_yaml(), "focal_px: [2698.42, 2701.55]", "focal_px: [2698.42]"),
+                    "camera.focal_px");
+    expect_rejected(
+        replaced(paper_yaml(), "focal_px: [1949.18, 1953.15]", "focal_px: [-1949.18, 1953.15]"),
+        "projector.focal_px");
+    expect_rejected(replaced(paper_yaml(), "skew: 0.84", "skew: abc"), "camera.skew");
+    expect_rejected(
+        replaced(paper_yaml(), "  white_level: 240\n", "  white_level: 240\n  read_noise_dn: -1\n"),
+        "sensor.read_noise_dn");
+    expect_rejected(paper_yaml() + "projector_optics: {gamma: 0}\n", "projector_optics.gamma");
+    // Both rotation forms, or a matrix that is not a rotation.
+    expect_rejected(
+        replaced(
+            paper_yaml(), "  euler_deg: [-0.42, 19.08, 0.36]\n",
+            "  euler_deg: [-0.42, 19.08, 0.36]\n  rotation: [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n"),
+        "extrinsics");
+    expect_rejected(replaced(paper_yaml(), "  euler_deg: [-0.42, 19.08, 0.36]\n",
+                             "  rotation: [[1, 0, 0], [0, 1, 0], [0, 0, 1.1]]\n"),
+                    "extrinsics.rotation");
+    expect_rejected(replaced(paper_yaml(), "  euler_deg: [-0.42, 19.08, 0.36]\n",
+                             "  rotation: [[1, 0, 0], [0, 1, 0], [0, 0, -1]]\n"),
+                    "extrinsics.rotation");
+    expect_rejected(replaced(paper_yaml(), "  euler_deg: [-0.42, 19.08, 0.36]\n",
+                             "  rotation: [[1, 0, 0], [0, 1, 0]]\n"),
+                    "extrinsics.rotation");
+}
+
+TEST(SimRigYaml, RejectsUnreadableFiles) {
+    fpp::test::TempDir dir;
+    EXPECT_THROW(fpp::sim::load_rig(dir / "missing.yaml"), fpp::InputError);
+    expect_rejected("format: [unclosed\n", "");
+    expect_rejected("- a list\n- not a map\n", "(top level)");
+    expect_rejected(paper_yaml() + "name: twice\n", "name");
+}
+
+TEST(SimRigYaml, AcceptsARotationMatrix) {
+    const std::string yaml = replaced(paper_yaml(), "  euler_deg: [-0.42, 19.08, 0.36]\n",
+                                      "  rotation: [[0, -1, 0], [1, 0, 0], [0, 0, 1]]\n");
+    fpp::test::TempDir dir;
+    const auto path = dir / "rot.yaml";
+    std::ofstream(path) << yaml;
+    const Rig r = fpp::sim::load_rig(path);
+    const fpp::Mat3 expected = fpp::rotation_from_euler_deg(0, 0, 90);
+    for (int i = 0; i < 9; ++i)
+        EXPECT_NEAR(r.R[i], expected[i], 1e-15);
+    EXPECT_EQ(r.name, "paper-rig");
+}
+
+} // namespace
