@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <ostream>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -207,8 +208,9 @@ Accuracy accuracy(const Image<float>& decoded, const Image<float>& truth, double
 }
 
 template <class T> bool same_bytes(const Image<T>& a, const Image<T>& b) {
-    return a.size() == b.size() && a.channels() == b.channels() &&
-           std::memcmp(a.data(), b.data(), a.pixel_count() * a.channels() * sizeof(T)) == 0;
+    if (a.size() != b.size() || a.channels() != b.channels()) return false;
+    if (a.empty()) return b.empty(); // memcmp must not see null pointers
+    return std::memcmp(a.data(), b.data(), a.pixel_count() * a.channels() * sizeof(T)) == 0;
 }
 
 DecodeResult stream(const CaptureSet& set, const DecodeOptions& options = {}) {
@@ -236,6 +238,14 @@ std::vector<NamedSequence> method_sequences() {
                  {fpp::WhiteBlock{}, fpp::BlackBlock{}, phase(Axis::x, 20, 8),
                   gray(Axis::x, 20, 6, false)},
                  "gray", "", 20, 0});
+    // Fractional periods: code edges fall between projector pixels (ceil()).
+    v.push_back({"complementary-gray-fractional",
+                 {phase(Axis::x, 21.3, 8), gray(Axis::x, 21.3, 6, true)}, "complementary-gray", "",
+                 21.3, 0});
+    v.push_back({"plain-gray-fractional",
+                 {fpp::WhiteBlock{}, fpp::BlackBlock{}, phase(Axis::y, 17.65, 8),
+                  gray(Axis::y, 17.65, 6, false)},
+                 "", "gray", 0, 17.65});
     v.push_back({"inverse-gray",
                  {phase(Axis::x, 20, 8), gray(Axis::x, 20, 6, false, true)}, "inverse-gray", "",
                  20, 0});
@@ -267,6 +277,8 @@ std::vector<NamedSequence> method_sequences() {
     v.push_back({"direct", {phase(Axis::x, 800, 12)}, "direct", "", 800, 0});
     return v;
 }
+
+void PrintTo(const NamedSequence& s, std::ostream* os) { *os << s.name; }
 
 class MethodTest : public ::testing::TestWithParam<NamedSequence> {};
 
@@ -437,6 +449,86 @@ TEST(DecodeMask, LowModulationAndSaturationAreFlagged) {
     lenient.min_modulation = 0.0;
     const DecodeResult r = fpp::decode(set, lenient);
     EXPECT_FALSE(r.mask.at(70, 70) & fpp::kDecodeLowModulation);
+}
+
+// Gray frames that clip (a bright white stripe) still read as white: by
+// default only the phase frames' saturation invalidates a pixel.
+TEST(DecodeMask, SaturatedGrayFramesOnlyInvalidateWhenAsked) {
+    Synth s = Synth::standard();
+    const Sequence seq{phase(Axis::x, 20, 8), gray(Axis::x, 20, 6, true)};
+    CaptureSet set = s.capture(seq);
+    // Clip every gray plane's bright pixels in a patch.
+    for (std::size_t f = 8; f < set.frames.size(); ++f)
+        for (int y = 100; y < 150; ++y)
+            for (int x = 100; x < 150; ++x) {
+                std::uint8_t& v = set.frames[f].u8.at(x, y);
+                if (v > 100) v = 255;
+            }
+    const DecodeResult lenient = fpp::decode(set);
+    const Accuracy a = accuracy(lenient.proj_x, s.truth_x, 20);
+    EXPECT_EQ(a.unwrap_errors, 0u);
+    EXPECT_GT(a.coverage(), 0.995);
+    DecodeOptions strict;
+    strict.saturation_in_binary_frames = true;
+    const DecodeResult r = fpp::decode(set, strict);
+    std::size_t flagged = 0;
+    for (int y = 100; y < 150; ++y)
+        for (int x = 100; x < 150; ++x) flagged += (r.mask.at(x, y) & fpp::kDecodeSaturated) != 0;
+    EXPECT_GT(flagged, 1000u);
+    EXPECT_TRUE(same_bytes(r.mask, stream(set, strict).mask));
+}
+
+// A coarse cue that disagrees with the fine phase by more than
+// max_unwrap_disagreement (0.35 fine periods) flags the pixel.
+TEST(DecodeMask, CoarseFineDisagreementIsFlagged) {
+    const Synth s = Synth::standard();
+    Synth shifted = s;
+    for (int y = 0; y < s.camera.height; ++y)
+        for (int x = 0; x < s.camera.width; ++x)
+            shifted.truth_x.at(x, y) = static_cast<float>(double(s.truth_x.at(x, y)) + 8.0);
+    const Sequence seq{phase(Axis::x, 20, 8), phase(Axis::x, 800, 8)};
+    CaptureSet set = s.capture(seq);
+    const CaptureSet moved = shifted.capture(seq);
+    // Inside a patch the coarse frames see the map 8 px (0.4 fine periods) off.
+    for (std::size_t f = 8; f < 16; ++f)
+        for (int y = 50; y < 120; ++y)
+            for (int x = 200; x < 300; ++x) set.frames[f].u8.at(x, y) = moved.frames[f].u8.at(x, y);
+    const DecodeResult r = fpp::decode(set);
+    std::size_t flagged = 0;
+    for (int y = 55; y < 115; ++y)
+        for (int x = 205; x < 295; ++x) {
+            flagged += (r.mask.at(x, y) & fpp::kDecodeUnwrapInconsistent) != 0;
+            EXPECT_FALSE(std::isfinite(r.proj_x.at(x, y)) &&
+                         std::abs(r.proj_x.at(x, y) - s.truth_x.at(x, y)) > 10.0f);
+        }
+    EXPECT_GT(flagged, 60u * 90u * 9 / 10);
+    // A looser limit accepts them (and they are right: 0.4 < 0.5).
+    DecodeOptions loose;
+    loose.max_unwrap_disagreement = 0.45;
+    const DecodeResult l = fpp::decode(set, loose);
+    EXPECT_EQ(accuracy(l.proj_x, s.truth_x, 20).unwrap_errors, 0u);
+    EXPECT_FALSE(l.mask.at(250, 85) & fpp::kDecodeUnwrapInconsistent);
+}
+
+TEST(DecodeApi, RecycledResultGivesTheSameBytes) {
+    const Synth s = Synth::standard();
+    const CaptureSet set = s.capture(method_sequences()[0].sequence, 8, 1.0);
+    const DecodeResult fresh = fpp::decode(set);
+    DecodeResult reused = fpp::decode(s.capture(method_sequences()[0].sequence, 8, 3.0, 99));
+    const float* memory = reused.proj_x.data();
+    fpp::decode(set, reused);
+    EXPECT_EQ(reused.proj_x.data(), memory); // no new allocation
+    EXPECT_TRUE(same_bytes(fresh.proj_x, reused.proj_x));
+    EXPECT_TRUE(same_bytes(fresh.proj_y, reused.proj_y));
+    EXPECT_TRUE(same_bytes(fresh.mask, reused.mask));
+    EXPECT_TRUE(same_bytes(fresh.modulation, reused.modulation));
+    fpp::StreamingDecoder d(set.manifest.sequence, set.manifest.camera, set.manifest.projector,
+                            {}, std::move(reused));
+    for (const auto& f : set.frames) d.push(f);
+    const DecodeResult streamed = d.finish();
+    EXPECT_EQ(streamed.proj_x.data(), memory);
+    EXPECT_TRUE(same_bytes(fresh.proj_x, streamed.proj_x));
+    EXPECT_TRUE(same_bytes(fresh.mean, streamed.mean));
 }
 
 // Plain Gray repair near a step of the projector coordinate (an occlusion

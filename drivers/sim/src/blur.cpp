@@ -1,7 +1,5 @@
 #include "blur.hpp"
 
-#include "parallel.hpp"
-
 #include <algorithm>
 #include <cmath>
 
@@ -22,40 +20,44 @@ std::vector<float> gaussian_kernel(double sigma) {
     return out;
 }
 
-void gaussian_blur(float* image, int W, int H, double sigma, Border border, int threads,
+void gaussian_blur(float* image, int W, int H, double sigma, Border border, ThreadPool& pool,
                    std::vector<float>& scratch) {
     if (!(sigma > 0) || W <= 0 || H <= 0)
         return;
     const std::vector<float> kernel = gaussian_kernel(sigma);
     const int r = static_cast<int>(kernel.size() / 2);
-    scratch.resize(static_cast<std::size_t>(W) * static_cast<std::size_t>(H));
+    // scratch = the horizontally blurred image, then one padded row per worker.
+    const std::size_t area = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+    const std::size_t padded_width = static_cast<std::size_t>(W + 2 * r);
+    scratch.resize(area + static_cast<std::size_t>(pool.size()) * padded_width);
     float* tmp = scratch.data();
     auto row = [W](float* base, int y) { return base + static_cast<std::size_t>(y) * W; };
+    // About eight chunks of rows per worker.
+    const int grain = std::max(1, H / (8 * pool.size()));
 
     // Horizontal pass into tmp, through a padded copy of each row.
-    parallel_rows(H, threads, [&](int y0, int y1) {
-        std::vector<float> padded(static_cast<std::size_t>(W + 2 * r));
+    pool.parallel_for(H, grain, [&](int y0, int y1, int worker) {
+        float* padded = tmp + area + static_cast<std::size_t>(worker) * padded_width;
         for (int y = y0; y < y1; ++y) {
             const float* in = row(image, y);
             for (int x = 0; x < W + 2 * r; ++x) {
                 const int sx = x - r;
-                padded[static_cast<std::size_t>(x)] = (sx >= 0 && sx < W) ? in[sx]
-                                                      : border == Border::zero
-                                                          ? 0.0f
-                                                          : in[std::clamp(sx, 0, W - 1)];
+                padded[x] = (sx >= 0 && sx < W)      ? in[sx]
+                            : border == Border::zero ? 0.0f
+                                                     : in[std::clamp(sx, 0, W - 1)];
             }
             float* out = row(tmp, y);
             std::fill(out, out + W, 0.0f);
             for (int k = 0; k <= 2 * r; ++k) {
                 const float wk = kernel[static_cast<std::size_t>(k)];
-                const float* src = padded.data() + k;
+                const float* src = padded + k;
                 for (int x = 0; x < W; ++x)
                     out[x] += wk * src[x];
             }
         }
     });
     // Vertical pass back into the image.
-    parallel_rows(H, threads, [&](int y0, int y1) {
+    pool.parallel_for(H, grain, [&](int y0, int y1, int) {
         for (int y = y0; y < y1; ++y) {
             float* out = row(image, y);
             std::fill(out, out + W, 0.0f);

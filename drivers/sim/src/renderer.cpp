@@ -2,7 +2,6 @@
 
 #include "blur.hpp"
 #include "noise.hpp"
-#include "parallel.hpp"
 #include "vec_math.hpp"
 
 #include <algorithm>
@@ -43,10 +42,16 @@ double projector_r2_limit(const Rig& rig) {
     return 1.5 * r2max;
 }
 
+// Rows per parallel_for chunk: about eight chunks per worker, so that rows of
+// uneven cost (ray casting) spread over the workers.
+int row_grain(int rows, const ThreadPool& pool) {
+    return std::max(1, rows / (8 * pool.size()));
+}
+
 } // namespace
 
 Renderer::Renderer(const Rig& rig, const Scene& scene, int threads)
-    : rig_(rig), threads_(detail::resolve_threads(threads)) {
+    : rig_(rig), pool_(std::make_shared<ThreadPool>(threads)) {
     rig_.validate();
     const int W = rig_.camera_size.width, H = rig_.camera_size.height;
     const int PW = rig_.projector_size.width, PH = rig_.projector_size.height;
@@ -67,7 +72,7 @@ Renderer::Renderer(const Rig& rig, const Scene& scene, int threads)
     // d(distorted)/d(pixel) of the camera: the inverse of its linear part.
     const double dxd_du = 1 / cam.fu, dxd_dv = -cam.skew / (cam.fu * cam.fv), dyd_dv = 1 / cam.fv;
 
-    detail::parallel_rows(H, threads_, [&](int y0, int y1) {
+    pool_->parallel_for(H, row_grain(H, *pool_), [&](int y0, int y1, int) {
         for (int y = y0; y < y1; ++y) {
             for (int x = 0; x < W; ++x) {
                 const std::size_t i = static_cast<std::size_t>(y) * W + x;
@@ -154,7 +159,7 @@ Renderer::Renderer(const Rig& rig, const Scene& scene, int threads)
 }
 
 void Renderer::set_threads(int threads) {
-    threads_ = detail::resolve_threads(threads);
+    pool_ = std::make_shared<ThreadPool>(threads);
 }
 
 std::uint64_t Renderer::frame_seed(std::uint64_t seed, int frame) {
@@ -167,6 +172,7 @@ namespace {
 // allocations would page-fault on every frame.
 struct Scratch {
     std::vector<float> radiance, light, blur;
+    std::vector<float> noisy_rows; // one camera row per pool worker
 };
 
 Scratch& thread_scratch() {
@@ -198,12 +204,12 @@ void Renderer::radiance_into(const Image<std::uint8_t>& projector_image,
             dst[k] = lut[src[k]];
     }
     detail::gaussian_blur(light.data(), PW, PH, optics.defocus_sigma_px, detail::Border::zero,
-                          threads_, blur);
+                          *pool_, blur);
 
     const int W = rig_.camera_size.width, H = rig_.camera_size.height;
     radiance.resize(rig_.camera_size.area());
     const float* L = light.data();
-    detail::parallel_rows(H, threads_, [&](int y0, int y1) {
+    pool_->parallel_for(H, row_grain(H, *pool_), [&](int y0, int y1, int) {
         for (int y = y0; y < y1; ++y) {
             const std::size_t base = static_cast<std::size_t>(y) * W;
             const float* gain = radiance_gain_.row(y);
@@ -221,7 +227,7 @@ void Renderer::radiance_into(const Image<std::uint8_t>& projector_image,
         }
     });
     detail::gaussian_blur(radiance.data(), W, H, rig_.sensor.defocus_sigma_px,
-                          detail::Border::clamp, threads_, blur);
+                          detail::Border::clamp, *pool_, blur);
 }
 
 Image<float> Renderer::render_radiance(const Image<std::uint8_t>& projector_image) const {
@@ -255,31 +261,43 @@ Frame Renderer::render(const Image<std::uint8_t>& projector_image, std::uint64_t
     else
         frame.u16 = Image<std::uint16_t>(W, H);
 
-    detail::parallel_rows(H, threads_, [&](int y0, int y1) {
-        std::vector<float> row(static_cast<std::size_t>(W));
+    scratch.noisy_rows.resize(static_cast<std::size_t>(pool_->size()) *
+                              static_cast<std::size_t>(W));
+    pool_->parallel_for(H, row_grain(H, *pool_), [&](int y0, int y1, int worker) {
+        // Local copies: seen through the closure, the captures could alias
+        // the 8-bit output rows, and every store would reload them (no
+        // vectorisation).
+        const int width = W;
+        const float full_dn = full;
+        const int msb_shift = shift;
+        const float noise_read_var = read_var, noise_shot_per_dn = shot_per_dn;
+        float* v = scratch.noisy_rows.data() +
+                   static_cast<std::size_t>(worker) * static_cast<std::size_t>(width);
         for (int y = y0; y < y1; ++y) {
-            const std::size_t first = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
+            const std::size_t first = static_cast<std::size_t>(y) * static_cast<std::size_t>(width);
             const float* in = radiance.data() + first;
-            float* v = row.data();
             if (noisy) {
-                for (int x = 0; x < W; ++x)
+                for (int x = 0; x < width; ++x)
                     v[x] = normal(key, first + static_cast<std::size_t>(x));
                 // Signal-dependent sigma, in a separate loop that vectorises.
-                for (int x = 0; x < W; ++x)
-                    v[x] = in[x] + std::sqrt(read_var + shot_per_dn * std::max(in[x], 0.0f)) * v[x];
+                for (int x = 0; x < width; ++x)
+                    v[x] = in[x] +
+                           std::sqrt(noise_read_var + noise_shot_per_dn * std::max(in[x], 0.0f)) *
+                               v[x];
             } else {
-                std::copy(in, in + W, v);
+                std::copy(in, in + width, v);
             }
             // Round to the nearest DN, clip to [0, full scale] (saturation).
             if (frame.bit_depth == 8) {
                 std::uint8_t* out = frame.u8.row(y);
-                for (int x = 0; x < W; ++x)
-                    out[x] = static_cast<std::uint8_t>(std::clamp(v[x], 0.0f, full) + 0.5f);
+                for (int x = 0; x < width; ++x)
+                    out[x] = static_cast<std::uint8_t>(std::clamp(v[x], 0.0f, full_dn) + 0.5f);
             } else {
                 std::uint16_t* out = frame.u16.row(y);
-                for (int x = 0; x < W; ++x)
+                for (int x = 0; x < width; ++x)
                     out[x] = static_cast<std::uint16_t>(
-                        static_cast<std::uint32_t>(std::clamp(v[x], 0.0f, full) + 0.5f) << shift);
+                        static_cast<std::uint32_t>(std::clamp(v[x], 0.0f, full_dn) + 0.5f)
+                        << msb_shift);
             }
         }
     });

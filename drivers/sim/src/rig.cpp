@@ -1,15 +1,18 @@
 #include "fpp/sim/rig.hpp"
 
 #include "fpp/error.hpp"
-#include "yaml_fields.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include <cmath>
 #include <sstream>
 
 namespace fpp::sim {
 
-using detail::format_number;
-using detail::YamlFields;
+using yaml_fields::child;
+using yaml_fields::format_real;
+using yaml_fields::format_string;
+using yaml_fields::item;
+using yaml_fields::Reader;
 
 namespace {
 
@@ -17,56 +20,58 @@ constexpr const char* kRigFormat = "fpp-rig/1";
 
 // ---- reading -------------------------------------------------------------
 
-void read_lens(const YamlFields& in, const YAML::Node& node, const std::string& field, Size& size,
+void read_lens(const Reader& in, const YAML::Node& node, const std::string& field, Size& size,
                LensModel& lens) {
     in.expect_map(node, field,
                   {"width", "height", "focal_px", "principal_px", "skew", "distortion",
                    "unmodelled_distortion"});
-    size.width = in.integer(in.require(node, field, "width"), field + ".width");
-    size.height = in.integer(in.require(node, field, "height"), field + ".height");
-    const auto f = in.vector<2>(in.require(node, field, "focal_px"), field + ".focal_px");
-    const auto c = in.vector<2>(in.require(node, field, "principal_px"), field + ".principal_px");
+    size.width = in.int_value(in.require(node, field, "width"), child(field, "width"));
+    size.height = in.int_value(in.require(node, field, "height"), child(field, "height"));
+    const auto f = in.real_array<2>(in.require(node, field, "focal_px"), child(field, "focal_px"));
+    const auto c =
+        in.real_array<2>(in.require(node, field, "principal_px"), child(field, "principal_px"));
     lens.fu = f[0];
     lens.fv = f[1];
     lens.cu = c[0];
     lens.cv = c[1];
-    lens.skew = in.number(in.require(node, field, "skew"), field + ".skew");
+    lens.skew = in.real_value(in.require(node, field, "skew"), child(field, "skew"));
 
-    const std::string dfield = field + ".distortion";
+    const std::string dfield = child(field, "distortion");
     const YAML::Node d = in.require(node, field, "distortion");
     in.expect_map(d, dfield, {"k1", "k2", "k3", "p1", "p2"});
-    lens.k1 = in.number(in.require(d, dfield, "k1"), dfield + ".k1");
-    lens.k2 = in.number(in.require(d, dfield, "k2"), dfield + ".k2");
-    lens.k3 = in.number(in.require(d, dfield, "k3"), dfield + ".k3");
-    lens.p1 = in.number(in.require(d, dfield, "p1"), dfield + ".p1");
-    lens.p2 = in.number(in.require(d, dfield, "p2"), dfield + ".p2");
+    lens.k1 = in.real_value(in.require(d, dfield, "k1"), child(dfield, "k1"));
+    lens.k2 = in.real_value(in.require(d, dfield, "k2"), child(dfield, "k2"));
+    lens.k3 = in.real_value(in.require(d, dfield, "k3"), child(dfield, "k3"));
+    lens.p1 = in.real_value(in.require(d, dfield, "p1"), child(dfield, "p1"));
+    lens.p2 = in.real_value(in.require(d, dfield, "p2"), child(dfield, "p2"));
 
     const YAML::Node u = node["unmodelled_distortion"];
     if (u.IsDefined()) {
-        const std::string ufield = field + ".unmodelled_distortion";
+        const std::string ufield = child(field, "unmodelled_distortion");
         in.expect_map(u, ufield, {"k4", "s1", "s2", "s3", "s4"});
-        lens.k4 = in.number(u, ufield, "k4", 0);
-        lens.s1 = in.number(u, ufield, "s1", 0);
-        lens.s2 = in.number(u, ufield, "s2", 0);
-        lens.s3 = in.number(u, ufield, "s3", 0);
-        lens.s4 = in.number(u, ufield, "s4", 0);
+        lens.k4 = in.real_value_or(u, ufield, "k4", 0);
+        lens.s1 = in.real_value_or(u, ufield, "s1", 0);
+        lens.s2 = in.real_value_or(u, ufield, "s2", 0);
+        lens.s3 = in.real_value_or(u, ufield, "s3", 0);
+        lens.s4 = in.real_value_or(u, ufield, "s4", 0);
     }
 }
 
-Mat3 read_rotation(const YamlFields& in, const YAML::Node& ext) {
+Mat3 read_rotation(const Reader& in, const YAML::Node& ext) {
     const YAML::Node euler = ext["euler_deg"];
     const YAML::Node matrix = ext["rotation"];
     if (euler.IsDefined() == matrix.IsDefined())
-        in.fail("extrinsics", "give exactly one of euler_deg and rotation");
+        in.fail(ext, "extrinsics", "give exactly one of euler_deg and rotation");
     if (euler.IsDefined()) {
-        const auto e = in.vector<3>(euler, "extrinsics.euler_deg");
+        const auto e = in.real_array<3>(euler, "extrinsics.euler_deg");
         return rotation_from_euler_deg(e[0], e[1], e[2]);
     }
+    const std::string field = "extrinsics.rotation";
     if (!matrix.IsSequence() || matrix.size() != 3)
-        in.fail("extrinsics.rotation", "expected a 3x3 matrix (three rows of three numbers)");
+        in.fail(matrix, field, "expected a 3x3 matrix (three rows of three numbers)");
     Mat3 R{};
     for (std::size_t i = 0; i < 3; ++i) {
-        const auto row = in.vector<3>(matrix[i], "extrinsics.rotation[" + std::to_string(i) + "]");
+        const auto row = in.real_array<3>(matrix[i], item(field, i));
         for (std::size_t j = 0; j < 3; ++j)
             R[i * 3 + j] = row[j];
     }
@@ -75,21 +80,21 @@ Mat3 read_rotation(const YamlFields& in, const YAML::Node& ext) {
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
             if (std::fabs(RRt[i * 3 + j] - (i == j ? 1.0 : 0.0)) > 1e-6)
-                in.fail("extrinsics.rotation", "not orthonormal (R R^T != I)");
+                in.fail(matrix, field, "not orthonormal (R R^T != I)");
     const double det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) +
                        R[2] * (R[3] * R[7] - R[4] * R[6]);
     if (det < 0)
-        in.fail("extrinsics.rotation", "determinant is -1 (a reflection)");
+        in.fail(matrix, field, "determinant is -1 (a reflection)");
     return R;
 }
 
 // ---- writing -------------------------------------------------------------
 
 std::string pair(double a, double b) {
-    return "[" + format_number(a) + ", " + format_number(b) + "]";
+    return "[" + format_real(a) + ", " + format_real(b) + "]";
 }
 std::string triple(double a, double b, double c) {
-    return "[" + format_number(a) + ", " + format_number(b) + ", " + format_number(c) + "]";
+    return "[" + format_real(a) + ", " + format_real(b) + ", " + format_real(c) + "]";
 }
 
 void write_lens(std::ostringstream& out, const char* name, Size size, const LensModel& l) {
@@ -98,14 +103,14 @@ void write_lens(std::ostringstream& out, const char* name, Size size, const Lens
         << "  height: " << size.height << "\n"
         << "  focal_px: " << pair(l.fu, l.fv) << "\n"
         << "  principal_px: " << pair(l.cu, l.cv) << "\n"
-        << "  skew: " << format_number(l.skew) << "\n"
-        << "  distortion: {k1: " << format_number(l.k1) << ", k2: " << format_number(l.k2)
-        << ", k3: " << format_number(l.k3) << ", p1: " << format_number(l.p1)
-        << ", p2: " << format_number(l.p2) << "}\n";
+        << "  skew: " << format_real(l.skew) << "\n"
+        << "  distortion: {k1: " << format_real(l.k1) << ", k2: " << format_real(l.k2)
+        << ", k3: " << format_real(l.k3) << ", p1: " << format_real(l.p1)
+        << ", p2: " << format_real(l.p2) << "}\n";
     if (l.k4 != 0 || l.s1 != 0 || l.s2 != 0 || l.s3 != 0 || l.s4 != 0)
-        out << "  unmodelled_distortion: {k4: " << format_number(l.k4)
-            << ", s1: " << format_number(l.s1) << ", s2: " << format_number(l.s2)
-            << ", s3: " << format_number(l.s3) << ", s4: " << format_number(l.s4) << "}\n";
+        out << "  unmodelled_distortion: {k4: " << format_real(l.k4)
+            << ", s1: " << format_real(l.s1) << ", s2: " << format_real(l.s2)
+            << ", s3: " << format_real(l.s3) << ", s4: " << format_real(l.s4) << "}\n";
 }
 
 void check_lens(const std::filesystem::path& origin, const std::string& field, Size size,
@@ -229,17 +234,22 @@ void Rig::validate(const std::filesystem::path& origin) const {
 }
 
 Rig load_rig(const std::filesystem::path& path) {
-    const YamlFields in(path);
-    const YAML::Node root = in.load();
+    const Reader in(path);
+    const YAML::Node root = in.load_file();
+    if (!root.IsMap())
+        in.fail(root, "(top level)", std::string("expected a map with format: ") + kRigFormat);
     in.expect_map(
         root, "",
         {"format", "name", "camera", "projector", "extrinsics", "sensor", "projector_optics"});
-    const std::string format = in.string(in.require(root, "", "format"), "format");
+    const YAML::Node format_node = in.require(root, "", "format");
+    const std::string format = in.string_value(format_node, "format");
     if (format != kRigFormat)
-        in.fail("format", "unknown format '" + format + "' (expected " + kRigFormat + ")");
+        in.fail(format_node, "format",
+                "unknown format '" + format + "' (expected " + kRigFormat + ")");
 
     Rig rig;
-    rig.name = root["name"].IsDefined() ? in.string(root["name"], "name") : path.stem().string();
+    rig.name =
+        root["name"].IsDefined() ? in.string_value(root["name"], "name") : path.stem().string();
     read_lens(in, in.require(root, "", "camera"), "camera", rig.camera_size, rig.camera);
     read_lens(in, in.require(root, "", "projector"), "projector", rig.projector_size,
               rig.projector);
@@ -247,30 +257,32 @@ Rig load_rig(const std::filesystem::path& path) {
     const YAML::Node ext = in.require(root, "", "extrinsics");
     in.expect_map(ext, "extrinsics", {"euler_deg", "rotation", "translation_mm"});
     rig.R = read_rotation(in, ext);
-    rig.t =
-        in.vector<3>(in.require(ext, "extrinsics", "translation_mm"), "extrinsics.translation_mm");
+    rig.t = in.real_array<3>(in.require(ext, "extrinsics", "translation_mm"),
+                             "extrinsics.translation_mm");
 
     const YAML::Node sensor = in.require(root, "", "sensor");
     in.expect_map(sensor, "sensor",
                   {"bit_depth", "white_level", "ambient", "read_noise_dn", "gain_e_per_dn",
                    "defocus_sigma_px", "reference_distance_mm"});
     rig.sensor.bit_depth =
-        in.integer(in.require(sensor, "sensor", "bit_depth"), "sensor.bit_depth");
+        in.int_value(in.require(sensor, "sensor", "bit_depth"), "sensor.bit_depth");
     rig.sensor.white_level =
-        in.number(in.require(sensor, "sensor", "white_level"), "sensor.white_level");
-    rig.sensor.ambient = in.number(sensor, "sensor", "ambient", 0);
-    rig.sensor.read_noise_dn = in.number(sensor, "sensor", "read_noise_dn", 0);
-    rig.sensor.gain_e_per_dn = in.number(sensor, "sensor", "gain_e_per_dn", 0);
-    rig.sensor.defocus_sigma_px = in.number(sensor, "sensor", "defocus_sigma_px", 0);
-    rig.sensor.reference_distance_mm = in.number(sensor, "sensor", "reference_distance_mm", 0);
+        in.real_value(in.require(sensor, "sensor", "white_level"), "sensor.white_level");
+    rig.sensor.ambient = in.real_value_or(sensor, "sensor", "ambient", 0);
+    rig.sensor.read_noise_dn = in.real_value_or(sensor, "sensor", "read_noise_dn", 0);
+    rig.sensor.gain_e_per_dn = in.real_value_or(sensor, "sensor", "gain_e_per_dn", 0);
+    rig.sensor.defocus_sigma_px = in.real_value_or(sensor, "sensor", "defocus_sigma_px", 0);
+    rig.sensor.reference_distance_mm =
+        in.real_value_or(sensor, "sensor", "reference_distance_mm", 0);
 
     const YAML::Node optics = root["projector_optics"];
     if (optics.IsDefined()) {
         in.expect_map(optics, "projector_optics", {"gamma", "black_level", "defocus_sigma_px"});
-        rig.projector_optics.gamma = in.number(optics, "projector_optics", "gamma", 1);
-        rig.projector_optics.black_level = in.number(optics, "projector_optics", "black_level", 0);
+        rig.projector_optics.gamma = in.real_value_or(optics, "projector_optics", "gamma", 1);
+        rig.projector_optics.black_level =
+            in.real_value_or(optics, "projector_optics", "black_level", 0);
         rig.projector_optics.defocus_sigma_px =
-            in.number(optics, "projector_optics", "defocus_sigma_px", 0);
+            in.real_value_or(optics, "projector_optics", "defocus_sigma_px", 0);
     }
     rig.validate(path);
     return rig;
@@ -279,13 +291,7 @@ Rig load_rig(const std::filesystem::path& path) {
 std::string rig_to_yaml(const Rig& rig) {
     std::ostringstream out;
     out << "format: " << kRigFormat << "\n";
-    std::string quoted;
-    for (char ch : rig.name) {
-        if (ch == '"' || ch == '\\')
-            quoted += '\\';
-        quoted += ch;
-    }
-    out << "name: \"" << quoted << "\"\n";
+    out << "name: " << format_string(rig.name) << "\n";
     write_lens(out, "camera", rig.camera_size, rig.camera);
     write_lens(out, "projector", rig.projector_size, rig.projector);
     const Mat3& R = rig.R;
@@ -298,17 +304,17 @@ std::string rig_to_yaml(const Rig& rig) {
     const SensorModel& s = rig.sensor;
     out << "sensor:\n"
         << "  bit_depth: " << s.bit_depth << "\n"
-        << "  white_level: " << format_number(s.white_level) << "\n"
-        << "  ambient: " << format_number(s.ambient) << "\n"
-        << "  read_noise_dn: " << format_number(s.read_noise_dn) << "\n"
-        << "  gain_e_per_dn: " << format_number(s.gain_e_per_dn) << "\n"
-        << "  defocus_sigma_px: " << format_number(s.defocus_sigma_px) << "\n"
-        << "  reference_distance_mm: " << format_number(s.reference_distance_mm) << "\n";
+        << "  white_level: " << format_real(s.white_level) << "\n"
+        << "  ambient: " << format_real(s.ambient) << "\n"
+        << "  read_noise_dn: " << format_real(s.read_noise_dn) << "\n"
+        << "  gain_e_per_dn: " << format_real(s.gain_e_per_dn) << "\n"
+        << "  defocus_sigma_px: " << format_real(s.defocus_sigma_px) << "\n"
+        << "  reference_distance_mm: " << format_real(s.reference_distance_mm) << "\n";
     const ProjectorOptics& p = rig.projector_optics;
     out << "projector_optics:\n"
-        << "  gamma: " << format_number(p.gamma) << "\n"
-        << "  black_level: " << format_number(p.black_level) << "\n"
-        << "  defocus_sigma_px: " << format_number(p.defocus_sigma_px) << "\n";
+        << "  gamma: " << format_real(p.gamma) << "\n"
+        << "  black_level: " << format_real(p.black_level) << "\n"
+        << "  defocus_sigma_px: " << format_real(p.defocus_sigma_px) << "\n";
     return out.str();
 }
 

@@ -3,14 +3,16 @@
 #include "fpp/sim/scene.hpp"
 
 #include "fpp/error.hpp"
+#include "fpp/yaml_fields.hpp"
 #include "vec_math.hpp"
-#include "yaml_fields.hpp"
 
 #include <stdexcept>
 
 namespace fpp::sim {
 
-using detail::YamlFields;
+using yaml_fields::child;
+using yaml_fields::item;
+using yaml_fields::Reader;
 
 namespace {
 
@@ -33,54 +35,58 @@ Scene composite_scene() {
 
 // ---- YAML ------------------------------------------------------------------
 
-Pose read_pose(const YamlFields& in, const YAML::Node& node, const std::string& field) {
+Pose read_pose(const Reader& in, const YAML::Node& node, const std::string& field) {
     Pose pose;
-    pose.centre = in.vector<3>(in.require(node, field, "centre"), field + ".centre");
+    pose.centre = in.real_array<3>(in.require(node, field, "centre"), child(field, "centre"));
     const YAML::Node e = node["euler_deg"];
     if (e.IsDefined()) {
-        const auto a = in.vector<3>(e, field + ".euler_deg");
+        const auto a = in.real_array<3>(e, child(field, "euler_deg"));
         pose.R = rotation_from_euler_deg(a[0], a[1], a[2]);
     }
     return pose;
 }
 
-double read_albedo(const YamlFields& in, const YAML::Node& node, const std::string& field,
+double read_albedo(const Reader& in, const YAML::Node& node, const std::string& field,
                    const char* key) {
-    const double a = in.number(in.require(node, field, key), field + "." + key);
+    const YAML::Node value = in.require(node, field, key);
+    const double a = in.real_value(value, child(field, key));
     if (!(a >= 0 && a <= 1))
-        in.fail(field + "." + key, "must be in [0, 1]");
+        in.fail(value, child(field, key), "must be in [0, 1]");
     return a;
 }
 
-double read_positive(const YamlFields& in, const YAML::Node& node, const std::string& field,
+double read_positive(const Reader& in, const YAML::Node& node, const std::string& field,
                      const char* key) {
-    const double v = in.number(in.require(node, field, key), field + "." + key);
+    const YAML::Node value = in.require(node, field, key);
+    const double v = in.real_value(value, child(field, key));
     if (!(v > 0))
-        in.fail(field + "." + key, "must be positive");
+        in.fail(value, child(field, key), "must be positive");
     return v;
 }
 
-Vec3 read_direction(const YamlFields& in, const YAML::Node& node, const std::string& field,
+Vec3 read_direction(const Reader& in, const YAML::Node& node, const std::string& field,
                     const char* key) {
-    const Vec3 a = in.vector<3>(in.require(node, field, key), field + "." + key);
+    const YAML::Node value = in.require(node, field, key);
+    const Vec3 a = in.real_array<3>(value, child(field, key));
     if (!(vec::norm(a) > 1e-12))
-        in.fail(field + "." + key, "must be a non-zero vector");
+        in.fail(value, child(field, key), "must be a non-zero vector");
     return vec::normalised(a);
 }
 
-std::array<double, 2> read_size(const YamlFields& in, const YAML::Node& node,
+std::array<double, 2> read_size(const Reader& in, const YAML::Node& node,
                                 const std::string& field) {
-    const auto s = in.vector<2>(in.require(node, field, "size"), field + ".size");
+    const YAML::Node value = in.require(node, field, "size");
+    const auto s = in.real_array<2>(value, child(field, "size"));
     if (!(s[0] > 0) || !(s[1] > 0))
-        in.fail(field + ".size", "must be positive");
+        in.fail(value, child(field, "size"), "must be positive");
     return s;
 }
 
-void read_shape(const YamlFields& in, const YAML::Node& node, const std::string& field,
-                Scene& scene) {
+void read_shape(const Reader& in, const YAML::Node& node, const std::string& field, Scene& scene) {
     if (!node.IsMap())
-        in.fail(field, "expected a map with a `type`");
-    const std::string type = in.string(in.require(node, field, "type"), field + ".type");
+        in.fail(node, field, "expected a map with a `type`");
+    const YAML::Node type_node = in.require(node, field, "type");
+    const std::string type = in.string_value(type_node, child(field, "type"));
     if (type == "plane") {
         in.expect_map(node, field, {"type", "centre", "euler_deg", "size", "albedo"});
         const auto size = read_size(in, node, field);
@@ -91,30 +97,31 @@ void read_shape(const YamlFields& in, const YAML::Node& node, const std::string&
                       {"type", "centre", "euler_deg", "inner_corners", "square_size", "margin",
                        "black_albedo", "white_albedo"});
         CheckerboardSpec spec;
+        const std::string cfield = child(field, "inner_corners");
         const YAML::Node corners = in.require(node, field, "inner_corners");
         if (!corners.IsSequence() || corners.size() != 2)
-            in.fail(field + ".inner_corners", "expected [columns, rows]");
-        spec.inner_columns = in.integer(corners[0], field + ".inner_corners[0]");
-        spec.inner_rows = in.integer(corners[1], field + ".inner_corners[1]");
+            in.fail(corners, cfield, "expected [columns, rows]");
+        spec.inner_columns = in.int_value(corners[0], item(cfield, 0));
+        spec.inner_rows = in.int_value(corners[1], item(cfield, 1));
         if (spec.inner_columns < 2 || spec.inner_rows < 2 || spec.inner_columns > 1000 ||
             spec.inner_rows > 1000)
-            in.fail(field + ".inner_corners", "must be 2..1000 each");
+            in.fail(corners, cfield, "must be 2..1000 each");
         spec.square_size = read_positive(in, node, field, "square_size");
-        spec.margin = in.number(node, field, "margin", spec.margin);
+        spec.margin = in.real_value_or(node, field, "margin", spec.margin);
         if (!(spec.margin >= 0))
-            in.fail(field + ".margin", "must be >= 0");
+            in.fail(node["margin"], child(field, "margin"), "must be >= 0");
         spec.black_albedo = read_albedo(in, node, field, "black_albedo");
         spec.white_albedo = read_albedo(in, node, field, "white_albedo");
         scene.add(std::make_unique<Checkerboard>(read_pose(in, node, field), spec));
     } else if (type == "sphere") {
         in.expect_map(node, field, {"type", "centre", "radius", "albedo"});
         scene.add(std::make_unique<Sphere>(
-            in.vector<3>(in.require(node, field, "centre"), field + ".centre"),
+            in.real_array<3>(in.require(node, field, "centre"), child(field, "centre")),
             read_positive(in, node, field, "radius"), read_albedo(in, node, field, "albedo")));
     } else if (type == "cylinder") {
         in.expect_map(node, field, {"type", "centre", "axis", "radius", "length", "albedo"});
         scene.add(std::make_unique<Cylinder>(
-            in.vector<3>(in.require(node, field, "centre"), field + ".centre"),
+            in.real_array<3>(in.require(node, field, "centre"), child(field, "centre")),
             read_direction(in, node, field, "axis"), read_positive(in, node, field, "radius"),
             read_positive(in, node, field, "length"), read_albedo(in, node, field, "albedo")));
     } else if (type == "ball_bar") {
@@ -122,8 +129,9 @@ void read_shape(const YamlFields& in, const YAML::Node& node, const std::string&
         const double distance = read_positive(in, node, field, "distance");
         const double radius = read_positive(in, node, field, "radius");
         if (!(distance > 2 * radius))
-            in.fail(field + ".distance", "must exceed the sphere diameter");
-        add_ball_bar(scene, in.vector<3>(in.require(node, field, "centre"), field + ".centre"),
+            in.fail(node["distance"], child(field, "distance"), "must exceed the sphere diameter");
+        add_ball_bar(scene,
+                     in.real_array<3>(in.require(node, field, "centre"), child(field, "centre")),
                      read_direction(in, node, field, "axis"), distance, radius,
                      read_albedo(in, node, field, "albedo"));
     } else if (type == "relief") {
@@ -132,15 +140,15 @@ void read_shape(const YamlFields& in, const YAML::Node& node, const std::string&
         std::vector<ReliefBump> bumps = Relief::face_bumps();
         const YAML::Node b = node["bumps"];
         if (b.IsDefined()) {
+            const std::string bfield = child(field, "bumps");
             if (!b.IsSequence() || b.size() == 0 || b.size() > 1000)
-                in.fail(field + ".bumps",
-                        "expected a list of [x0, y0, amplitude, radius_x, radius_y]");
+                in.fail(b, bfield, "expected a list of [x0, y0, amplitude, radius_x, radius_y]");
             bumps.clear();
             for (std::size_t i = 0; i < b.size(); ++i) {
-                const std::string bf = field + ".bumps[" + std::to_string(i) + "]";
-                const auto v = in.vector<5>(b[i], bf);
+                const std::string bf = item(bfield, i);
+                const auto v = in.real_array<5>(b[i], bf);
                 if (!(v[3] > 0) || !(v[4] > 0))
-                    in.fail(bf, "radii must be positive");
+                    in.fail(b[i], bf, "radii must be positive");
                 bumps.push_back({v[0], v[1], v[2], v[3], v[4]});
             }
         }
@@ -148,8 +156,9 @@ void read_shape(const YamlFields& in, const YAML::Node& node, const std::string&
                                            std::move(bumps),
                                            read_albedo(in, node, field, "albedo")));
     } else {
-        in.fail(field + ".type", "unknown shape type '" + type +
-                                     "' (plane, checkerboard, sphere, cylinder, ball_bar, relief)");
+        in.fail(type_node, child(field, "type"),
+                "unknown shape type '" + type +
+                    "' (plane, checkerboard, sphere, cylinder, ball_bar, relief)");
     }
 }
 
@@ -194,22 +203,26 @@ Scene named_scene(const std::string& name) {
 }
 
 Scene load_scene(const std::filesystem::path& path) {
-    const YamlFields in(path);
-    const YAML::Node root = in.load();
+    const Reader in(path);
+    const YAML::Node root = in.load_file();
+    if (!root.IsMap())
+        in.fail(root, "(top level)", std::string("expected a map with format: ") + kSceneFormat);
     in.expect_map(root, "", {"format", "shapes"});
-    const std::string format = in.string(in.require(root, "", "format"), "format");
+    const YAML::Node format_node = in.require(root, "", "format");
+    const std::string format = in.string_value(format_node, "format");
     if (format != kSceneFormat)
-        in.fail("format", "unknown format '" + format + "' (expected " + kSceneFormat + ")");
+        in.fail(format_node, "format",
+                "unknown format '" + format + "' (expected " + kSceneFormat + ")");
     const YAML::Node shapes = in.require(root, "", "shapes");
     if (!shapes.IsSequence() || shapes.size() == 0)
-        in.fail("shapes", "expected a non-empty list");
+        in.fail(shapes, "shapes", "expected a non-empty list");
     Scene scene;
     for (std::size_t i = 0; i < shapes.size(); ++i) {
-        const std::string field = "shapes[" + std::to_string(i) + "]";
+        const std::string field = item("shapes", i);
         try {
             read_shape(in, shapes[i], field, scene);
         } catch (const std::invalid_argument& e) { // a shape's own consistency check
-            in.fail(field, e.what());
+            in.fail(shapes[i], field, e.what());
         }
     }
     return scene;

@@ -2,6 +2,7 @@
 
 #include "fpp/patterns.hpp"
 #include "fpp/sim/renderer.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include <cstdio>
 #include <string>
@@ -34,14 +35,8 @@ SimulatedCapture simulate(const Renderer& renderer, const Sequence& sequence, st
             renderer.render(patterns[static_cast<std::size_t>(k)], Renderer::frame_seed(seed, k)));
     }
     m.truth = TruthFiles{"truth_xyz.tiff", "truth_proj.tiff"};
-    std::string name;
-    for (char ch : rig.name) {
-        if (ch == '"' || ch == '\\')
-            name += '\\';
-        name += ch;
-    }
-    m.metadata_yaml = "source: fpp-sim\nrig: \"" + name +
-                      "\"\nbit_depth: " + std::to_string(rig.sensor.bit_depth) +
+    m.metadata_yaml = "source: fpp-sim\nrig: " + yaml_fields::format_string(rig.name) +
+                      "\nbit_depth: " + std::to_string(rig.sensor.bit_depth) +
                       "\nseed: " + std::to_string(seed) + "\n";
     capture.truth_xyz = renderer.truth_xyz();
     capture.truth_projector = renderer.truth_projector();

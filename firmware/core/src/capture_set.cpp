@@ -3,23 +3,17 @@
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
-#include "yaml_fields.hpp"
+#include "fpp/parallel.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include <algorithm>
 #include <atomic>
-#include <cctype>
-#include <cerrno>
-#include <cstring>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <exception>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <set>
-#include <sstream>
-#include <thread>
 
 namespace fpp {
 
@@ -27,7 +21,10 @@ namespace {
 
 namespace fs = std::filesystem;
 using yaml_fields::child;
+using yaml_fields::format_real;
+using yaml_fields::format_string;
 using yaml_fields::item;
+using yaml_fields::read_text_file;
 using yaml_fields::Reader;
 
 constexpr int kMaxImageSide = 65535; // PNG readers refuse larger frames too
@@ -67,14 +64,6 @@ private:
     fs::path origin_;
     const std::map<std::string, int>* lines_;
 };
-
-std::string format_real(double value) {
-    char buffer[64];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-    std::string text(buffer, result.ptr);
-    if (text.find_first_of(".eEn") == std::string::npos) text += ".0";
-    return text;
-}
 
 std::string block_field(std::size_t index, const char* key) {
     return child(item("sequence", index), key);
@@ -419,15 +408,6 @@ private:
     std::map<std::string, int> lines_;
 };
 
-std::string read_text_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw InputError(path, "", "read error");
-    return text.str();
-}
-
 // yaml-cpp throws its own exceptions for a few malformed inputs even after
 // our type checks; report them as input errors of the file.
 template <class F> auto with_yaml_errors(const fs::path& origin, F&& f) {
@@ -441,48 +421,6 @@ template <class F> auto with_yaml_errors(const fs::path& origin, F&& f) {
 // ---------------------------------------------------------------------------
 // YAML writing
 // ---------------------------------------------------------------------------
-
-bool is_plain_safe(const std::string& s) {
-    if (s.empty()) return false;
-    for (const char c : s) {
-        const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                        c == '_' || c == '.' || c == '-' || c == '/' || c == '+';
-        if (!ok) return false;
-    }
-    if (s[0] == '-' || s[0] == '+' || s[0] == '.') return false;
-    // Would read back as a number, boolean or null in other YAML readers.
-    static const std::set<std::string> words = {"true", "false", "null", "yes", "no",
-                                                "on",   "off",   "y",    "n"};
-    std::string lower = s;
-    std::transform(lower.begin(), lower.end(), lower.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (words.count(lower)) return false;
-    const bool all_digits = std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
-    if (all_digits) return false;
-    double ignored = 0;
-    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), ignored);
-    return !(ec == std::errc() && end == s.data() + s.size());
-}
-
-std::string yaml_string(const std::string& s) {
-    if (is_plain_safe(s)) return s;
-    std::string out = "\"";
-    for (const char c : s) {
-        const auto u = static_cast<unsigned char>(c);
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += c;
-        } else if (u < 0x20 || u == 0x7f) {
-            static const char* hex = "0123456789abcdef";
-            out += "\\x";
-            out += hex[u >> 4];
-            out += hex[u & 15];
-        } else {
-            out += c;
-        }
-    }
-    return out + "\"";
-}
 
 std::string block_yaml(const PatternBlock& block) {
     std::string s = "  - pattern: " + pattern_name(block) + "\n";
@@ -528,15 +466,17 @@ std::string metadata_yaml(const std::string& text) {
     return out;
 }
 
-// Runs f(0..n-1) on a few threads; rethrows the exception of the lowest index.
-void parallel_for(std::size_t n, const std::function<void(std::size_t)>& f) {
-    const std::size_t workers =
-        std::min<std::size_t>(n, std::clamp<std::size_t>(std::thread::hardware_concurrency(), 1, 4));
+// Runs f(0..n-1) on up to four threads (the work is file decoding and
+// fsync, not arithmetic); rethrows the exception of the lowest failing index.
+void for_each_file(std::size_t n, const std::function<void(std::size_t)>& f) {
+    if (n == 0) return;
+    const int count = static_cast<int>(n);
+    ThreadPool pool(std::min({ThreadPool::resolve_threads(0), 4, count}));
     std::vector<std::exception_ptr> errors(n);
-    std::atomic<std::size_t> next{0};
     std::atomic<bool> failed{false};
-    auto run = [&]() {
-        for (std::size_t i = next++; i < n && !failed; i = next++) {
+    pool.parallel_for(count, 1, [&](int begin, int end, int) {
+        for (int k = begin; k < end && !failed; ++k) {
+            const auto i = static_cast<std::size_t>(k);
             try {
                 f(i);
             } catch (...) {
@@ -544,14 +484,7 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t)>& f) {
                 failed = true;
             }
         }
-    };
-    if (workers <= 1) {
-        run();
-    } else {
-        std::vector<std::jthread> threads;
-        for (std::size_t w = 1; w < workers; ++w) threads.emplace_back(run);
-        run();
-    }
+    });
     for (const auto& e : errors) {
         if (e) std::rethrow_exception(e);
     }
@@ -664,7 +597,7 @@ CaptureSet read_capture_set(const std::filesystem::path& folder) {
     }
 
     set.frames.resize(n);
-    parallel_for(n, [&](std::size_t i) {
+    for_each_file(n, [&](std::size_t i) {
         const fs::path path = folder / m.frames[i];
         try {
             set.frames[i] = read_png_gray(path);
@@ -693,7 +626,7 @@ std::string manifest_to_yaml(const CaptureManifest& manifest) {
     std::string line = "frames: [";
     const std::string indent(line.size(), ' ');
     for (std::size_t i = 0; i < m.frames.size(); ++i) {
-        const std::string name = yaml_string(m.frames[i]) + (i + 1 < m.frames.size() ? "," : "]");
+        const std::string name = format_string(m.frames[i]) + (i + 1 < m.frames.size() ? "," : "]");
         if (line.size() > indent.size() && line.size() + 1 + name.size() > 100) {
             s += line + "\n";
             line = indent;
@@ -708,9 +641,9 @@ std::string manifest_to_yaml(const CaptureManifest& manifest) {
     for (const auto& block : m.sequence) s += block_yaml(block);
     if (m.truth) {
         s += "truth:\n";
-        if (!m.truth->xyz.empty()) s += "  xyz: " + yaml_string(m.truth->xyz) + "\n";
+        if (!m.truth->xyz.empty()) s += "  xyz: " + format_string(m.truth->xyz) + "\n";
         if (!m.truth->projector.empty()) {
-            s += "  projector: " + yaml_string(m.truth->projector) + "\n";
+            s += "  projector: " + format_string(m.truth->projector) + "\n";
         }
     }
     s += metadata_yaml(m.metadata_yaml);
@@ -794,8 +727,8 @@ void write_capture_set(const std::filesystem::path& folder, const CaptureManifes
         for (const auto& t : truth_entries) {
             if (t.image) prepare(t.name);
         }
-        parallel_for(frames.size(),
-                     [&](std::size_t i) { write_png_synced(temp / m.frames[i], frames[i]); });
+        for_each_file(frames.size(),
+                      [&](std::size_t i) { write_png_synced(temp / m.frames[i], frames[i]); });
         for (const auto& t : truth_entries) {
             if (t.image) write_tiff_synced(temp / t.name, *t.image);
         }

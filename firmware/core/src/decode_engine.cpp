@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 
+FPP_NO_FP_CONTRACT
+
 namespace fpp::detail {
 
 namespace {
@@ -19,9 +21,6 @@ constexpr int kMaxBlocksPerAxis = 16;
 
 std::uint8_t axis_bit(int axis) { return static_cast<std::uint8_t>(1u << axis); }
 
-} // namespace
-
-namespace {
 AxisConstants axis_constants(const Plan& plan, int a) {
     AxisConstants c;
     const AxisPlan& ap = plan.axes[a];
@@ -48,6 +47,7 @@ AxisConstants axis_constants(const Plan& plan, int a) {
         c.centerline.position = cl.block.position;
         c.centerline.half_width = cl.block.width / 2.0;
         c.centerline.sat_bit = axis_bit(a);
+        c.centerline.highest = static_cast<float>(ap.extent + 0.5);
     }
     if (ap.method == UnwrapMethod::heterodyne) {
         for (const auto& level : ap.levels) {
@@ -60,6 +60,7 @@ AxisConstants axis_constants(const Plan& plan, int a) {
     }
     return c;
 }
+
 } // namespace
 
 DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
@@ -70,6 +71,9 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
     full_ = mode_ == Mode::streaming || plan_.needs_full_storage;
     const std::size_t area = plan_.camera.area();
     for (int a = 0; a < 2; ++a) constants_[a] = axis_constants(plan_, a);
+    if (!options_.saturation_in_binary_frames)
+        for (Step& s : plan_.steps)
+            if (s.kind != StepKind::phase_frame) s.sat_bits = 0;
     single_decider_ = (plan_.axes[0].coded != plan_.axes[1].coded) && !plan_.needs_full_storage;
 
     for (int a = 0; a < 2; ++a)
@@ -126,6 +130,21 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
     if (mode_ == Mode::streaming)
         for (int s = 0; s < plan_.slot_count; ++s)
             slots_.push_back(std::make_unique_for_overwrite<std::uint16_t[]>(area));
+    // Batch groups: runs of phase frames of one block, or of gray planes of
+    // one block thresholded against one image, up to four at a time.
+    for (int i = 0; i < static_cast<int>(plan_.steps.size());) {
+        const Step& head = plan_.steps[static_cast<std::size_t>(i)];
+        const bool groupable = head.kind == StepKind::phase_frame ||
+                               head.kind == StepKind::gray_threshold;
+        int n = 1;
+        while (groupable && n < 4 && i + n < static_cast<int>(plan_.steps.size())) {
+            const Step& s = plan_.steps[static_cast<std::size_t>(i + n)];
+            if (s.kind != head.kind || s.index != head.index || s.k != head.k + n) break;
+            ++n;
+        }
+        batch_groups_.push_back({i, n});
+        i += n;
+    }
     step_begin_.assign(static_cast<std::size_t>(plan_.frame_count), 0);
     step_end_.assign(static_cast<std::size_t>(plan_.frame_count), 0);
     for (int t = 0, s = 0; t < plan_.frame_count; ++t) {
@@ -240,7 +259,8 @@ FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, int y, std::byte* l
                       ? static_cast<const T*>(frame_base_[static_cast<std::size_t>(s.frame)]) + offset
                       : nullptr;
     const T level = static_cast<T>(sat_level_);
-    if (in != nullptr) saturation_row(in, w, level, s.sat_bits, s.sat_first, row(sat_, y, local));
+    if (in != nullptr && (s.sat_bits != 0 || s.sat_first))
+        saturation_row(in, w, level, s.sat_bits, s.sat_first, row(sat_, y, local));
     switch (s.kind) {
     case StepKind::phase_frame: {
         const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(s.index)];
@@ -277,7 +297,7 @@ FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, int y, std::byte* l
         const GrayInfo& g = plan_.grays[static_cast<std::size_t>(s.index)];
         const T* inverse =
             static_cast<const T*>(frame_base_[static_cast<std::size_t>(s.frame2)]) + offset;
-        saturation_row(inverse, w, level, s.sat_bits, false, row(sat_, y, local));
+        if (s.sat_bits != 0) saturation_row(inverse, w, level, s.sat_bits, false, row(sat_, y, local));
         const auto bit = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
         gray_inverse_row(in, inverse, w, bit, s.first,
                          row(code_[static_cast<std::size_t>(s.index)], y, local));
@@ -291,6 +311,62 @@ FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, int y, std::byte* l
         break;
     }
     }
+}
+
+template <class T>
+FPP_VECTOR_CLONES void DecodeEngine::run_group(const StepGroup& group, int y,
+                                               std::byte* local) const {
+    const Step& head = plan_.steps[static_cast<std::size_t>(group.first)];
+    if (group.count == 1) {
+        run_step<T>(head, y, local);
+        return;
+    }
+    const int w = width_;
+    const std::size_t offset = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+    const T level = static_cast<T>(sat_level_);
+    const T* in[4] = {nullptr, nullptr, nullptr, nullptr};
+    for (int k = 0; k < group.count; ++k) {
+        const Step& s = plan_.steps[static_cast<std::size_t>(group.first + k)];
+        in[k] = static_cast<const T*>(frame_base_[static_cast<std::size_t>(s.frame)]) + offset;
+        if (s.sat_bits != 0 || s.sat_first)
+            saturation_row(in[k], w, level, s.sat_bits, s.sat_first, row(sat_, y, local));
+    }
+    if (head.kind == StepKind::phase_frame) {
+        const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(head.index)];
+        const PhaseState& ps = phase_state_[static_cast<std::size_t>(head.index)];
+        const float* cw = p.cos_w.data() + head.k;
+        const float* sw = p.sin_w.data() + head.k;
+        float* c = row(ps.fraction, y, local);
+        float* sn = row(ps.modulation, y, local);
+        float* a = row(ps.mean, y, local);
+        switch (group.count) {
+        case 2: phase_frames_row<T, 2>(in, w, cw, sw, head.first, c, sn, a); break;
+        case 3: phase_frames_row<T, 3>(in, w, cw, sw, head.first, c, sn, a); break;
+        default: phase_frames_row<T, 4>(in, w, cw, sw, head.first, c, sn, a); break;
+        }
+    } else {
+        const GrayInfo& g = plan_.grays[static_cast<std::size_t>(head.index)];
+        const std::uint16_t* threshold =
+            g.threshold == GrayThreshold::white_black
+                ? row(white_black_, y, local)
+                : row(phase_state_[static_cast<std::size_t>(g.phase)].threshold, y, local);
+        std::uint16_t bits[4] = {0, 0, 0, 0};
+        for (int k = 0; k < group.count; ++k)
+            bits[k] = static_cast<std::uint16_t>(1u << (g.planes - 1 - head.k - k));
+        std::uint16_t* code = row(code_[static_cast<std::size_t>(head.index)], y, local);
+        switch (group.count) {
+        case 2: gray_planes_row<T, 2>(in, w, threshold, bits, head.first, code); break;
+        case 3: gray_planes_row<T, 3>(in, w, threshold, bits, head.first, code); break;
+        default: gray_planes_row<T, 4>(in, w, threshold, bits, head.first, code); break;
+        }
+    }
+}
+
+void DecodeEngine::run_group_any(const StepGroup& group, int y, std::byte* local) const {
+    if (depth_ == 8)
+        run_group<std::uint8_t>(group, y, local);
+    else
+        run_group<std::uint16_t>(group, y, local);
 }
 
 void DecodeEngine::run_step_any(const Step& step, int y, std::byte* local) const {
@@ -315,6 +391,7 @@ FPP_VECTOR_CLONES void DecodeEngine::finish_row(int y, std::byte* local, bool wi
         checks.max_disagreement = static_cast<float>(options_.max_unwrap_disagreement);
         checks.sat_bit = axis_bit(a);
         checks.valid_flag = single_decider_ ? std::uint8_t{kDecodeValid} : std::uint8_t{0};
+        checks.highest = static_cast<float>(ap.extent + 0.5);
         PhaseRow rows[kMaxBlocksPerAxis];
         const int count = static_cast<int>(ap.phases.size());
         for (int i = 0; i < count; ++i) {
@@ -376,7 +453,13 @@ void DecodeEngine::global_stages() {
             const PhaseState& ps = phase_state_[static_cast<std::size_t>(b)];
             CenterlineParams params = constants_[a].centerline;
             params.min_modulation = min_modulation_dn_;
-            unwrap_centerline(plan_.camera, ps.fraction.full, ps.modulation.full, sat_.full,
+            // The finest phase block of the other axis, if any, gates links too.
+            const AxisPlan& other_axis = plan_.axes[1 - a];
+            const float* other =
+                other_axis.coded
+                    ? phase_state_[static_cast<std::size_t>(other_axis.report_phase)].fraction.full
+                    : nullptr;
+            unwrap_centerline(plan_.camera, ps.fraction.full, other, ps.modulation.full, sat_.full,
                               line_[static_cast<std::size_t>(ap.centerline)].full, params, region_,
                               queue_next_, proj_[a], result_.mask.data());
         }
@@ -454,23 +537,10 @@ DecodeResult DecodeEngine::run_batch(const std::vector<Frame>& frames) {
     const bool neighbourhood = plan_.needs_full_storage;
     // Small chunks of rows: every frame's row and the state of a row stay in cache.
     const int grain = std::max(1, std::min(8, height_ / (8 * pool_.size())));
-    const std::size_t row_bytes =
-        static_cast<std::size_t>(width_) * static_cast<std::size_t>(depth_ / 8);
     pool_.parallel_for(height_, grain, [&](int y0, int y1, int worker) {
         std::byte* local = local_buffer(worker);
         for (int y = y0; y < y1; ++y) {
-            // Every step reads a different frame, more streams than the
-            // hardware prefetcher follows: fetch each frame's next row while
-            // this row's step for that frame runs.
-            const std::size_t next = static_cast<std::size_t>(std::min(y + 1, y1 - 1)) * row_bytes;
-            for (const Step& s : plan_.steps) {
-                for (int f : {s.frame, s.frame2}) {
-                    if (f < 0) continue;
-                    const char* p = static_cast<const char*>(frame_base_[static_cast<std::size_t>(f)]) + next;
-                    for (std::size_t b = 0; b < row_bytes; b += 64) __builtin_prefetch(p + b);
-                }
-                run_step_any(s, y, local);
-            }
+            for (const StepGroup& g : batch_groups_) run_group_any(g, y, local);
             finish_row(y, local, !neighbourhood);
         }
     });

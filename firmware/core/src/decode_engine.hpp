@@ -1,8 +1,11 @@
 #pragma once
 // The decoder's state and its execution of a plan (decode_plan.hpp), shared by
-// the streaming form (frames pushed one by one, per-frame work in push) and the
-// batch form (all frames at hand: rows processed start to finish while they
-// are in cache). Both run the same kernels in the same order per pixel.
+// the streaming form (frames pushed one by one, per-frame work in push, state
+// in full-size planes) and the batch form (all frames at hand: each row goes
+// through every step and the unwrapping while it is in cache, with state in
+// one row per worker unless a neighbourhood stage needs whole images). Both
+// apply the same operations in the same order to every pixel, without
+// floating-point contraction (phase_math.hpp), so they are bit-identical.
 
 #include "decode_plan.hpp"
 #include "fpp/decoder.hpp"
@@ -67,6 +70,13 @@ private:
     void set_depth(int bit_depth);
     template <class T> void run_step(const Step& step, int y, std::byte* local) const;
     void run_step_any(const Step& step, int y, std::byte* local) const;
+    // Batch mode: up to four consecutive steps of one kind and block at once.
+    struct StepGroup {
+        int first = 0; // index in plan_.steps
+        int count = 1;
+    };
+    template <class T> void run_group(const StepGroup& group, int y, std::byte* local) const;
+    void run_group_any(const StepGroup& group, int y, std::byte* local) const;
     void finish_row(int y, std::byte* local, bool with_valid);
     void valid_row_at(int y);
     void global_stages();
@@ -112,6 +122,7 @@ private:
     // Frames: row source per frame index, waiting slots.
     std::vector<const void*> frame_base_;
     std::vector<std::unique_ptr<std::uint16_t[]>> slots_; // sized for 16-bit
+    std::vector<StepGroup> batch_groups_; // plan_.steps grouped for run_batch
     std::vector<int> step_begin_; // per trigger frame: range in plan_.steps
     std::vector<int> step_end_;
     int received_ = 0;

@@ -1,5 +1,5 @@
 #pragma once
-// Scalar float helpers written so that GCC vectorises the loops that use them
+// Scalar float functions written so that GCC vectorises the loops that use them
 // (no calls into libm, no branches: comparisons become selects).
 
 #include <bit>
@@ -16,6 +16,20 @@
 #else
 #define FPP_VECTOR_CLONES
 #endif
+// Files that hold kernel loops switch off floating-point contraction: GCC
+// would otherwise fuse a * b + c into an FMA in some code shapes and not in
+// others (a vectorised loop, its scalar tail, the batch mode's fused loop),
+// and the batch and streaming forms must round identically.
+#if defined(__GNUC__) && !defined(__clang__)
+#define FPP_NO_FP_CONTRACT _Pragma("GCC optimize(\"fp-contract=off\")")
+#else
+#define FPP_NO_FP_CONTRACT _Pragma("clang fp contract(off)")
+#endif
+
+// Kernels and these functions are always inlined into their (cloned) callers, so a
+// kernel is never compiled once for the baseline and called from an AVX2
+// clone: the same arithmetic (FMA contraction included) everywhere.
+#define FPP_KERNEL [[gnu::always_inline]] inline
 
 namespace fpp::detail {
 
@@ -27,28 +41,28 @@ inline constexpr float kInvTwoPi = 0.15915494309189533577f;
 // c ? u : v by bit masks. With the default -ftrapping-math GCC sinks the
 // arithmetic of a ?: arm into a branch and then cannot vectorise the loop;
 // a bitwise select keeps both operands computed and the loop branch-free.
-inline float select(bool c, float u, float v) {
+FPP_KERNEL float select(bool c, float u, float v) {
     const std::uint32_t m = 0u - static_cast<std::uint32_t>(c);
     return std::bit_cast<float>((std::bit_cast<std::uint32_t>(u) & m) |
                                 (std::bit_cast<std::uint32_t>(v) & ~m));
 }
 
 // floor() for |x| < 2^31 through an int conversion (vectorises without SSE4.1).
-inline float floor_fast(float x) {
+FPP_KERNEL float floor_fast(float x) {
     const std::int32_t i = static_cast<std::int32_t>(x);
     return static_cast<float>(i - static_cast<std::int32_t>(static_cast<float>(i) > x));
 }
-inline float ceil_fast(float x) { return -floor_fast(-x); }
+FPP_KERNEL float ceil_fast(float x) { return -floor_fast(-x); }
 // Nearest integer, halves rounded up.
-inline float round_fast(float x) { return floor_fast(x + 0.5f); }
-inline float abs_fast(float x) { return __builtin_fabsf(x); }
+FPP_KERNEL float round_fast(float x) { return floor_fast(x + 0.5f); }
+FPP_KERNEL float abs_fast(float x) { return __builtin_fabsf(x); }
 
 // atan2(y, x) in [-pi, pi], max error about 2e-7 rad (float rounding; the
 // polynomial alone is good to 4e-9). Range reduction: a = min/max of |x|, |y|
 // in [0, 1]; a > tan(pi/8) maps to (a - 1)/(a + 1) with pi/4 added, leaving
 // |t| <= tan(pi/8) for an odd degree-9 least-squares fit of atan(t) (our own
 // fit on Chebyshev nodes). atan2(0, 0) returns 0.
-inline float atan2_fast(float y, float x) {
+FPP_KERNEL float atan2_fast(float y, float x) {
     const float ax = abs_fast(x);
     const float ay = abs_fast(y);
     const float hi = ax > ay ? ax : ay; // plain operands: maxps / minps
@@ -76,7 +90,7 @@ inline float atan2_fast(float y, float x) {
 // sqrt(v) for v >= 0 by an inverse square root estimate and two Newton
 // steps (relative error below 5e-6, plenty for a modulation in DN).
 // std::sqrt may set errno, which keeps GCC from vectorising the loop around it.
-inline float sqrt_fast(float v) {
+FPP_KERNEL float sqrt_fast(float v) {
     float y = std::bit_cast<float>(0x5f375a86u - (std::bit_cast<std::uint32_t>(v) >> 1));
     const float half = 0.5f * v;
     y = y * (1.5f - half * y * y);
@@ -85,7 +99,7 @@ inline float sqrt_fast(float v) {
 }
 
 // Gray code to binary on up to 16 bits (g^-1 of g(n) = n ^ (n >> 1)).
-inline std::uint32_t gray_to_binary(std::uint32_t g) {
+FPP_KERNEL std::uint32_t gray_to_binary(std::uint32_t g) {
     g ^= g >> 1;
     g ^= g >> 2;
     g ^= g >> 4;

@@ -73,85 +73,238 @@ void repair_plain_gray_rows(Size size, int y0, int y1, const float* estimate,
     }
 }
 
-void unwrap_centerline(Size size, const float* fraction, const float* modulation,
-                       const std::uint8_t* sat, const std::uint8_t* line,
-                       const CenterlineParams& params, std::int32_t* region, std::int32_t* next,
-                       float* out, std::uint8_t* mask) {
+namespace {
+
+// Union-find over patches with integer fringe-order offsets: a patch's values
+// plus offset * period are in its root's frame.
+struct OffsetForest {
+    std::vector<std::int32_t> parent;
+    std::vector<std::int32_t> offset;
+    explicit OffsetForest(std::int32_t n) : parent(static_cast<std::size_t>(n)), offset(static_cast<std::size_t>(n), 0) {
+        for (std::int32_t i = 0; i < n; ++i) parent[static_cast<std::size_t>(i)] = i;
+    }
+    // Root of x and x's offset to it.
+    std::pair<std::int32_t, std::int32_t> find(std::int32_t x) {
+        std::int32_t root = x, total = 0;
+        while (parent[static_cast<std::size_t>(root)] != root) {
+            total += offset[static_cast<std::size_t>(root)];
+            root = parent[static_cast<std::size_t>(root)];
+        }
+        // Path compression, keeping offsets relative to the root.
+        std::int32_t node = x, remaining = total;
+        while (parent[static_cast<std::size_t>(node)] != root && node != root) {
+            const std::int32_t up = parent[static_cast<std::size_t>(node)];
+            const std::int32_t own = offset[static_cast<std::size_t>(node)];
+            parent[static_cast<std::size_t>(node)] = root;
+            offset[static_cast<std::size_t>(node)] = remaining;
+            remaining -= own;
+            node = up;
+        }
+        return {root, total};
+    }
+    // Patch q shifted by k periods continues patch p. False if that
+    // contradicts earlier merges.
+    bool join(std::int32_t p, std::int32_t q, std::int32_t k) {
+        const auto [rp, op] = find(p);
+        const auto [rq, oq] = find(q);
+        if (rp == rq) return oq == k + op;
+        parent[static_cast<std::size_t>(rq)] = rp;
+        offset[static_cast<std::size_t>(rq)] = k + op - oq;
+        return true;
+    }
+};
+
+struct PatchLink {
+    std::int32_t p = 0, q = 0; // p < q
+    std::int32_t k = 0;        // q shifted by k periods continues p
+    bool pass = false;
+    friend bool operator<(const PatchLink& a, const PatchLink& b) {
+        if (a.p != b.p) return a.p < b.p;
+        if (a.q != b.q) return a.q < b.q;
+        if (a.pass != b.pass) return a.pass > b.pass;
+        return a.k < b.k;
+    }
+};
+
+} // namespace
+
+void unwrap_centerline(Size size, const float* fraction, const float* other,
+                       const float* modulation, const std::uint8_t* sat,
+                       const std::uint8_t* line, const CenterlineParams& params,
+                       std::int32_t* state, std::int32_t* next, float* out, std::uint8_t* mask) {
     const int w = size.width;
     const int h = size.height;
     const std::int32_t count = static_cast<std::int32_t>(size.area());
     const float period = params.period;
     const float inv = 1.0f / period;
-    constexpr int kBuckets = 64;
-    const float bucket_scale = static_cast<float>(kBuckets - 1) / params.jump_gate;
+    constexpr std::int32_t kInvalid = -2, kUnvisited = -1;
 
     for (std::int32_t i = 0; i < count; ++i) {
         const bool ok = modulation[i] >= params.min_modulation && (sat[i] & params.sat_bit) == 0;
-        region[i] = ok ? -1 : -2;
+        state[i] = ok ? kUnvisited : kInvalid;
     }
+    // Wrapped difference f[j] - f[i], in periods, in [-0.5, 0.5].
+    auto wrapped_in = [](const float* f, std::int32_t i, std::int32_t j) {
+        const float d = f[j] - f[i];
+        return d - round_fast(d);
+    };
+    // Neighbour of i one step in direction dir (0 left, 1 right, 2 up, 3 down), -1 outside.
+    auto step = [&](std::int32_t i, int dir) -> std::int32_t {
+        const int x = i % w, y = i / w;
+        switch (dir) {
+        case 0: return x > 0 ? i - 1 : -1;
+        case 1: return x + 1 < w ? i + 1 : -1;
+        case 2: return y > 0 ? i - w : -1;
+        default: return y + 1 < h ? i + w : -1;
+        }
+    };
+    auto usable = [&](std::int32_t i) { return i >= 0 && state[i] != kInvalid; };
+    // Second difference of the link a -> b (direction dir) in f: how much the
+    // step d differs from the steps just before and after it; -1 if neither exists.
+    auto curvature_of = [&](const float* f, std::int32_t a, std::int32_t b, int dir, float d) {
+        float c = -1.0f;
+        const std::int32_t before = step(a, dir ^ 1);
+        if (usable(before)) c = abs_fast(d - wrapped_in(f, before, a));
+        const std::int32_t after = step(b, dir);
+        if (usable(after)) c = std::max(c, abs_fast(wrapped_in(f, b, after) - d));
+        return c;
+    };
+    // A link is smooth if the wrapped step is small and steady in this axis's
+    // phase and in the other axis's (a depth step moves both coordinates).
+    auto smooth = [&](std::int32_t a, std::int32_t b, int dir, float gate, float& d) {
+        d = wrapped_in(fraction, a, b);
+        if (abs_fast(d) > params.jump_gate) return false;
+        const float c = curvature_of(fraction, a, b, dir, d);
+        if (c < 0.0f || c > gate) return false;
+        if (other != nullptr) {
+            const float od = wrapped_in(other, a, b);
+            if (abs_fast(od) > params.jump_gate || curvature_of(other, a, b, dir, od) > gate)
+                return false;
+        }
+        return true;
+    };
 
-    // Regions, each grown from its first pixel in raster order along the
-    // smoothest links first. `out` holds the relative unwrapped coordinate.
-    std::int32_t regions = 0;
-    std::int32_t head[kBuckets];
+    // 1. Patches: pixels joined by strictly smooth links, unwrapped relative
+    //    to their first pixel (breadth first; `next` is the queue).
+    std::int32_t patches = 0;
     for (std::int32_t seed = 0; seed < count; ++seed) {
-        if (region[seed] != -1) continue;
-        const std::int32_t id = regions++;
-        std::fill(head, head + kBuckets, -1);
-        region[seed] = id;
+        if (state[seed] != kUnvisited) continue;
+        const std::int32_t id = patches++;
+        state[seed] = id;
         out[seed] = fraction[seed] * period;
-        next[seed] = -1;
-        head[0] = seed;
-        int lowest = 0;
-        for (;;) {
-            while (lowest < kBuckets && head[lowest] < 0) ++lowest;
-            if (lowest == kBuckets) break;
-            const std::int32_t a = head[lowest];
-            head[lowest] = next[a];
-            const int ax = a % w, ay = a / w;
-            const float ua = out[a];
-            const float fa = fraction[a];
-            const std::int32_t neighbours[4] = {ax > 0 ? a - 1 : -1, ax + 1 < w ? a + 1 : -1,
-                                                ay > 0 ? a - w : -1, ay + 1 < h ? a + w : -1};
-            for (std::int32_t b : neighbours) {
-                if (b < 0 || region[b] != -1) continue;
-                float d = fraction[b] - fa;
-                d -= round_fast(d);
-                const float ad = abs_fast(d);
-                if (ad > params.jump_gate) continue;
-                region[b] = id;
+        std::int32_t head = 0, tail = 0;
+        next[tail++] = seed;
+        while (head < tail) {
+            const std::int32_t a = next[head++];
+            for (int dir = 0; dir < 4; ++dir) {
+                const std::int32_t b = step(a, dir);
+                float d = 0;
+                if (b < 0 || state[b] != kUnvisited || !smooth(a, b, dir, params.patch_gate, d))
+                    continue;
+                state[b] = id;
                 const float pw = fraction[b] * period;
-                out[b] = pw + round_fast((ua - pw) * inv) * period;
-                const int bucket = std::min(kBuckets - 1, static_cast<int>(ad * bucket_scale));
-                next[b] = head[bucket];
-                head[bucket] = b;
-                lowest = std::min(lowest, bucket);
+                out[b] = pw + round_fast((out[a] - pw) * inv) * period;
+                next[tail++] = b;
             }
         }
     }
 
-    // Votes of the centerline pixels: (region, fringe-order offset).
-    std::vector<std::pair<std::int32_t, std::int32_t>> votes;
+    // 2. Links between patches. Two patches of one surface (split where the
+    //    phase is noisy or curves) share a boundary whose links are mostly
+    //    smooth and agree on the offset; at an occlusion edge most links jump
+    //    and only a few look smooth by chance.
+    std::vector<PatchLink> links;
+    for (std::int32_t a = 0; a < count; ++a) {
+        if (state[a] < 0) continue;
+        for (int dir : {1, 3}) {
+            const std::int32_t b = step(a, dir);
+            if (b < 0 || state[b] < 0 || state[b] == state[a]) continue;
+            PatchLink link;
+            float d = 0;
+            link.pass = smooth(a, b, dir, params.merge_gate, d);
+            // q shifted by k continues p at this link.
+            const float k = round_fast((out[a] + d * period - out[b]) * inv);
+            link.p = state[a];
+            link.q = state[b];
+            link.k = static_cast<std::int32_t>(k);
+            if (link.p > link.q) {
+                std::swap(link.p, link.q);
+                link.k = -link.k;
+            }
+            links.push_back(link);
+        }
+    }
+    std::sort(links.begin(), links.end());
+    struct Candidate {
+        std::int32_t p, q, k, support;
+    };
+    std::vector<Candidate> candidates;
+    for (std::size_t s = 0; s < links.size();) {
+        std::size_t e = s;
+        int total = 0, passing = 0, best = 0;
+        std::int32_t best_k = 0;
+        while (e < links.size() && links[e].p == links[s].p && links[e].q == links[s].q) {
+            std::size_t f = e;
+            while (f < links.size() && links[f].p == links[e].p && links[f].q == links[e].q &&
+                   links[f].pass == links[e].pass && links[f].k == links[e].k)
+                ++f;
+            const int n = static_cast<int>(f - e);
+            total += n;
+            if (links[e].pass) {
+                passing += n;
+                if (n > best) {
+                    best = n;
+                    best_k = links[e].k;
+                }
+            }
+            e = f;
+        }
+        if (passing >= params.min_links && 2 * passing >= total && 5 * best >= 4 * passing)
+            candidates.push_back({links[s].p, links[s].q, best_k, best});
+        s = e;
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const Candidate& x, const Candidate& y) { return x.support > y.support; });
+    OffsetForest forest(patches);
+    for (const Candidate& c : candidates) forest.join(c.p, c.q, c.k);
+
+    // 3. Seeds: pixels lit by the centerline whose wrapped position matches
+    //    the line, in runs (at least two such 8-neighbours) so that a stray
+    //    bright pixel cannot vote. Each votes for its group's fringe order.
     const double position = params.position;
     const double period_d = static_cast<double>(period);
     const double reach = params.half_width + 1.0;
-    for (std::int32_t i = 0; i < count; ++i) {
-        if (line[i] == 0 || region[i] < 0) continue;
+    auto on_line = [&](std::int32_t i) {
+        if (line[i] == 0 || state[i] < 0) return false;
         double offset = static_cast<double>(fraction[i]) * period_d - position;
         offset -= period_d * std::floor(offset / period_d + 0.5);
-        if (std::abs(offset) > reach) continue;
-        const auto k = static_cast<std::int32_t>(std::lround((position - static_cast<double>(out[i])) / period_d));
-        votes.emplace_back(region[i], k);
+        return std::abs(offset) <= reach;
+    };
+    std::vector<std::pair<std::int32_t, std::int32_t>> votes; // (root, fringe-order shift)
+    for (std::int32_t i = 0; i < count; ++i) {
+        if (!on_line(i)) continue;
+        const int x = i % w, y = i / w;
+        int neighbours = 0;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                if ((dx == 0 && dy == 0) || x + dx < 0 || x + dx >= w || y + dy < 0 || y + dy >= h)
+                    continue;
+                neighbours += on_line(i + dy * w + dx) ? 1 : 0;
+            }
+        if (neighbours < 2) continue;
+        const auto [root, offset] = forest.find(state[i]);
+        const double value = static_cast<double>(out[i]) + offset * period_d;
+        votes.emplace_back(root, static_cast<std::int32_t>(std::lround((position - value) / period_d)));
     }
     std::sort(votes.begin(), votes.end());
-    std::vector<float> shift(static_cast<std::size_t>(regions), kNaN);
-    std::vector<std::uint8_t> flag(static_cast<std::size_t>(regions), kDecodeNoCue);
+    std::vector<std::int32_t> shift(static_cast<std::size_t>(patches), 0);
+    std::vector<std::uint8_t> flag(static_cast<std::size_t>(patches), kDecodeNoCue);
     for (std::size_t s = 0; s < votes.size();) {
-        const std::int32_t id = votes[s].first;
+        const std::int32_t root = votes[s].first;
         std::size_t e = s;
         int total = 0, best = 0;
         std::int32_t best_k = 0;
-        while (e < votes.size() && votes[e].first == id) {
+        while (e < votes.size() && votes[e].first == root) {
             std::size_t f = e;
             while (f < votes.size() && votes[f] == votes[e]) ++f;
             const int n = static_cast<int>(f - e);
@@ -163,24 +316,32 @@ void unwrap_centerline(Size size, const float* fraction, const float* modulation
             e = f;
         }
         if (best >= params.min_votes && 3 * best >= 2 * total) {
-            shift[static_cast<std::size_t>(id)] = static_cast<float>(best_k) * period;
-            flag[static_cast<std::size_t>(id)] = 0;
-        } else {
-            flag[static_cast<std::size_t>(id)] = total >= params.min_votes ? kDecodeUnwrapInconsistent
-                                                                           : kDecodeNoCue;
+            shift[static_cast<std::size_t>(root)] = best_k;
+            flag[static_cast<std::size_t>(root)] = 0;
+        } else if (total >= params.min_votes) {
+            flag[static_cast<std::size_t>(root)] = kDecodeUnwrapInconsistent;
         }
         s = e;
     }
 
+    // 4. Absolute coordinates for groups with a centerline; the rest has no cue.
     for (std::int32_t i = 0; i < count; ++i) {
-        const std::int32_t id = region[i];
-        if (id < 0) {
+        if (state[i] < 0) {
             out[i] = kNaN; // flagged already (low modulation or saturated)
             continue;
         }
-        const float s = shift[static_cast<std::size_t>(id)];
-        out[i] = s == s ? out[i] + s : kNaN;
-        mask[i] = static_cast<std::uint8_t>(mask[i] | flag[static_cast<std::size_t>(id)]);
+        const auto [root, offset] = forest.find(state[i]);
+        const std::uint8_t f = flag[static_cast<std::size_t>(root)];
+        if (f != 0) {
+            out[i] = kNaN;
+            mask[i] = static_cast<std::uint8_t>(mask[i] | f);
+        } else {
+            out[i] += static_cast<float>(offset + shift[static_cast<std::size_t>(root)]) * period;
+            if (out[i] < -1.5f || out[i] > params.highest) {
+                out[i] = kNaN;
+                mask[i] = static_cast<std::uint8_t>(mask[i] | kDecodeUnwrapInconsistent);
+            }
+        }
     }
 }
 

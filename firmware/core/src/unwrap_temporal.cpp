@@ -5,30 +5,34 @@
 
 #include <limits>
 
+FPP_NO_FP_CONTRACT
+
 namespace fpp::detail {
 
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-inline std::uint8_t base_flags(float modulation, std::uint8_t sat, const PixelChecks& checks) {
+FPP_KERNEL std::uint8_t base_flags(float modulation, std::uint8_t sat, const PixelChecks& checks) {
     return static_cast<std::uint8_t>((modulation < checks.min_modulation ? kDecodeLowModulation : 0) |
                                      ((sat & checks.sat_bit) != 0 ? kDecodeSaturated : 0));
 }
 
 // `keep` is 0 for the first axis written (assign) and 0xff after (OR); an
 // unconditional read keeps the loops free of branches.
-inline void store(float p, std::uint8_t flags, std::uint8_t keep, std::uint8_t valid_flag,
+FPP_KERNEL void store(float p, std::uint8_t flags, std::uint8_t keep, const PixelChecks& c,
                   float& out, std::uint8_t& mask) {
+    const bool outside = (p < c.lowest) | (p > c.highest);
+    flags = static_cast<std::uint8_t>(flags | (outside ? kDecodeUnwrapInconsistent : 0));
     out = select(flags != 0, kNaN, p);
-    mask = static_cast<std::uint8_t>((mask & keep) | flags | (flags == 0 ? valid_flag : 0));
+    mask = static_cast<std::uint8_t>((mask & keep) | flags | (flags == 0 ? c.valid_flag : 0));
 }
 
 // Complementary Gray with the interval centre computed from the code: the
 // general form with ceil(), or, when the half period is a whole number of
 // pixels, the exact shortcut K unit + unit/2 - 0.5.
 template <bool WholeUnit>
-[[gnu::always_inline]] inline void unwrap_complementary_gray(int n, const float* fraction, const float* modulation,
+FPP_KERNEL void unwrap_complementary_gray(int n, const float* fraction, const float* modulation,
                                const std::uint16_t* code, const GrayRowParams& params,
                                const std::uint8_t* sat, const PixelChecks& c, std::uint8_t keep,
                                float* out, std::uint8_t* mask) {
@@ -49,14 +53,14 @@ template <bool WholeUnit>
         const bool inconsistent = (k > max_code) | (abs_fast(p - centre) * inv > max_dis);
         const std::uint8_t flags = static_cast<std::uint8_t>(
             base_flags(modulation[x], sat[x], c) | (inconsistent ? kDecodeUnwrapInconsistent : 0));
-        store(p, flags, keep, c.valid_flag, out[x], mask[x]);
+        store(p, flags, keep, c, out[x], mask[x]);
     }
 }
 
-inline std::uint8_t keep_mask(bool mask_first) { return mask_first ? std::uint8_t{0} : std::uint8_t{0xff}; }
+FPP_KERNEL std::uint8_t keep_mask(bool mask_first) { return mask_first ? std::uint8_t{0} : std::uint8_t{0xff}; }
 
 // Projector window of a block covering the extent: [lo, lo + period).
-inline float window_top(double period, double extent) {
+FPP_KERNEL float window_top(double period, double extent) {
     const double lo = -0.5 - (period - extent) / 2.0;
     return static_cast<float>(lo + period);
 }
@@ -77,7 +81,7 @@ void unwrap_direct_row(int n, const PhaseRow& phase, double extent, const std::u
         float p = fraction[x] * period;
         p -= select(p >= top, period, 0.0f);
         const std::uint8_t flags = base_flags(modulation[x], sat[x], c);
-        store(p, flags, keep, c.valid_flag, out[x], mask[x]);
+        store(p, flags, keep, c, out[x], mask[x]);
     }
 }
 
@@ -100,7 +104,7 @@ void unwrap_multi_period_row(int n, const PhaseRow* blocks, int count, double ex
             if (b.modulation[x] < checks.min_modulation) flags |= kDecodeLowModulation;
             p = q;
         }
-        store(p, flags, keep, checks.valid_flag, out[x], mask[x]);
+        store(p, flags, keep, checks, out[x], mask[x]);
     }
 }
 
@@ -142,7 +146,7 @@ void unwrap_heterodyne_row(int n, const PhaseRow* blocks, int count,
             }
         }
         const float mean = weighted / select(weights > 0, weights, 1.0f);
-        store(select(weights > 0, mean, p), flags, keep, checks.valid_flag, out[x], mask[x]);
+        store(select(weights > 0, mean, p), flags, keep, checks, out[x], mask[x]);
     }
 }
 
@@ -179,8 +183,8 @@ void unwrap_gray_row(int n, const PhaseRow& phase, const std::uint16_t* code,
             const std::uint8_t flags = static_cast<std::uint8_t>(
                 base_flags(modulation[x], sat[x], c) |
                 (k > max_code ? kDecodeUnwrapInconsistent : 0));
-            store(p, flags, keep, c.valid_flag, out[x], mask[x]);
-            estimate[x] = select(flags != 0, kNaN, p);
+            store(p, flags, keep, c, out[x], mask[x]);
+            estimate[x] = out[x];
             edge[x] = ((p - lo < band) | (hi - p < band)) ? std::uint8_t{1} : std::uint8_t{0};
         }
     }

@@ -17,6 +17,10 @@ struct PixelChecks {
     // kDecodeValid when this kernel alone decides validity (one coded axis,
     // no neighbourhood stage): set where no flag is raised. Else 0.
     std::uint8_t valid_flag = 0;
+    // Projector range along the axis, with a pixel of margin: a coordinate
+    // outside it cannot have been lit, so the unwrapping went wrong.
+    float lowest = -1.5f;
+    float highest = 1e30f;
 };
 
 // A phase block's per-row data after phase_finish_row.

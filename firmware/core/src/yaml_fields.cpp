@@ -1,13 +1,17 @@
-#include "yaml_fields.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include "fpp/error.hpp"
 
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <limits>
 #include <set>
+#include <sstream>
 #include <system_error>
 
 namespace fpp::yaml_fields {
@@ -71,6 +75,25 @@ bool is_non_finite_word(const std::string& s) {
     return t == ".inf" || t == ".nan" || t == "inf" || t == "nan" || t == "infinity";
 }
 
+// True if `s` can be written unquoted and reads back as the same string.
+bool is_plain_safe(const std::string& s) {
+    if (s.empty()) return false;
+    for (const char c : s) {
+        const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || is_digit(c) ||
+                        c == '_' || c == '.' || c == '-' || c == '/' || c == '+';
+        if (!ok) return false;
+    }
+    if (s[0] == '-' || s[0] == '+' || s[0] == '.') return false;
+    // Would read back as a number, boolean or null in other YAML readers.
+    static const std::set<std::string> words = {"true", "false", "null", "yes", "no",
+                                                "on",   "off",   "y",    "n"};
+    if (words.count(lower(s))) return false;
+    if (std::all_of(s.begin(), s.end(), is_digit)) return false;
+    double ignored = 0;
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), ignored);
+    return !(ec == std::errc() && end == s.data() + s.size());
+}
+
 } // namespace
 
 std::string child(const std::string& parent, std::string_view key) {
@@ -79,6 +102,19 @@ std::string child(const std::string& parent, std::string_view key) {
 
 std::string item(const std::string& parent, std::size_t index) {
     return parent + "[" + std::to_string(index) + "]";
+}
+
+std::string read_text_file(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) {
+        throw InputError(path, "", "is a folder, not a file");
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw InputError(path, "", "read error");
+    return text.str();
 }
 
 YAML::Node Reader::load(const std::string& text) const {
@@ -94,6 +130,8 @@ YAML::Node Reader::load(const std::string& text) const {
     }
 }
 
+YAML::Node Reader::load_file() const { return load(read_text_file(origin_)); }
+
 void Reader::fail(const YAML::Node& node, const std::string& field,
                   const std::string& message) const {
     std::string where;
@@ -101,6 +139,10 @@ void Reader::fail(const YAML::Node& node, const std::string& field,
         where = " (line " + std::to_string(node.Mark().line + 1) + ")";
     }
     throw InputError(origin_, field, message + where);
+}
+
+void Reader::fail(const std::string& field, const std::string& message) const {
+    throw InputError(origin_, field, message);
 }
 
 void Reader::check_keys(const YAML::Node& node, const std::string& field,
@@ -135,6 +177,15 @@ void Reader::expect_any_map(const YAML::Node& node, const std::string& field) co
 void Reader::expect_list(const YAML::Node& node, const std::string& field) const {
     if (!node.IsSequence()) {
         fail(node, field, std::string("must be a list, got ") + describe_type(node));
+    }
+}
+
+void Reader::expect_list(const YAML::Node& node, const std::string& field,
+                         std::size_t size) const {
+    expect_list(node, field);
+    if (node.size() != size) {
+        fail(node, field, "must be a list of " + std::to_string(size) + " values, got " +
+                              std::to_string(node.size()));
     }
 }
 
@@ -199,6 +250,41 @@ bool Reader::bool_value(const YAML::Node& node, const std::string& field) const 
     if (text == "true" || text == "True" || text == "TRUE") return true;
     if (text == "false" || text == "False" || text == "FALSE") return false;
     fail(node, field, "must be true or false, got '" + text + "'");
+}
+
+double Reader::real_value_or(const YAML::Node& map, const std::string& parent,
+                             std::string_view key, double fallback) const {
+    const YAML::Node value = map[std::string(key)];
+    if (!value.IsDefined()) return fallback;
+    return real_value(value, child(parent, key));
+}
+
+std::string format_real(double value) {
+    char buffer[64];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+    std::string text(buffer, result.ptr);
+    if (text.find_first_of(".eEn") == std::string::npos) text += ".0";
+    return text;
+}
+
+std::string format_string(const std::string& text) {
+    if (is_plain_safe(text)) return text;
+    std::string out = "\"";
+    for (const char c : text) {
+        const auto u = static_cast<unsigned char>(c);
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += c;
+        } else if (u < 0x20 || u == 0x7f) {
+            static const char* hex = "0123456789abcdef";
+            out += "\\x";
+            out += hex[u >> 4];
+            out += hex[u & 15];
+        } else {
+            out += c;
+        }
+    }
+    return out + "\"";
 }
 
 } // namespace fpp::yaml_fields

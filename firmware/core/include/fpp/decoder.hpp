@@ -16,10 +16,21 @@
 //                                             absolute by the centerline pixels)
 // Gray planes are thresholded against (white + black) / 2 when the sequence has
 // both, against their inverse frames when present, else against the mean A of
-// the phase block they index. A sequence that cannot be decoded (no phase
-// block, a phase block without a usable cue, a gray block without a phase
-// block of its period, ...) makes the constructor / decode() throw
-// std::invalid_argument.
+// the phase block they index. The fringe order is the one that puts p nearest
+// the centre of the code's interval [ceil(K u) - 0.5, ceil((K + 1) u) - 0.5]
+// (u = period, or period / 2 for complementary code): code edges sit between
+// projector pixels, the phase wraps at multiples of the period. Plain Gray
+// pixels near a code edge are checked against their neighbours. The
+// centerline method only reaches surfaces that carry the centerline; other
+// regions get kDecodeNoCue.
+// A sequence that cannot be decoded (no phase block, a phase block without a
+// usable cue, a gray block without a phase block of its period or with too
+// few bits, more than one gray or centerline block on an axis, ...) makes the
+// constructor / decode() throw std::invalid_argument naming the reason.
+//
+// Coordinates outside the projector (beyond one pixel of margin) are flagged
+// kDecodeUnwrapInconsistent. Low modulation and saturation are judged on the
+// phase frames a pixel uses (see DecodeOptions).
 
 #include "fpp/capture_set.hpp"
 #include "fpp/image.hpp"
@@ -39,6 +50,12 @@ struct DecodeOptions {
     // saturated. 0.999 catches 255 in 8-bit frames and the MSB-aligned maxima
     // of 10- and 12-bit sensors in 16-bit frames (65472, 65520).
     double saturation = 0.999;
+    // Whether saturation in the thresholded frames (gray planes, white and
+    // black, centerline) also invalidates a pixel. Off by default: clipping
+    // bends a phase frame's sinusoid and biases the phase, but a clipped white
+    // stripe still reads as white (in the SLMaster scan a fifth of the tile
+    // clips in the Gray frames only and decodes correctly).
+    bool saturation_in_binary_frames = false;
     // Largest tolerated disagreement, in periods of the finer block, between
     // a coarse cue and the fine phase before a pixel is flagged inconsistent.
     double max_unwrap_disagreement = 0.35;
@@ -100,7 +117,9 @@ private:
 // Batch form: the whole capture set at once.
 DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options = {});
 // Same, writing into `result` and reusing its images' memory when their size
-// fits (bit-identical output to the form above).
+// fits (bit-identical output to the form above; no page faults or zero-fill
+// of fresh images, which cost about as much as decoding itself at 1600x1200).
+// If it throws, `result` is left empty or partly moved from.
 void decode(const CaptureSet& capture, DecodeResult& result, const DecodeOptions& options = {});
 
 } // namespace fpp

@@ -17,11 +17,13 @@
 
 #include "fpp/capture_set.hpp"
 #include "fpp/image.hpp"
+#include "fpp/parallel.hpp"
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <vector>
 
 namespace fpp::sim {
@@ -29,7 +31,8 @@ namespace fpp::sim {
 class Renderer {
   public:
     // `threads`: workers for ray casting and rendering (rows are split among
-    // them); 0 = the machine's cores. Results do not depend on it.
+    // them); 0 = the machine's cores. Results do not depend on it. Copies of a
+    // renderer share its workers.
     Renderer(const Rig& rig, const Scene& scene, int threads = 0);
 
     // 3 channels: camera-frame X, Y, Z in mm per camera pixel centre, NaN where no surface.
@@ -47,7 +50,8 @@ class Renderer {
     Image<float> render_radiance(const Image<std::uint8_t>& projector_image) const;
 
     const Rig& rig() const { return rig_; }
-    int threads() const { return threads_; }
+    int threads() const { return pool_->size(); }
+    // Replaces the workers (not while another thread renders with this renderer).
     void set_threads(int threads);
     // Albedo seen by each camera pixel (area-averaged on printed surfaces), 0 where no surface.
     const Image<float>& albedo() const { return albedo_; }
@@ -60,7 +64,10 @@ class Renderer {
                        std::vector<float>& light, std::vector<float>& blur) const;
 
     Rig rig_;
-    int threads_ = 1;
+    // Shared so that the renderer stays copyable (copies share the workers).
+    // A pool runs one parallel loop at a time: renders from several threads
+    // take turns in their parallel parts.
+    std::shared_ptr<ThreadPool> pool_;
     Image<float> truth_xyz_;
     Image<float> truth_projector_;
     Image<float>
