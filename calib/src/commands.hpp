@@ -13,5 +13,8 @@ using Action = std::function<int()>;
 Action add_simulate_command(CLI::App& app);
 Action add_decode_command(CLI::App& app);
 Action add_demo_command(CLI::App& app);
+Action add_simulate_session_command(CLI::App& app);
+Action add_stereo_command(CLI::App& app);
+Action add_reconstruct_command(CLI::App& app);
 
 } // namespace fpp::calib

@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
     add(fpp::calib::add_simulate_command);
     add(fpp::calib::add_decode_command);
     add(fpp::calib::add_demo_command);
+    add(fpp::calib::add_simulate_session_command);
+    add(fpp::calib::add_stereo_command);
+    add(fpp::calib::add_reconstruct_command);
 
     try {
         app.parse(argc, argv);

@@ -5,6 +5,7 @@
 #include "unwrap_temporal.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -18,13 +19,19 @@ namespace {
 
 constexpr std::size_t kAlign = 64;
 constexpr int kMaxBlocksPerAxis = 16;
+// Pixels per span: a batch span's state (sums, code, thresholds, saturation)
+// and the frames' samples for it stay in a 32 KiB L1 data cache.
+constexpr std::size_t kSpanPixels = 1024;
 
-std::uint8_t axis_bit(int axis) { return static_cast<std::uint8_t>(1u << axis); }
+std::uint8_t axis_bit(int axis) {
+    return static_cast<std::uint8_t>(1u << axis);
+}
 
 AxisConstants axis_constants(const Plan& plan, int a) {
     AxisConstants c;
     const AxisPlan& ap = plan.axes[a];
-    if (!ap.coded) return c;
+    if (!ap.coded)
+        return c;
     if (ap.method == UnwrapMethod::gray) {
         const GrayInfo& g = plan.grays[static_cast<std::size_t>(ap.gray)];
         const double period = g.block.period;
@@ -53,7 +60,8 @@ AxisConstants axis_constants(const Plan& plan, int a) {
         for (const auto& level : ap.levels) {
             HeterodyneStep s;
             s.period = static_cast<float>(level.period);
-            for (int j = 0; j < 3; ++j) s.coef[j] = static_cast<float>(level.coef[j]);
+            for (int j = 0; j < 3; ++j)
+                s.coef[j] = static_cast<float>(level.coef[j]);
             s.single = level.single;
             c.heterodyne.push_back(s);
         }
@@ -65,21 +73,26 @@ AxisConstants axis_constants(const Plan& plan, int a) {
 
 DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
                            DecodeResult* recycled)
-    : plan_(std::move(plan)), options_(options), mode_(mode), pool_(options.threads) {
+    : plan_(std::move(plan)), options_(options), mode_(mode),
+      pool_(ThreadPool::shared(options.threads)) {
     width_ = plan_.camera.width;
     height_ = plan_.camera.height;
+    area_ = plan_.camera.area();
     full_ = mode_ == Mode::streaming || plan_.needs_full_storage;
-    const std::size_t area = plan_.camera.area();
-    for (int a = 0; a < 2; ++a) constants_[a] = axis_constants(plan_, a);
+    span_ = static_cast<int>(std::min<std::size_t>(kSpanPixels, std::max<std::size_t>(area_, 1)));
+    for (int a = 0; a < 2; ++a)
+        constants_[a] = axis_constants(plan_, a);
     if (!options_.saturation_in_binary_frames)
         for (Step& s : plan_.steps)
-            if (s.kind != StepKind::phase_frame) s.sat_bits = 0;
+            if (s.kind != StepKind::phase_frame)
+                s.sat_bits = 0;
     single_decider_ = (plan_.axes[0].coded != plan_.axes[1].coded) && !plan_.needs_full_storage;
 
     for (int a = 0; a < 2; ++a)
         if (plan_.axes[a].phases.size() > static_cast<std::size_t>(kMaxBlocksPerAxis))
-            throw std::invalid_argument("cannot decode sequence: more than 16 phase blocks on axis " +
-                                        std::string(a == 0 ? "x" : "y"));
+            throw std::invalid_argument(
+                "cannot decode sequence: more than 16 phase blocks on axis " +
+                std::string(a == 0 ? "x" : "y"));
 
     allocate_result(recycled);
     const int report_axis = plan_.axes[0].coded ? 0 : 1;
@@ -87,7 +100,8 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
 
     phase_state_.resize(plan_.phases.size());
     for (std::size_t b = 0; b < plan_.phases.size(); ++b) {
-        if (!plan_.phases[b].used) continue;
+        if (!plan_.phases[b].used)
+            continue;
         PhaseState& ps = phase_state_[b];
         ps.fraction = make_plane(float_store_, full_);
         if (static_cast<int>(b) == report) {
@@ -97,54 +111,45 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
             ps.modulation = make_plane(float_store_, full_);
             ps.mean = make_plane(float_store_, full_);
         }
-        if (plan_.phases[b].thresholds) ps.threshold = make_plane(u16_store_, full_);
+        if (plan_.phases[b].thresholds)
+            ps.threshold = make_plane(u16_store_, full_);
     }
     code_.resize(plan_.grays.size());
-    for (std::size_t g = 0; g < plan_.grays.size(); ++g) code_[g] = make_plane(u16_store_, full_);
+    for (std::size_t g = 0; g < plan_.grays.size(); ++g)
+        code_[g] = make_plane(u16_store_, full_);
     line_.resize(plan_.centerlines.size());
     for (std::size_t c = 0; c < plan_.centerlines.size(); ++c)
-        if (plan_.centerlines[c].phase >= 0) line_[c] = make_plane(u8_store_, full_);
-    if (plan_.uses_white_black) white_black_ = make_plane(u16_store_, full_);
+        if (plan_.centerlines[c].phase >= 0)
+            line_[c] = make_plane(u8_store_, full_);
+    if (plan_.uses_white_black)
+        white_black_ = make_plane(u16_store_, full_);
     sat_ = make_plane(u8_store_, full_);
 
     for (int a = 0; a < 2; ++a) {
         const AxisPlan& ap = plan_.axes[a];
-        if (!ap.coded) continue;
+        if (!ap.coded)
+            continue;
         if (ap.method == UnwrapMethod::gray &&
             !plan_.grays[static_cast<std::size_t>(ap.gray)].block.complementary) {
             gray_estimate_[a] = make_plane(float_store_, true).full;
             gray_edge_[a] = make_plane(u8_store_, true).full;
         }
         if (ap.method == UnwrapMethod::centerline && region_ == nullptr) {
-            i32_store_.push_back(std::make_unique_for_overwrite<std::int32_t[]>(area));
+            i32_store_.push_back(std::make_unique_for_overwrite<std::int32_t[]>(area_));
             region_ = i32_store_.back().get();
-            i32_store_.push_back(std::make_unique_for_overwrite<std::int32_t[]>(area));
+            i32_store_.push_back(std::make_unique_for_overwrite<std::int32_t[]>(area_));
             queue_next_ = i32_store_.back().get();
         }
     }
     if (!full_)
         for (int w = 0; w < pool_.size(); ++w)
-            local_rows_.push_back(std::make_unique<std::byte[]>(local_bytes_ + kAlign));
+            local_spans_.push_back(
+                std::make_unique_for_overwrite<std::byte[]>(local_bytes_ + kAlign));
 
     frame_base_.assign(static_cast<std::size_t>(plan_.frame_count), nullptr);
     if (mode_ == Mode::streaming)
         for (int s = 0; s < plan_.slot_count; ++s)
-            slots_.push_back(std::make_unique_for_overwrite<std::uint16_t[]>(area));
-    // Batch groups: runs of phase frames of one block, or of gray planes of
-    // one block thresholded against one image, up to four at a time.
-    for (int i = 0; i < static_cast<int>(plan_.steps.size());) {
-        const Step& head = plan_.steps[static_cast<std::size_t>(i)];
-        const bool groupable = head.kind == StepKind::phase_frame ||
-                               head.kind == StepKind::gray_threshold;
-        int n = 1;
-        while (groupable && n < 4 && i + n < static_cast<int>(plan_.steps.size())) {
-            const Step& s = plan_.steps[static_cast<std::size_t>(i + n)];
-            if (s.kind != head.kind || s.index != head.index || s.k != head.k + n) break;
-            ++n;
-        }
-        batch_groups_.push_back({i, n});
-        i += n;
-    }
+            slots_.push_back(std::make_unique_for_overwrite<std::uint16_t[]>(area_));
     step_begin_.assign(static_cast<std::size_t>(plan_.frame_count), 0);
     step_end_.assign(static_cast<std::size_t>(plan_.frame_count), 0);
     for (int t = 0, s = 0; t < plan_.frame_count; ++t) {
@@ -154,6 +159,91 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
             ++s;
         step_end_[static_cast<std::size_t>(t)] = s;
     }
+    if (mode_ == Mode::batch)
+        build_batch_groups();
+}
+
+void DecodeEngine::build_batch_groups() {
+    // A phase block's frame steps move to its finish step: they only touch the
+    // block's own sums and the saturation bytes (an OR, order-free), and
+    // nothing reads the sums before the finish. Everything else keeps the
+    // plan's order, so each step still runs after the steps it reads from.
+    for (const Step& s : plan_.steps) {
+        if (s.kind == StepKind::phase_frame)
+            continue;
+        BatchGroup group;
+        group.first = static_cast<int>(batch_steps_.size());
+        if (s.kind == StepKind::phase_finish) {
+            group.kind = GroupKind::phase_block;
+            for (const Step& f : plan_.steps)
+                if (f.kind == StepKind::phase_frame && f.index == s.index)
+                    batch_steps_.push_back(f);
+            group.count = static_cast<int>(batch_steps_.size()) - group.first;
+            // Frames in step order k = 0 .. N-1 (the plan emits them so).
+            for (int k = 0; k < group.count; ++k)
+                assert(batch_steps_[static_cast<std::size_t>(group.first + k)].k == k);
+            batch_groups_.push_back(group);
+            continue;
+        }
+        if (s.kind == StepKind::gray_threshold && !batch_groups_.empty()) {
+            BatchGroup& last = batch_groups_.back();
+            const Step& prev = batch_steps_[static_cast<std::size_t>(last.first + last.count - 1)];
+            if (last.kind == GroupKind::gray_planes && last.count < 4 && prev.index == s.index &&
+                prev.k + 1 == s.k) {
+                batch_steps_.push_back(s);
+                ++last.count;
+                continue;
+            }
+        }
+        group.kind =
+            s.kind == StepKind::gray_threshold ? GroupKind::gray_planes : GroupKind::single;
+        batch_steps_.push_back(s);
+        batch_groups_.push_back(group);
+    }
+    // The first step reading a frame, in this order, assigns the saturation
+    // bytes; the others OR into them.
+    bool seen = false;
+    for (Step& s : batch_steps_) {
+        s.sat_first = !seen && s.frame >= 0;
+        seen = seen || s.frame >= 0;
+    }
+}
+
+template <class T>
+PlaneRef<T> DecodeEngine::make_plane(std::vector<std::unique_ptr<T[]>>& store, bool full) {
+    PlaneRef<T> p;
+    if (full) {
+        store.push_back(std::make_unique_for_overwrite<T[]>(area_));
+        p.full = store.back().get();
+    } else {
+        local_bytes_ = (local_bytes_ + kAlign - 1) / kAlign * kAlign;
+        p.local = local_bytes_;
+        local_bytes_ += static_cast<std::size_t>(span_) * sizeof(T);
+    }
+    return p;
+}
+
+std::byte* DecodeEngine::local_buffer(int worker) const {
+    if (local_spans_.empty())
+        return nullptr;
+    std::byte* base = local_spans_[static_cast<std::size_t>(worker)].get();
+    const auto addr = reinterpret_cast<std::uintptr_t>(base);
+    return base + ((kAlign - addr % kAlign) % kAlign);
+}
+
+template <class F> void DecodeEngine::for_spans(int spans_per_task, F&& fn) {
+    const int count = static_cast<int>((area_ + static_cast<std::size_t>(span_) - 1) /
+                                       static_cast<std::size_t>(span_));
+    pool_.parallel_for(count, spans_per_task, [&](int b, int e, int worker) {
+        for (int i = b; i < e; ++i) {
+            const std::size_t offset =
+                static_cast<std::size_t>(i) * static_cast<std::size_t>(span_);
+            fn(offset,
+               static_cast<int>(
+                   std::min<std::size_t>(static_cast<std::size_t>(span_), area_ - offset)),
+               worker);
+        }
+    });
 }
 
 void DecodeEngine::allocate_result(DecodeResult* recycled) {
@@ -173,9 +263,11 @@ void DecodeEngine::allocate_result(DecodeResult* recycled) {
     adopt(result_.modulation, recycled != nullptr ? &recycled->modulation : nullptr);
     adopt(result_.mean, recycled != nullptr ? &recycled->mean : nullptr);
     for (int a = 0; a < 2; ++a) {
-        if (!plan_.axes[a].coded) continue;
+        if (!plan_.axes[a].coded)
+            continue;
         Image<float>* old = nullptr;
-        if (recycled != nullptr) old = a == 0 ? &recycled->proj_x : &recycled->proj_y;
+        if (recycled != nullptr)
+            old = a == 0 ? &recycled->proj_x : &recycled->proj_y;
         // A recycled image of the other axis is as good.
         if (recycled != nullptr && (old->empty() || !fits(*old)))
             old = a == 0 ? &recycled->proj_y : &recycled->proj_x;
@@ -195,31 +287,11 @@ void DecodeEngine::allocate_result(DecodeResult* recycled) {
         }
     });
     for (int a = 0; a < 2; ++a) {
-        if (!plan_.axes[a].coded) continue;
+        if (!plan_.axes[a].coded)
+            continue;
         proj_[a] = (a == 0 ? result_.proj_x : result_.proj_y).data();
         (a == 0 ? result_.method_x : result_.method_y) = plan_.axes[a].name;
     }
-}
-
-template <class T>
-PlaneRef<T> DecodeEngine::make_plane(std::vector<std::unique_ptr<T[]>>& store, bool full) {
-    PlaneRef<T> p;
-    if (full) {
-        store.push_back(std::make_unique_for_overwrite<T[]>(plan_.camera.area()));
-        p.full = store.back().get();
-    } else {
-        local_bytes_ = (local_bytes_ + kAlign - 1) / kAlign * kAlign;
-        p.local = local_bytes_;
-        local_bytes_ += static_cast<std::size_t>(width_) * sizeof(T);
-    }
-    return p;
-}
-
-std::byte* DecodeEngine::local_buffer(int worker) const {
-    if (local_rows_.empty()) return nullptr;
-    std::byte* base = local_rows_[static_cast<std::size_t>(worker)].get();
-    const auto addr = reinterpret_cast<std::uintptr_t>(base);
-    return base + ((kAlign - addr % kAlign) % kAlign);
 }
 
 void DecodeEngine::check_frame(const Frame& frame, int index) const {
@@ -230,14 +302,15 @@ void DecodeEngine::check_frame(const Frame& frame, int index) const {
     const bool eight = frame.bit_depth == 8;
     const int channels = eight ? frame.u8.channels() : frame.u16.channels();
     const bool empty = eight ? frame.u8.empty() : frame.u16.empty();
-    if (empty) throw std::invalid_argument(where + "no pixel data for its bit depth");
-    if (channels != 1) throw std::invalid_argument(where + "must have one channel");
+    if (empty)
+        throw std::invalid_argument(where + "no pixel data for its bit depth");
+    if (channels != 1)
+        throw std::invalid_argument(where + "must have one channel");
     if (frame.size() != plan_.camera)
-        throw std::invalid_argument(where + "size " + std::to_string(frame.size().width) + "x" +
-                                    std::to_string(frame.size().height) +
-                                    " differs from the camera size " +
-                                    std::to_string(plan_.camera.width) + "x" +
-                                    std::to_string(plan_.camera.height));
+        throw std::invalid_argument(
+            where + "size " + std::to_string(frame.size().width) + "x" +
+            std::to_string(frame.size().height) + " differs from the camera size " +
+            std::to_string(plan_.camera.width) + "x" + std::to_string(plan_.camera.height));
     if (depth_ != 0 && frame.bit_depth != depth_)
         throw std::invalid_argument(where + "bit depth " + std::to_string(frame.bit_depth) +
                                     " differs from the first frame's " + std::to_string(depth_));
@@ -252,139 +325,187 @@ void DecodeEngine::set_depth(int bit_depth) {
 }
 
 template <class T>
-FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, int y, std::byte* local) const {
-    const int w = width_;
-    const std::size_t offset = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
-    const T* in = s.frame >= 0
-                      ? static_cast<const T*>(frame_base_[static_cast<std::size_t>(s.frame)]) + offset
-                      : nullptr;
+FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, std::size_t offset, int n,
+                                              std::byte* local) const {
+    const T* in = s.frame >= 0 ? frame_at<T>(s.frame, offset) : nullptr;
     const T level = static_cast<T>(sat_level_);
-    if (in != nullptr && (s.sat_bits != 0 || s.sat_first))
-        saturation_row(in, w, level, s.sat_bits, s.sat_first, row(sat_, y, local));
+    std::uint8_t* sat = at(sat_, offset, local);
     switch (s.kind) {
     case StepKind::phase_frame: {
         const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(s.index)];
         const PhaseState& ps = phase_state_[static_cast<std::size_t>(s.index)];
-        phase_frame_row(in, w, p.cos_w[static_cast<std::size_t>(s.k)],
-                        p.sin_w[static_cast<std::size_t>(s.k)], s.first, row(ps.fraction, y, local),
-                        row(ps.modulation, y, local), row(ps.mean, y, local));
-        break;
+        const SatUpdate update{sat, s.sat_bits, s.sat_first ? std::uint8_t{0} : std::uint8_t{0xff}};
+        const std::size_t k = static_cast<std::size_t>(s.k);
+        float* c = at(ps.fraction, offset, local);
+        float* sn = at(ps.modulation, offset, local);
+        float* a = at(ps.mean, offset, local);
+        if (s.sat_bits != 0 || s.sat_first)
+            phase_frames_row<T, 1, true>(&in, n, &p.cos_w[k], &p.sin_w[k], s.first, level, update,
+                                         c, sn, a);
+        else
+            phase_frames_row<T, 1, false>(&in, n, &p.cos_w[k], &p.sin_w[k], s.first, level, update,
+                                          c, sn, a);
+        return;
     }
     case StepKind::phase_finish: {
         const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(s.index)];
         const PhaseState& ps = phase_state_[static_cast<std::size_t>(s.index)];
-        const float n = static_cast<float>(p.block.steps);
-        phase_finish_row(w, 2.0f / n, 1.0f / n, p.offset_fraction, row(ps.fraction, y, local),
-                         row(ps.modulation, y, local), row(ps.mean, y, local));
-        if (p.thresholds) mean_threshold_row(row(ps.mean, y, local), w, row(ps.threshold, y, local));
+        const float steps = static_cast<float>(p.block.steps);
+        phase_finish_row<T>(n, 2.0f / steps, 1.0f / steps, p.offset_fraction,
+                            at(ps.fraction, offset, local), at(ps.modulation, offset, local),
+                            at(ps.mean, offset, local),
+                            p.thresholds ? threshold_at<T>(ps.threshold, offset, local) : nullptr);
+        return;
+    }
+    default:
         break;
     }
+    if (in != nullptr && (s.sat_bits != 0 || s.sat_first))
+        saturation_row(in, n, level, s.sat_bits, s.sat_first, sat);
+    switch (s.kind) {
     case StepKind::white_black_frame:
-        white_black_row(in, w, s.first, row(white_black_, y, local));
+        white_black_row(in, n, s.first, threshold_at<T>(white_black_, offset, local));
         break;
     case StepKind::gray_threshold: {
         const GrayInfo& g = plan_.grays[static_cast<std::size_t>(s.index)];
         const auto bit = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
-        std::uint16_t* code = row(code_[static_cast<std::size_t>(s.index)], y, local);
-        const std::uint16_t* threshold =
+        const T* threshold =
             g.threshold == GrayThreshold::white_black
-                ? row(white_black_, y, local)
-                : row(phase_state_[static_cast<std::size_t>(g.phase)].threshold, y, local);
-        gray_threshold_row(in, w, threshold, bit, s.first, code);
+                ? threshold_at<T>(white_black_, offset, local)
+                : threshold_at<T>(phase_state_[static_cast<std::size_t>(g.phase)].threshold, offset,
+                                  local);
+        gray_planes_row<T, 1>(&in, n, threshold, &bit, s.first,
+                              at(code_[static_cast<std::size_t>(s.index)], offset, local));
         break;
     }
     case StepKind::gray_inverse: {
         const GrayInfo& g = plan_.grays[static_cast<std::size_t>(s.index)];
-        const T* inverse =
-            static_cast<const T*>(frame_base_[static_cast<std::size_t>(s.frame2)]) + offset;
-        if (s.sat_bits != 0) saturation_row(inverse, w, level, s.sat_bits, false, row(sat_, y, local));
+        const T* inverse = frame_at<T>(s.frame2, offset);
+        if (s.sat_bits != 0)
+            saturation_row(inverse, n, level, s.sat_bits, false, sat);
         const auto bit = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
-        gray_inverse_row(in, inverse, w, bit, s.first,
-                         row(code_[static_cast<std::size_t>(s.index)], y, local));
+        gray_inverse_row(in, inverse, n, bit, s.first,
+                         at(code_[static_cast<std::size_t>(s.index)], offset, local));
         break;
     }
     case StepKind::centerline_bit: {
         const CenterlineInfo& c = plan_.centerlines[static_cast<std::size_t>(s.index)];
-        centerline_row(in, w,
-                       row(phase_state_[static_cast<std::size_t>(c.phase)].threshold, y, local),
-                       row(line_[static_cast<std::size_t>(s.index)], y, local));
+        centerline_row(in, n,
+                       threshold_at<T>(phase_state_[static_cast<std::size_t>(c.phase)].threshold,
+                                       offset, local),
+                       at(line_[static_cast<std::size_t>(s.index)], offset, local));
         break;
     }
+    default:
+        break;
     }
 }
 
 template <class T>
-FPP_VECTOR_CLONES void DecodeEngine::run_group(const StepGroup& group, int y,
-                                               std::byte* local) const {
-    const Step& head = plan_.steps[static_cast<std::size_t>(group.first)];
-    if (group.count == 1) {
-        run_step<T>(head, y, local);
-        return;
+FPP_VECTOR_CLONES void DecodeEngine::run_phase_block(const BatchGroup& group, std::size_t offset,
+                                                     int n, std::byte* local) const {
+    const Step& head = batch_steps_[static_cast<std::size_t>(group.first)];
+    const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(head.index)];
+    const PhaseState& ps = phase_state_[static_cast<std::size_t>(head.index)];
+    float* c = at(ps.fraction, offset, local);
+    float* sn = at(ps.modulation, offset, local);
+    float* a = at(ps.mean, offset, local);
+    const T level = static_cast<T>(sat_level_);
+    // Frames four at a time, in order k = 0 .. N-1, the sums staying in
+    // registers within a run of four.
+    for (int k = 0; k < group.count; k += 4) {
+        const T* in[4] = {nullptr, nullptr, nullptr, nullptr};
+        const int g = std::min(4, group.count - k);
+        for (int j = 0; j < g; ++j)
+            in[j] = frame_at<T>(batch_steps_[static_cast<std::size_t>(group.first + k + j)].frame,
+                                offset);
+        const bool sat_first = k == 0 && head.sat_first;
+        const SatUpdate update{at(sat_, offset, local), head.sat_bits,
+                               sat_first ? std::uint8_t{0} : std::uint8_t{0xff}};
+        const float* cw = p.cos_w.data() + k;
+        const float* sw = p.sin_w.data() + k;
+        switch (g) {
+        case 1:
+            phase_frames_row<T, 1, true>(in, n, cw, sw, k == 0, level, update, c, sn, a);
+            break;
+        case 2:
+            phase_frames_row<T, 2, true>(in, n, cw, sw, k == 0, level, update, c, sn, a);
+            break;
+        case 3:
+            phase_frames_row<T, 3, true>(in, n, cw, sw, k == 0, level, update, c, sn, a);
+            break;
+        default:
+            phase_frames_row<T, 4, true>(in, n, cw, sw, k == 0, level, update, c, sn, a);
+            break;
+        }
     }
-    const int w = width_;
-    const std::size_t offset = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+    const float steps = static_cast<float>(p.block.steps);
+    phase_finish_row<T>(n, 2.0f / steps, 1.0f / steps, p.offset_fraction, c, sn, a,
+                        p.thresholds ? threshold_at<T>(ps.threshold, offset, local) : nullptr);
+}
+
+template <class T>
+FPP_VECTOR_CLONES void DecodeEngine::run_gray_planes(const BatchGroup& group, std::size_t offset,
+                                                     int n, std::byte* local) const {
+    const Step& head = batch_steps_[static_cast<std::size_t>(group.first)];
+    const GrayInfo& g = plan_.grays[static_cast<std::size_t>(head.index)];
     const T level = static_cast<T>(sat_level_);
     const T* in[4] = {nullptr, nullptr, nullptr, nullptr};
+    std::uint16_t bits[4] = {0, 0, 0, 0};
     for (int k = 0; k < group.count; ++k) {
-        const Step& s = plan_.steps[static_cast<std::size_t>(group.first + k)];
-        in[k] = static_cast<const T*>(frame_base_[static_cast<std::size_t>(s.frame)]) + offset;
+        const Step& s = batch_steps_[static_cast<std::size_t>(group.first + k)];
+        in[k] = frame_at<T>(s.frame, offset);
+        bits[k] = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
         if (s.sat_bits != 0 || s.sat_first)
-            saturation_row(in[k], w, level, s.sat_bits, s.sat_first, row(sat_, y, local));
+            saturation_row(in[k], n, level, s.sat_bits, s.sat_first, at(sat_, offset, local));
     }
-    if (head.kind == StepKind::phase_frame) {
-        const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(head.index)];
-        const PhaseState& ps = phase_state_[static_cast<std::size_t>(head.index)];
-        const float* cw = p.cos_w.data() + head.k;
-        const float* sw = p.sin_w.data() + head.k;
-        float* c = row(ps.fraction, y, local);
-        float* sn = row(ps.modulation, y, local);
-        float* a = row(ps.mean, y, local);
-        switch (group.count) {
-        case 2: phase_frames_row<T, 2>(in, w, cw, sw, head.first, c, sn, a); break;
-        case 3: phase_frames_row<T, 3>(in, w, cw, sw, head.first, c, sn, a); break;
-        default: phase_frames_row<T, 4>(in, w, cw, sw, head.first, c, sn, a); break;
-        }
-    } else {
-        const GrayInfo& g = plan_.grays[static_cast<std::size_t>(head.index)];
-        const std::uint16_t* threshold =
-            g.threshold == GrayThreshold::white_black
-                ? row(white_black_, y, local)
-                : row(phase_state_[static_cast<std::size_t>(g.phase)].threshold, y, local);
-        std::uint16_t bits[4] = {0, 0, 0, 0};
-        for (int k = 0; k < group.count; ++k)
-            bits[k] = static_cast<std::uint16_t>(1u << (g.planes - 1 - head.k - k));
-        std::uint16_t* code = row(code_[static_cast<std::size_t>(head.index)], y, local);
-        switch (group.count) {
-        case 2: gray_planes_row<T, 2>(in, w, threshold, bits, head.first, code); break;
-        case 3: gray_planes_row<T, 3>(in, w, threshold, bits, head.first, code); break;
-        default: gray_planes_row<T, 4>(in, w, threshold, bits, head.first, code); break;
-        }
+    const T* threshold =
+        g.threshold == GrayThreshold::white_black
+            ? threshold_at<T>(white_black_, offset, local)
+            : threshold_at<T>(phase_state_[static_cast<std::size_t>(g.phase)].threshold, offset,
+                              local);
+    std::uint16_t* code = at(code_[static_cast<std::size_t>(head.index)], offset, local);
+    switch (group.count) {
+    case 1:
+        gray_planes_row<T, 1>(in, n, threshold, bits, head.first, code);
+        break;
+    case 2:
+        gray_planes_row<T, 2>(in, n, threshold, bits, head.first, code);
+        break;
+    case 3:
+        gray_planes_row<T, 3>(in, n, threshold, bits, head.first, code);
+        break;
+    default:
+        gray_planes_row<T, 4>(in, n, threshold, bits, head.first, code);
+        break;
     }
 }
 
-void DecodeEngine::run_group_any(const StepGroup& group, int y, std::byte* local) const {
-    if (depth_ == 8)
-        run_group<std::uint8_t>(group, y, local);
-    else
-        run_group<std::uint16_t>(group, y, local);
+template <class T> void DecodeEngine::run_batch_span(std::size_t offset, int n, std::byte* local) {
+    for (const BatchGroup& g : batch_groups_) {
+        switch (g.kind) {
+        case GroupKind::phase_block:
+            run_phase_block<T>(g, offset, n, local);
+            break;
+        case GroupKind::gray_planes:
+            run_gray_planes<T>(g, offset, n, local);
+            break;
+        case GroupKind::single:
+            run_step<T>(batch_steps_[static_cast<std::size_t>(g.first)], offset, n, local);
+            break;
+        }
+    }
+    finish_span(offset, n, local, !plan_.needs_full_storage);
 }
 
-void DecodeEngine::run_step_any(const Step& step, int y, std::byte* local) const {
-    if (depth_ == 8)
-        run_step<std::uint8_t>(step, y, local);
-    else
-        run_step<std::uint16_t>(step, y, local);
-}
-
-FPP_VECTOR_CLONES void DecodeEngine::finish_row(int y, std::byte* local, bool with_valid) {
-    const int w = width_;
-    const std::size_t offset = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+void DecodeEngine::finish_span(std::size_t offset, int n, std::byte* local, bool with_valid) {
     std::uint8_t* mask = result_.mask.data() + offset;
-    const std::uint8_t* sat = row(sat_, y, local);
+    const std::uint8_t* sat = at(sat_, offset, local);
     bool first = true;
     for (int a = 0; a < 2; ++a) {
         const AxisPlan& ap = plan_.axes[a];
-        if (!ap.coded) continue;
+        if (!ap.coded)
+            continue;
         const AxisConstants& k = constants_[a];
         PixelChecks checks;
         checks.min_modulation = min_modulation_dn_;
@@ -397,51 +518,54 @@ FPP_VECTOR_CLONES void DecodeEngine::finish_row(int y, std::byte* local, bool wi
         for (int i = 0; i < count; ++i) {
             const int b = ap.phases[static_cast<std::size_t>(i)];
             const PhaseState& ps = phase_state_[static_cast<std::size_t>(b)];
-            rows[i].fraction = row(ps.fraction, y, local);
-            rows[i].modulation = row(ps.modulation, y, local);
-            rows[i].period = static_cast<float>(plan_.phases[static_cast<std::size_t>(b)].block.period);
+            rows[i].fraction = at(ps.fraction, offset, local);
+            rows[i].modulation = at(ps.modulation, offset, local);
+            rows[i].period =
+                static_cast<float>(plan_.phases[static_cast<std::size_t>(b)].block.period);
         }
         float* out = proj_[a] + offset;
         switch (ap.method) {
         case UnwrapMethod::direct:
-            unwrap_direct_row(w, rows[0], ap.extent, sat, checks, first, out, mask);
+            unwrap_direct_row(n, rows[0], ap.extent, sat, checks, first, out, mask);
             break;
         case UnwrapMethod::multi_period:
-            unwrap_multi_period_row(w, rows, count, ap.extent, sat, checks, first, out, mask);
+            unwrap_multi_period_row(n, rows, count, ap.extent, sat, checks, first, out, mask);
             break;
         case UnwrapMethod::heterodyne:
-            unwrap_heterodyne_row(w, rows, count, k.heterodyne, ap.extent, sat, checks, first, out,
+            unwrap_heterodyne_row(n, rows, count, k.heterodyne, ap.extent, sat, checks, first, out,
                                   mask);
             break;
         case UnwrapMethod::gray:
-            unwrap_gray_row(w, rows[0], row(code_[static_cast<std::size_t>(ap.gray)], y, local),
+            unwrap_gray_row(n, rows[0], at(code_[static_cast<std::size_t>(ap.gray)], offset, local),
                             k.gray, sat, checks, first, out, mask,
                             gray_estimate_[a] != nullptr ? gray_estimate_[a] + offset : nullptr,
                             gray_edge_[a] != nullptr ? gray_edge_[a] + offset : nullptr);
             break;
         case UnwrapMethod::centerline:
-            flag_row(w, rows[0], sat, checks, first, mask);
+            flag_row(n, rows[0], sat, checks, first, mask);
             break;
         }
         first = false;
     }
-    if (with_valid && !single_decider_) valid_row_at(y);
+    if (with_valid && !single_decider_)
+        valid_span(offset, n);
 }
 
-void DecodeEngine::valid_row_at(int y) {
-    const std::size_t offset = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_);
+void DecodeEngine::valid_span(std::size_t offset, int n) {
     const float* coords[2];
     int count = 0;
     for (int a = 0; a < 2; ++a)
-        if (proj_[a] != nullptr) coords[count++] = proj_[a] + offset;
-    valid_row(width_, coords, count, result_.mask.data() + offset);
+        if (proj_[a] != nullptr)
+            coords[count++] = proj_[a] + offset;
+    valid_row(n, coords, count, result_.mask.data() + offset);
 }
 
 void DecodeEngine::global_stages() {
     const int grain = std::max(1, height_ / (8 * pool_.size()));
     for (int a = 0; a < 2; ++a) {
         const AxisPlan& ap = plan_.axes[a];
-        if (!ap.coded) continue;
+        if (!ap.coded)
+            continue;
         if (gray_estimate_[a] != nullptr) {
             pool_.parallel_for(height_, grain, [&](int y0, int y1, int) {
                 repair_plain_gray_rows(plan_.camera, y0, y1, gray_estimate_[a], gray_edge_[a],
@@ -464,87 +588,103 @@ void DecodeEngine::global_stages() {
                               queue_next_, proj_[a], result_.mask.data());
         }
     }
-    pool_.parallel_for(height_, grain, [&](int y0, int y1, int) {
-        for (int y = y0; y < y1; ++y) valid_row_at(y);
-    });
+    for_spans(spans_per_task(), [&](std::size_t offset, int n, int) { valid_span(offset, n); });
+}
+
+int DecodeEngine::spans_per_task() const {
+    // About eight tasks per worker: balance without much claiming.
+    const std::size_t spans =
+        (area_ + static_cast<std::size_t>(span_) - 1) / static_cast<std::size_t>(span_);
+    return static_cast<int>(
+        std::max<std::size_t>(1, spans / (8 * static_cast<std::size_t>(pool_.size()))));
 }
 
 void DecodeEngine::push(const Frame& frame) {
-    if (mode_ != Mode::streaming) throw std::logic_error("push() on a batch decoder");
-    if (finished_) throw std::logic_error("push() after finish()");
+    if (mode_ != Mode::streaming)
+        throw std::logic_error("push() on a batch decoder");
+    if (finished_)
+        throw std::logic_error("push() after finish()");
     if (received_ >= plan_.frame_count)
         throw std::invalid_argument("push(): the sequence has only " +
                                     std::to_string(plan_.frame_count) + " frames");
     check_frame(frame, received_);
-    if (depth_ == 0) set_depth(frame.bit_depth);
+    if (depth_ == 0)
+        set_depth(frame.bit_depth);
     const int t = received_;
     const void* data = frame.bit_depth == 8 ? static_cast<const void*>(frame.u8.data())
                                             : static_cast<const void*>(frame.u16.data());
     frame_base_[static_cast<std::size_t>(t)] = data;
     const int slot = plan_.frame_slot[static_cast<std::size_t>(t)];
     void* slot_data = slot >= 0 ? slots_[static_cast<std::size_t>(slot)].get() : nullptr;
-    const std::size_t row_bytes =
-        static_cast<std::size_t>(width_) * static_cast<std::size_t>(frame.bit_depth / 8);
+    const std::size_t sample_bytes = static_cast<std::size_t>(frame.bit_depth / 8);
     const int begin = step_begin_[static_cast<std::size_t>(t)];
     const int end = step_end_[static_cast<std::size_t>(t)];
     if (slot_data != nullptr || begin < end) {
-        const int grain = std::max(1, height_ / (8 * pool_.size()));
-        pool_.parallel_for(height_, grain, [&](int y0, int y1, int worker) {
+        for_spans(spans_per_task(), [&](std::size_t offset, int n, int worker) {
+            if (slot_data != nullptr)
+                std::memcpy(static_cast<std::byte*>(slot_data) + offset * sample_bytes,
+                            static_cast<const std::byte*>(data) + offset * sample_bytes,
+                            static_cast<std::size_t>(n) * sample_bytes);
             std::byte* local = local_buffer(worker);
-            for (int y = y0; y < y1; ++y) {
-                if (slot_data != nullptr)
-                    std::memcpy(static_cast<std::byte*>(slot_data) + static_cast<std::size_t>(y) * row_bytes,
-                                static_cast<const std::byte*>(data) + static_cast<std::size_t>(y) * row_bytes,
-                                row_bytes);
-                for (int s = begin; s < end; ++s)
-                    run_step_any(plan_.steps[static_cast<std::size_t>(s)], y, local);
-            }
+            if (depth_ == 8)
+                run_steps<std::uint8_t>(begin, end, offset, n, local);
+            else
+                run_steps<std::uint16_t>(begin, end, offset, n, local);
         });
     }
     frame_base_[static_cast<std::size_t>(t)] = slot_data;
     ++received_;
 }
 
+template <class T>
+void DecodeEngine::run_steps(int begin, int end, std::size_t offset, int n,
+                             std::byte* local) const {
+    for (int s = begin; s < end; ++s)
+        run_step<T>(plan_.steps[static_cast<std::size_t>(s)], offset, n, local);
+}
+
 DecodeResult DecodeEngine::finish() {
-    if (finished_) throw std::logic_error("finish() called twice");
+    if (finished_)
+        throw std::logic_error("finish() called twice");
     if (received_ < plan_.frame_count)
         throw std::logic_error("finish(): " + std::to_string(received_) + " of " +
                                std::to_string(plan_.frame_count) + " frames received");
     const bool neighbourhood = plan_.needs_full_storage;
-    const int grain = std::max(1, height_ / (8 * pool_.size()));
-    pool_.parallel_for(height_, grain, [&](int y0, int y1, int worker) {
-        std::byte* local = local_buffer(worker);
-        for (int y = y0; y < y1; ++y) finish_row(y, local, !neighbourhood);
+    for_spans(spans_per_task(), [&](std::size_t offset, int n, int worker) {
+        finish_span(offset, n, local_buffer(worker), !neighbourhood);
     });
-    if (neighbourhood) global_stages();
+    if (neighbourhood)
+        global_stages();
     finished_ = true;
     return std::move(result_);
 }
 
 DecodeResult DecodeEngine::run_batch(const std::vector<Frame>& frames) {
-    if (mode_ != Mode::batch) throw std::logic_error("run_batch() on a streaming decoder");
-    if (finished_) throw std::logic_error("run_batch() called twice");
+    if (mode_ != Mode::batch)
+        throw std::logic_error("run_batch() on a streaming decoder");
+    if (finished_)
+        throw std::logic_error("run_batch() called twice");
     if (static_cast<int>(frames.size()) != plan_.frame_count)
         throw std::invalid_argument("the capture has " + std::to_string(frames.size()) +
                                     " frames but its sequence needs " +
                                     std::to_string(plan_.frame_count));
     for (std::size_t f = 0; f < frames.size(); ++f) {
         check_frame(frames[f], static_cast<int>(f));
-        if (depth_ == 0) set_depth(frames[f].bit_depth);
+        if (depth_ == 0)
+            set_depth(frames[f].bit_depth);
         frame_base_[f] = frames[f].bit_depth == 8 ? static_cast<const void*>(frames[f].u8.data())
                                                   : static_cast<const void*>(frames[f].u16.data());
     }
-    const bool neighbourhood = plan_.needs_full_storage;
-    // Small chunks of rows: every frame's row and the state of a row stay in cache.
-    const int grain = std::max(1, std::min(8, height_ / (8 * pool_.size())));
-    pool_.parallel_for(height_, grain, [&](int y0, int y1, int worker) {
+    // Each span goes through every frame and the unwrapping while in cache.
+    for_spans(spans_per_task(), [&](std::size_t offset, int n, int worker) {
         std::byte* local = local_buffer(worker);
-        for (int y = y0; y < y1; ++y) {
-            for (const StepGroup& g : batch_groups_) run_group_any(g, y, local);
-            finish_row(y, local, !neighbourhood);
-        }
+        if (depth_ == 8)
+            run_batch_span<std::uint8_t>(offset, n, local);
+        else
+            run_batch_span<std::uint16_t>(offset, n, local);
     });
-    if (neighbourhood) global_stages();
+    if (plan_.needs_full_storage)
+        global_stages();
     received_ = plan_.frame_count;
     finished_ = true;
     return std::move(result_);

@@ -1,11 +1,15 @@
 #pragma once
 // The decoder's state and its execution of a plan (decode_plan.hpp), shared by
 // the streaming form (frames pushed one by one, per-frame work in push, state
-// in full-size planes) and the batch form (all frames at hand: each row goes
-// through every step and the unwrapping while it is in cache, with state in
-// one row per worker unless a neighbourhood stage needs whole images). Both
-// apply the same operations in the same order to every pixel, without
-// floating-point contraction (phase_math.hpp), so they are bit-identical.
+// in full-size planes) and the batch form (all frames at hand). Work is done on
+// spans: runs of consecutive pixels in row-major order (a span may cross rows;
+// no per-pixel kernel looks at a neighbour). The batch form takes one span at
+// a time through every frame and the unwrapping while the span is in cache,
+// each phase block's frames in one pass, with its state in one span-sized
+// buffer per worker unless a neighbourhood stage needs whole images; so each
+// input byte is read once and each output written once. Both forms apply the
+// same operations in the same order to every pixel, without floating-point
+// contraction (phase_math.hpp), so they are bit-identical.
 
 #include "decode_plan.hpp"
 #include "fpp/decoder.hpp"
@@ -20,8 +24,8 @@
 
 namespace fpp::detail {
 
-// A per-pixel array: either full-size (`full`) or one row in each worker's
-// row buffer at byte offset `local` (batch mode without neighbourhood stages).
+// A per-pixel array: either full-size (`full`) or one span in each worker's
+// span buffer at byte offset `local` (batch mode without neighbourhood stages).
 template <class T> struct PlaneRef {
     T* full = nullptr;
     std::size_t local = 0;
@@ -36,7 +40,7 @@ struct AxisConstants {
 };
 
 class DecodeEngine {
-public:
+  public:
     enum class Mode { streaming, batch };
     // `recycled`: a previous result whose images are reused when their size
     // fits (may be null).
@@ -50,56 +54,86 @@ public:
     DecodeResult finish();
     DecodeResult run_batch(const std::vector<Frame>& frames);
 
-private:
+  private:
     struct PhaseState {
-        PlaneRef<float> fraction; // cos sum, then wrapped fraction
+        PlaneRef<float> fraction;   // cos sum, then wrapped fraction
         PlaneRef<float> modulation; // sin sum, then B
-        PlaneRef<float> mean;     // sum, then A
-        PlaneRef<std::uint16_t> threshold; // floor(A) when gray/centerline use it
+        PlaneRef<float> mean;       // sum, then A
+        // floor(A) in the frames' sample type when gray/centerline use it
+        // (16-bit storage, read as 8-bit for 8-bit frames).
+        PlaneRef<std::uint16_t> threshold;
+    };
+
+    // Batch mode: the plan's steps regrouped. A phase block's frames and its
+    // finish become one group; runs of gray planes of one block thresholded
+    // against one image become groups of up to four; other steps stay single.
+    enum class GroupKind { phase_block, gray_planes, single };
+    struct BatchGroup {
+        GroupKind kind = GroupKind::single;
+        int first = 0; // index in batch_steps_
+        int count = 1;
     };
 
     template <class T> PlaneRef<T> make_plane(std::vector<std::unique_ptr<T[]>>& store, bool full);
-    template <class T> T* row(const PlaneRef<T>& p, int y, std::byte* local) const {
-        return p.full != nullptr ? p.full + static_cast<std::size_t>(y) * static_cast<std::size_t>(width_)
+    // Start of a plane's data for the span beginning at pixel `offset`.
+    template <class T> T* at(const PlaneRef<T>& p, std::size_t offset, std::byte* local) const {
+        return p.full != nullptr ? p.full + offset : reinterpret_cast<T*>(local + p.local);
+    }
+    // A threshold plane viewed in the sample type T.
+    template <class T>
+    T* threshold_at(const PlaneRef<std::uint16_t>& p, std::size_t offset, std::byte* local) const {
+        return p.full != nullptr ? reinterpret_cast<T*>(p.full) + offset
                                  : reinterpret_cast<T*>(local + p.local);
+    }
+    template <class T> const T* frame_at(int frame, std::size_t offset) const {
+        return static_cast<const T*>(frame_base_[static_cast<std::size_t>(frame)]) + offset;
     }
     std::byte* local_buffer(int worker) const;
 
     void allocate_result(DecodeResult* recycled);
+    void build_batch_groups();
     void check_frame(const Frame& frame, int index) const;
     void set_depth(int bit_depth);
-    template <class T> void run_step(const Step& step, int y, std::byte* local) const;
-    void run_step_any(const Step& step, int y, std::byte* local) const;
-    // Batch mode: up to four consecutive steps of one kind and block at once.
-    struct StepGroup {
-        int first = 0; // index in plan_.steps
-        int count = 1;
-    };
-    template <class T> void run_group(const StepGroup& group, int y, std::byte* local) const;
-    void run_group_any(const StepGroup& group, int y, std::byte* local) const;
-    void finish_row(int y, std::byte* local, bool with_valid);
-    void valid_row_at(int y);
+    template <class T>
+    void run_step(const Step& step, std::size_t offset, int n, std::byte* local) const;
+    template <class T>
+    void run_steps(int begin, int end, std::size_t offset, int n, std::byte* local) const;
+    template <class T>
+    void run_phase_block(const BatchGroup& group, std::size_t offset, int n,
+                         std::byte* local) const;
+    template <class T>
+    void run_gray_planes(const BatchGroup& group, std::size_t offset, int n,
+                         std::byte* local) const;
+    template <class T> void run_batch_span(std::size_t offset, int n, std::byte* local);
+    void finish_span(std::size_t offset, int n, std::byte* local, bool with_valid);
+    void valid_span(std::size_t offset, int n);
     void global_stages();
+    // Calls fn(offset, n, worker) on every span of the image, in parallel.
+    template <class F> void for_spans(int spans_per_task, F&& fn);
+    int spans_per_task() const;
 
     Plan plan_;
     DecodeOptions options_;
     Mode mode_;
-    ThreadPool pool_;
+    ThreadPool& pool_; // shared (ThreadPool::shared)
     AxisConstants constants_[2];
     int width_ = 0;
     int height_ = 0;
+    std::size_t area_ = 0;
+    int span_ = 0; // pixels per span
     bool full_ = true;
-    bool single_decider_ = false; // one coded axis, no neighbourhood stage: kernels set kDecodeValid
+    bool single_decider_ =
+        false; // one coded axis, no neighbourhood stage: kernels set kDecodeValid
 
     // Depth-dependent constants, set by the first frame.
     int depth_ = 0;
     std::uint16_t sat_level_ = 0;
     float min_modulation_dn_ = 0;
 
-    std::vector<PhaseState> phase_state_; // per plan phase block (unused: empty refs)
+    std::vector<PhaseState> phase_state_;       // per plan phase block (unused: empty refs)
     std::vector<PlaneRef<std::uint16_t>> code_; // per gray block
     std::vector<PlaneRef<std::uint8_t>> line_;  // per centerline block
-    PlaneRef<std::uint16_t> white_black_; // floor((white + black) / 2)
+    PlaneRef<std::uint16_t> white_black_;       // floor((white + black) / 2), sample type
     PlaneRef<std::uint8_t> sat_;
 
     std::vector<std::unique_ptr<float[]>> float_store_;
@@ -107,7 +141,7 @@ private:
     std::vector<std::unique_ptr<std::uint8_t[]>> u8_store_;
     std::vector<std::unique_ptr<std::int32_t[]>> i32_store_;
     std::size_t local_bytes_ = 0;
-    std::vector<std::unique_ptr<std::byte[]>> local_rows_; // per worker
+    std::vector<std::unique_ptr<std::byte[]>> local_spans_; // per worker
 
     // Neighbourhood stages (full storage): plain Gray estimate and edge marks,
     // centerline region labels and queue links.
@@ -119,10 +153,11 @@ private:
     DecodeResult result_;
     float* proj_[2] = {nullptr, nullptr};
 
-    // Frames: row source per frame index, waiting slots.
+    // Frames: sample source per frame index, waiting slots.
     std::vector<const void*> frame_base_;
     std::vector<std::unique_ptr<std::uint16_t[]>> slots_; // sized for 16-bit
-    std::vector<StepGroup> batch_groups_; // plan_.steps grouped for run_batch
+    std::vector<Step> batch_steps_; // plan_.steps in batch order (saturation first flags redone)
+    std::vector<BatchGroup> batch_groups_;
     std::vector<int> step_begin_; // per trigger frame: range in plan_.steps
     std::vector<int> step_end_;
     int received_ = 0;

@@ -1,8 +1,14 @@
 #pragma once
-// Per-row kernels applied as frames arrive. Each processes one full camera row
-// and is written as a simple loop over contiguous arrays that GCC vectorises at
-// -O3. `first` means "assign instead of accumulate", so no buffer ever needs
-// clearing and the order of operations per pixel is fixed by the plan alone.
+// Per-pixel kernels applied as frames arrive. Each processes a contiguous run
+// of pixels (a span of the image, which may cross rows: no kernel looks at a
+// neighbour) and is written as a simple loop over contiguous arrays that GCC
+// vectorises at -O3. `first` means "assign instead of accumulate", so no
+// buffer ever needs clearing and the order of operations per pixel is fixed by
+// the plan alone.
+//
+// T is the frame's sample type (8- or 16-bit). Gray thresholds are stored in
+// the same type as the samples they are compared with, so the comparisons run
+// on 16 or 32 lanes per vector instead of being widened to 32 bits.
 
 #include "phase_math.hpp"
 
@@ -10,64 +16,77 @@
 
 namespace fpp::detail {
 
-// sat |= bits where the sample is at or above `level`.
+// sat |= bits where the sample is at or above `level` (assigns when `first`).
 template <class T>
-FPP_KERNEL void saturation_row(const T* in, int n, T level, std::uint8_t bits, bool first, std::uint8_t* sat) {
+FPP_KERNEL void saturation_row(const T* in, int n, T level, std::uint8_t bits, bool first,
+                               std::uint8_t* sat) {
     if (first) {
-        for (int x = 0; x < n; ++x) sat[x] = in[x] >= level ? bits : std::uint8_t{0};
+        for (int x = 0; x < n; ++x)
+            sat[x] = in[x] >= level ? bits : std::uint8_t{0};
     } else {
         for (int x = 0; x < n; ++x)
             sat[x] = static_cast<std::uint8_t>(sat[x] | (in[x] >= level ? bits : std::uint8_t{0}));
     }
 }
 
-// Phase sums: c += I cos(delta_k), s += I (-shift_sign sin(delta_k)), a += I.
-template <class T>
-FPP_KERNEL void phase_frame_row(const T* in, int n, float cw, float sw, bool first, float* c, float* s,
-                     float* a) {
-    if (first) {
-        for (int x = 0; x < n; ++x) {
-            const float v = static_cast<float>(in[x]);
-            c[x] = v * cw;
-            s[x] = v * sw;
-            a[x] = v;
-        }
-    } else {
-        for (int x = 0; x < n; ++x) {
-            const float v = static_cast<float>(in[x]);
-            c[x] += v * cw;
-            s[x] += v * sw;
-            a[x] += v;
-        }
-    }
-}
+// How a kernel that reads phase frames updates the saturation bytes.
+struct SatUpdate {
+    std::uint8_t* sat = nullptr; // null: leave them alone
+    std::uint8_t bits = 0;       // axis bits of the frames read
+    std::uint8_t keep = 0xff;    // 0 when this is the first write (assign), else 0xff (OR)
+};
 
-// G consecutive frames of one block in one pass (batch mode: all frames at
-// hand). Per pixel the same operations in the same order as G calls of
-// phase_frame_row, so the sums are bit-identical; only the accumulators stay
-// in registers between frames.
-template <class T, int G>
-FPP_KERNEL void phase_frames_row(const T* const* in, int n, const float* cw, const float* sw,
-                                 bool first, float* __restrict c, float* __restrict s,
-                                 float* __restrict a) {
-    static_assert(G >= 2 && G <= 4);
+// G consecutive frames k..k+G-1 of one phase block (G = 1 in streaming, up to
+// 4 when the frames are at hand): c += I cos(delta_k), s += I (-shift_sign
+// sin(delta_k)), a += I, frame after frame; the first frame of the block
+// assigns. The per-pixel operations and their order do not depend on G, so
+// the sums are bit-identical however the frames are grouped; only the
+// accumulators stay in registers between frames. With Sat, also ORs
+// `sat.bits` into the saturation bytes where any of the samples reaches
+// `level` (integer comparisons: the order does not matter).
+template <class T, int G, bool Sat, bool First>
+FPP_KERNEL void phase_frames_pass(const T* const* in, int n, const float* cw, const float* sw,
+                                  T level, const SatUpdate& sat, float* __restrict c,
+                                  float* __restrict s, float* __restrict a) {
+    static_assert(G >= 1 && G <= 4);
     // Distinct restrict pointers: otherwise GCC gives up on the alias checks.
     const T* __restrict i0 = in[0];
-    const T* __restrict i1 = in[1];
-    const T* __restrict i2 = in[G > 2 ? 2 : 1];
-    const T* __restrict i3 = in[G > 3 ? 3 : 1];
-    const float c0 = cw[0], c1 = cw[1], c2 = cw[G > 2 ? 2 : 1], c3 = cw[G > 3 ? 3 : 1];
-    const float s0 = sw[0], s1 = sw[1], s2 = sw[G > 2 ? 2 : 1], s3 = sw[G > 3 ? 3 : 1];
+    const T* __restrict i1 = in[G > 1 ? 1 : 0];
+    const T* __restrict i2 = in[G > 2 ? 2 : 0];
+    const T* __restrict i3 = in[G > 3 ? 3 : 0];
+    std::uint8_t* __restrict sat_out = sat.sat;
+    const std::uint8_t bits = sat.bits;
+    const std::uint8_t keep = sat.keep;
+    const float c0 = cw[0], c1 = cw[G > 1 ? 1 : 0], c2 = cw[G > 2 ? 2 : 0], c3 = cw[G > 3 ? 3 : 0];
+    const float s0 = sw[0], s1 = sw[G > 1 ? 1 : 0], s2 = sw[G > 2 ? 2 : 0], s3 = sw[G > 3 ? 3 : 0];
     for (int x = 0; x < n; ++x) {
+        if constexpr (Sat) {
+            T m = i0[x];
+            if constexpr (G > 1)
+                m = m > i1[x] ? m : i1[x];
+            if constexpr (G > 2)
+                m = m > i2[x] ? m : i2[x];
+            if constexpr (G > 3)
+                m = m > i3[x] ? m : i3[x];
+            sat_out[x] = static_cast<std::uint8_t>((sat_out[x] & keep) | (m >= level ? bits : 0));
+        }
         const float v0 = static_cast<float>(i0[x]);
-        // First frame: v * w (as phase_frame_row assigns); else c + v * w.
-        float cc = first ? v0 * c0 : c[x] + v0 * c0;
-        float ss = first ? v0 * s0 : s[x] + v0 * s0;
-        float aa = first ? v0 : a[x] + v0;
-        const float v1 = static_cast<float>(i1[x]);
-        cc += v1 * c1;
-        ss += v1 * s1;
-        aa += v1;
+        float cc, ss, aa;
+        if constexpr (First) { // the block's first frame assigns
+            cc = v0 * c0;
+            ss = v0 * s0;
+            aa = v0;
+        } else {
+            cc = c[x] + v0 * c0;
+            ss = s[x] + v0 * s0;
+            aa = a[x] + v0;
+        }
+        if constexpr (G > 1) {
+            const float v1 = static_cast<float>(i1[x]);
+            cc += v1 * c1;
+            ss += v1 * s1;
+            aa += v1;
+        }
         if constexpr (G > 2) {
             const float v2 = static_cast<float>(i2[x]);
             cc += v2 * c2;
@@ -86,75 +105,105 @@ FPP_KERNEL void phase_frames_row(const T* const* in, int n, const float* cw, con
     }
 }
 
-// In place: c -> wrapped fraction of a period in [0, 1) with the phase offset
-// removed, (theta - offset) / (2 pi) mod 1; s -> modulation B = (2/N)|sum|;
-// a -> mean A = sum / N.
-FPP_KERNEL void phase_finish_row(int n, float two_over_n, float one_over_n, float offset_fraction,
-                             float* c, float* s, float* a) {
-    for (int x = 0; x < n; ++x) {
-        const float cc = c[x];
-        const float ss = s[x];
-        float f = atan2_fast(ss, cc) * kInvTwoPi - offset_fraction;
-        f -= floor_fast(f);
-        c[x] = select(f < 1.0f, f, 0.0f); // rounding may land exactly on 1
-        s[x] = two_over_n * sqrt_fast(cc * cc + ss * ss);
-        a[x] *= one_over_n;
-    }
+// One loop per case of `first`: a loop-invariant ?: on loads inside the loop
+// keeps GCC from vectorising it.
+template <class T, int G, bool Sat>
+FPP_KERNEL void phase_frames_row(const T* const* in, int n, const float* cw, const float* sw,
+                                 bool first, T level, const SatUpdate& sat, float* c, float* s,
+                                 float* a) {
+    if (first)
+        phase_frames_pass<T, G, Sat, true>(in, n, cw, sw, level, sat, c, s, a);
+    else
+        phase_frames_pass<T, G, Sat, false>(in, n, cw, sw, level, sat, c, s, a);
 }
 
-// Gray threshold from white and black: floor((W + B) / 2), stored in 16 bits.
-// I > floor((W + B)/2) is exactly 2 I > W + B for integers, and comparing in
-// the frame's own integer type avoids float conversions.
-template <class T> FPP_KERNEL void white_black_row(const T* in, int n, bool first, std::uint16_t* threshold) {
-    if (first) {
-        for (int x = 0; x < n; ++x) threshold[x] = in[x];
-    } else {
-        for (int x = 0; x < n; ++x)
-            threshold[x] = static_cast<std::uint16_t>(
-                (static_cast<std::uint32_t>(threshold[x]) + static_cast<std::uint32_t>(in[x])) >> 1);
-    }
+// Wrapped fraction of a period in [0, 1) from the sums, the phase offset
+// removed: (theta - offset) / (2 pi) mod 1.
+FPP_KERNEL float wrapped_fraction(float c, float s, float offset_fraction) {
+    float f = atan2_fast(s, c) * kInvTwoPi - offset_fraction;
+    f -= floor_fast(f);
+    return select(f < 1.0f, f, 0.0f); // rounding may land exactly on 1
 }
 
-// Integer gray threshold from a phase mean: floor(A), so that for integer
-// samples I > floor(A) is exactly I > A.
-FPP_KERNEL void mean_threshold_row(const float* mean, int n, std::uint16_t* threshold) {
-    for (int x = 0; x < n; ++x) {
-        const float a = mean[x] < 65535.0f ? mean[x] : 65535.0f;
-        threshold[x] = static_cast<std::uint16_t>(static_cast<std::int32_t>(a));
-    }
-}
-
-// code |= bit where I > threshold (white/black or phase-mean threshold).
+// In place: c -> wrapped fraction (wrapped_fraction); s -> modulation
+// B = (2/N)|sum|; a -> mean A = sum / N. With a `threshold` (gray or
+// centerline thresholded against the mean), also stores floor(A) in the sample
+// type, so that for integer samples I > floor(A) is exactly I > A.
 template <class T>
-FPP_KERNEL void gray_threshold_row(const T* in, int n, const std::uint16_t* threshold, std::uint16_t bit,
-                        bool first, std::uint16_t* code) {
-    if (first) {
-        for (int x = 0; x < n; ++x) code[x] = in[x] > threshold[x] ? bit : std::uint16_t{0};
+FPP_KERNEL void phase_finish_row(int n, float two_over_n, float one_over_n, float offset_fraction,
+                                 float* __restrict c, float* __restrict s, float* __restrict a,
+                                 T* __restrict threshold) {
+    constexpr float top = static_cast<float>(static_cast<T>(~T{0}));
+    if (threshold == nullptr) {
+        for (int x = 0; x < n; ++x) {
+            const float cc = c[x];
+            const float ss = s[x];
+            c[x] = wrapped_fraction(cc, ss, offset_fraction);
+            s[x] = two_over_n * sqrt_fast(cc * cc + ss * ss);
+            a[x] *= one_over_n;
+        }
     } else {
-        for (int x = 0; x < n; ++x)
-            code[x] = static_cast<std::uint16_t>(code[x] | (in[x] > threshold[x] ? bit : 0u));
+        for (int x = 0; x < n; ++x) {
+            const float cc = c[x];
+            const float ss = s[x];
+            c[x] = wrapped_fraction(cc, ss, offset_fraction);
+            s[x] = two_over_n * sqrt_fast(cc * cc + ss * ss);
+            const float mean = a[x] * one_over_n;
+            a[x] = mean;
+            threshold[x] = static_cast<T>(static_cast<std::int32_t>(mean < top ? mean : top));
+        }
     }
 }
 
-// G consecutive gray planes against one threshold in one pass (batch mode),
-// same result as G calls of gray_threshold_row.
+// Gray threshold from white and black: floor((W + B) / 2), in the sample type.
+// I > floor((W + B)/2) is exactly 2 I > W + B for integers.
+template <class T> FPP_KERNEL void white_black_row(const T* in, int n, bool first, T* threshold) {
+    if (first) {
+        for (int x = 0; x < n; ++x)
+            threshold[x] = in[x];
+    } else {
+        for (int x = 0; x < n; ++x)
+            threshold[x] = static_cast<T>(
+                (static_cast<std::uint32_t>(threshold[x]) + static_cast<std::uint32_t>(in[x])) >>
+                1);
+    }
+}
+
+// G consecutive planes of one gray block against one threshold (white/black or
+// phase mean): code |= bits[k] where I_k > threshold. Same result however the
+// planes are grouped (G = 1 in streaming).
 template <class T, int G>
-FPP_KERNEL void gray_planes_row(const T* const* in, int n, const std::uint16_t* threshold,
-                     const std::uint16_t* bits, bool first, std::uint16_t* code) {
+FPP_KERNEL void gray_planes_row(const T* const* in, int n, const T* __restrict threshold,
+                                const std::uint16_t* bits, bool first,
+                                std::uint16_t* __restrict code) {
+    static_assert(G >= 1 && G <= 4);
+    const T* __restrict i0 = in[0];
+    const T* __restrict i1 = in[G > 1 ? 1 : 0];
+    const T* __restrict i2 = in[G > 2 ? 2 : 0];
+    const T* __restrict i3 = in[G > 3 ? 3 : 0];
+    const std::uint16_t b0 = bits[0], b1 = bits[G > 1 ? 1 : 0], b2 = bits[G > 2 ? 2 : 0],
+                        b3 = bits[G > 3 ? 3 : 0];
+    const std::uint16_t zero = 0;
     for (int x = 0; x < n; ++x) {
-        const std::uint16_t t = threshold[x];
-        std::uint32_t c = first ? 0u : code[x];
-        for (int k = 0; k < G; ++k) c |= in[k][x] > t ? bits[k] : 0u;
-        code[x] = static_cast<std::uint16_t>(c);
+        const T t = threshold[x];
+        auto c = static_cast<std::uint16_t>((first ? zero : code[x]) | (i0[x] > t ? b0 : zero));
+        if constexpr (G > 1)
+            c = static_cast<std::uint16_t>(c | (i1[x] > t ? b1 : zero));
+        if constexpr (G > 2)
+            c = static_cast<std::uint16_t>(c | (i2[x] > t ? b2 : zero));
+        if constexpr (G > 3)
+            c = static_cast<std::uint16_t>(c | (i3[x] > t ? b3 : zero));
+        code[x] = c;
     }
 }
 
 // code |= bit where the plane is brighter than its inverse.
 template <class T>
-FPP_KERNEL void gray_inverse_row(const T* in, const T* inverse, int n, std::uint16_t bit, bool first,
-                      std::uint16_t* code) {
+FPP_KERNEL void gray_inverse_row(const T* in, const T* inverse, int n, std::uint16_t bit,
+                                 bool first, std::uint16_t* code) {
     if (first) {
-        for (int x = 0; x < n; ++x) code[x] = in[x] > inverse[x] ? bit : std::uint16_t{0};
+        for (int x = 0; x < n; ++x)
+            code[x] = in[x] > inverse[x] ? bit : std::uint16_t{0};
     } else {
         for (int x = 0; x < n; ++x)
             code[x] = static_cast<std::uint16_t>(code[x] | (in[x] > inverse[x] ? bit : 0u));
@@ -162,10 +211,11 @@ FPP_KERNEL void gray_inverse_row(const T* in, const T* inverse, int n, std::uint
 }
 
 // line = 1 where the centerline frame is brighter than the phase mean
-// (threshold = floor(A), see mean_threshold_row).
+// (threshold = floor(A), see phase_finish_row).
 template <class T>
-FPP_KERNEL void centerline_row(const T* in, int n, const std::uint16_t* threshold, std::uint8_t* line) {
-    for (int x = 0; x < n; ++x) line[x] = in[x] > threshold[x] ? std::uint8_t{1} : std::uint8_t{0};
+FPP_KERNEL void centerline_row(const T* in, int n, const T* threshold, std::uint8_t* line) {
+    for (int x = 0; x < n; ++x)
+        line[x] = in[x] > threshold[x] ? std::uint8_t{1} : std::uint8_t{0};
 }
 
 } // namespace fpp::detail

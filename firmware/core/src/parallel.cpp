@@ -1,6 +1,8 @@
 #include "fpp/parallel.hpp"
 
 #include <algorithm>
+#include <map>
+#include <memory>
 
 namespace fpp {
 
@@ -14,6 +16,16 @@ int ThreadPool::resolve_threads(int requested) {
     if (requested > 0) return requested;
     const unsigned hw = std::thread::hardware_concurrency();
     return hw == 0 ? 1 : static_cast<int>(hw);
+}
+
+ThreadPool& ThreadPool::shared(int threads) {
+    static std::mutex mutex;
+    static std::map<int, std::unique_ptr<ThreadPool>> pools; // by thread count
+    const int n = resolve_threads(threads);
+    std::lock_guard lock(mutex);
+    std::unique_ptr<ThreadPool>& pool = pools[n];
+    if (!pool) pool = std::make_unique<ThreadPool>(n);
+    return *pool;
 }
 
 ThreadPool::ThreadPool(int threads) {

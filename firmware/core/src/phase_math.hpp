@@ -47,6 +47,13 @@ FPP_KERNEL float select(bool c, float u, float v) {
                                 (std::bit_cast<std::uint32_t>(v) & ~m));
 }
 
+// copysign(r, s) for r >= +0 (sign bit clear): one AND and one OR instead of
+// clearing r's sign first.
+FPP_KERNEL float or_sign(float r, float s) {
+    return std::bit_cast<float>(std::bit_cast<std::uint32_t>(r) |
+                                (std::bit_cast<std::uint32_t>(s) & 0x80000000u));
+}
+
 // floor() for |x| < 2^31 through an int conversion (vectorises without SSE4.1).
 FPP_KERNEL float floor_fast(float x) {
     const std::int32_t i = static_cast<std::int32_t>(x);
@@ -55,6 +62,14 @@ FPP_KERNEL float floor_fast(float x) {
 FPP_KERNEL float ceil_fast(float x) { return -floor_fast(-x); }
 // Nearest integer, halves rounded up.
 FPP_KERNEL float round_fast(float x) { return floor_fast(x + 0.5f); }
+// Nearest integer, halves to even, for |x| < 2^22: adding 1.5 * 2^23 leaves
+// no fraction bits, so the addition itself rounds (IEEE round to nearest, the
+// default mode; valid without -ffast-math, which could fold the two
+// operations). Two operations instead of round_fast's six.
+FPP_KERNEL float round_nearest(float x) {
+    constexpr float kShift = 12582912.0f; // 1.5 * 2^23
+    return (x + kShift) - kShift;
+}
 FPP_KERNEL float abs_fast(float x) { return __builtin_fabsf(x); }
 
 // atan2(y, x) in [-pi, pi], max error about 2e-7 rad (float rounding; the
@@ -81,10 +96,12 @@ FPP_KERNEL float atan2_fast(float y, float x) {
     r = r * u + 9.999999030344e-01f;
     r = r * t + (reduce ? kQuarterPi : 0.0f);
     // Octant and quadrant by sign flips plus constants (no select of sums):
-    // |y| > |x|: pi/2 - r;  x < 0: pi - r;  y < 0: -r.
-    r = __builtin_copysignf(r, ax - ay) + (ay > ax ? kHalfPi : 0.0f);
-    r = __builtin_copysignf(r, x) + (x < 0.0f ? kPi : 0.0f);
-    return __builtin_copysignf(r, y);
+    // |y| > |x|: pi/2 - r;  x < 0: pi - r;  y < 0: -r. The first two flips
+    // act on r >= +0 (t >= +0, or t >= -tan(pi/8) with pi/4 added; then r or
+    // pi/2 - r), where copysign is a plain OR of the sign bit.
+    r = or_sign(r, ax - ay) + (ay > ax ? kHalfPi : 0.0f);
+    r = or_sign(r, x) + (x < 0.0f ? kPi : 0.0f);
+    return __builtin_copysignf(r, y); // r < 0 is possible here (x = -0)
 }
 
 // sqrt(v) for v >= 0 by an inverse square root estimate and two Newton

@@ -114,11 +114,14 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-// Batch form: the whole capture set at once.
+// Batch form: the whole capture set at once. Works through the image in
+// cache-sized spans of pixels, each taken through every frame and the
+// unwrapping at once, so each input sample is read once and each output
+// written once.
 DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options = {});
 // Same, writing into `result` and reusing its images' memory when their size
 // fits (bit-identical output to the form above; no page faults or zero-fill
-// of fresh images, which cost about as much as decoding itself at 1600x1200).
+// of fresh images, about an eighth of the decoding time at 1600x1200).
 // If it throws, `result` is left empty or partly moved from.
 void decode(const CaptureSet& capture, DecodeResult& result, const DecodeOptions& options = {});
 

@@ -43,6 +43,12 @@ public:
     // Threads for `requested` (0 = hardware concurrency, at least 1).
     static int resolve_threads(int requested);
 
+    // A process-wide pool of resolve_threads(threads) threads, started on first
+    // use and kept until exit: short jobs (a decode takes milliseconds) then
+    // pay no thread start-up. Callers on several threads share it; their jobs
+    // run one after the other (each job uses every thread anyway).
+    static ThreadPool& shared(int threads = 0);
+
 private:
     using Invoke = void (*)(void*, int, int, int);
     void run(int count, int grain, void* ctx, Invoke invoke);

@@ -1,0 +1,539 @@
+// Checkerboard corners: texture, detection (OpenCV's classic and sector-based
+// finders), sub-pixel refinement and a pose-independent ordering.
+
+#include "fpp/calib/corners.hpp"
+
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <variant>
+
+namespace fpp::calib {
+
+namespace {
+
+Image<float> frame_to_float(const Frame& frame) {
+    const Size s = frame.size();
+    Image<float> out(s);
+    float* dst = out.data();
+    const std::size_t n = s.area();
+    if (frame.bit_depth == 8) {
+        const std::uint8_t* src = frame.u8.data();
+        for (std::size_t i = 0; i < n; ++i)
+            dst[i] = static_cast<float>(src[i]);
+    } else {
+        const std::uint16_t* src = frame.u16.data();
+        for (std::size_t i = 0; i < n; ++i)
+            dst[i] = static_cast<float>(src[i]);
+    }
+    return out;
+}
+
+cv::Mat as_mat(const Image<float>& image) {
+    return cv::Mat(image.height(), image.width(), CV_32F, const_cast<float*>(image.data()));
+}
+
+// Stretches finite values between the 0.5 % and 99.5 % quantiles to 0..255
+// (the finders work on 8-bit images; NaN becomes black).
+cv::Mat to_8bit(const Image<float>& image) {
+    std::vector<float> sample;
+    const std::size_t n = image.pixel_count();
+    const std::size_t stride = std::max<std::size_t>(1, n / 200000);
+    for (std::size_t i = 0; i < n; i += stride)
+        if (std::isfinite(image.data()[i]))
+            sample.push_back(image.data()[i]);
+    float lo = 0, hi = 1;
+    if (!sample.empty()) {
+        const auto q = [&](double f) {
+            const std::size_t k =
+                std::min(sample.size() - 1,
+                         static_cast<std::size_t>(f * static_cast<double>(sample.size())));
+            std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(k),
+                             sample.end());
+            return sample[k];
+        };
+        lo = q(0.005);
+        hi = q(0.995);
+    }
+    if (!(hi > lo))
+        hi = lo + 1;
+    cv::Mat out(image.height(), image.width(), CV_8U);
+    const float scale = 255.0f / (hi - lo);
+    for (int y = 0; y < image.height(); ++y) {
+        const float* src = image.row(y);
+        auto* dst = out.ptr<std::uint8_t>(y);
+        for (int x = 0; x < image.width(); ++x) {
+            const float v = std::isfinite(src[x]) ? (src[x] - lo) * scale : 0.0f;
+            dst[x] = static_cast<std::uint8_t>(std::clamp(v, 0.0f, 255.0f) + 0.5f);
+        }
+    }
+    return out;
+}
+
+double dist(const Vec2& a, const Vec2& b) {
+    return std::hypot(a[0] - b[0], a[1] - b[1]);
+}
+
+// Median and minimum distance between grid neighbours.
+void neighbour_spacing(const std::vector<Vec2>& p, int columns, int rows, double& median,
+                       double& minimum) {
+    std::vector<double> d;
+    for (int j = 0; j < rows; ++j)
+        for (int i = 0; i < columns; ++i) {
+            const std::size_t k = static_cast<std::size_t>(j * columns + i);
+            if (i + 1 < columns)
+                d.push_back(dist(p[k], p[k + 1]));
+            if (j + 1 < rows)
+                d.push_back(dist(p[k], p[k + static_cast<std::size_t>(columns)]));
+        }
+    std::sort(d.begin(), d.end());
+    median = d.empty() ? 0 : d[d.size() / 2];
+    minimum = d.empty() ? 0 : d.front();
+}
+
+std::vector<Vec2> reordered(const std::vector<Vec2>& p, int columns, int rows, bool flip_i,
+                            bool flip_j) {
+    std::vector<Vec2> out(p.size());
+    for (int j = 0; j < rows; ++j)
+        for (int i = 0; i < columns; ++i) {
+            const int si = flip_i ? columns - 1 - i : i;
+            const int sj = flip_j ? rows - 1 - j : j;
+            out[static_cast<std::size_t>(j * columns + i)] =
+                p[static_cast<std::size_t>(sj * columns + si)];
+        }
+    return out;
+}
+
+// Transposed grid (a square board found with rows and columns swapped).
+std::vector<Vec2> transposed(const std::vector<Vec2>& p, int n) {
+    std::vector<Vec2> out(p.size());
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            out[static_cast<std::size_t>(j * n + i)] = p[static_cast<std::size_t>(i * n + j)];
+    return out;
+}
+
+double handedness(const std::vector<Vec2>& p, int columns, int rows) {
+    const Vec2& o = p[0];
+    const Vec2& a = p[static_cast<std::size_t>(columns - 1)];
+    const Vec2& b = p[static_cast<std::size_t>((rows - 1) * columns)];
+    const double ax = a[0] - o[0], ay = a[1] - o[1], bx = b[0] - o[0], by = b[1] - o[1];
+    return ax * by - ay * bx; // > 0: i right, j down in image coordinates (y down)
+}
+
+// Dark-minus-light evidence that the square diagonally outside corner (0, 0)
+// is black: the outside square against its neighbour along the top edge,
+// checked at all four outer corners of the pattern (their expected colours
+// follow from the parity of columns and rows).
+double origin_black_evidence(const std::vector<Vec2>& p, int columns, int rows,
+                             const Image<float>& texture) {
+    double evidence = 0;
+    const int ci[4] = {0, columns - 1, 0, columns - 1};
+    const int cj[4] = {0, 0, rows - 1, rows - 1};
+    for (int c = 0; c < 4; ++c) {
+        // Outward diagonal square centre and its neighbour along the outer row.
+        const double di = ci[c] == 0 ? -0.5 : 0.5, dj = cj[c] == 0 ? -0.5 : 0.5;
+        const double outside = texture_at_board(p, columns, rows, texture, ci[c] + di, cj[c] + dj);
+        const double beside = texture_at_board(p, columns, rows, texture, ci[c] - di, cj[c] + dj);
+        if (!std::isfinite(outside) || !std::isfinite(beside))
+            continue;
+        // Square (m, n) is black when m + n is even (origin black); the
+        // outside square of corner (ci, cj) is square (ci + (di > 0), cj + (dj > 0)).
+        const int m = ci[c] + (di > 0 ? 1 : 0), n = cj[c] + (dj > 0 ? 1 : 0);
+        const bool black_if_origin_black = (m + n) % 2 == 0;
+        const double dark_outside = beside - outside; // > 0 when the outside square is darker
+        evidence += black_if_origin_black ? dark_outside : -dark_outside;
+    }
+    return evidence;
+}
+
+bool try_finder(const cv::Mat& image8, int columns, int rows, bool sector,
+                std::vector<cv::Point2f>& found) {
+    found.clear();
+    const cv::Size pattern(columns, rows);
+    if (sector)
+        return cv::findChessboardCornersSB(image8, pattern, found,
+                                           cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
+    return cv::findChessboardCorners(image8, pattern, found,
+                                     cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE |
+                                         cv::CALIB_CB_FAST_CHECK);
+}
+
+// Below this fitted blur (px, median over a board) the corners are fitted
+// again on a copy of the texture blurred by kPreBlurPx.
+constexpr double kMinModelBlurPx = 0.4;
+constexpr double kPreBlurPx = 0.5;
+
+// One corner: Levenberg-Marquardt on the blurred checker corner model.
+// Parameters: cx, cy (relative to the start), edge angles tu, tv, blur s,
+// shading a0, ax, ay (per window radius) and contrast b.
+bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, double tv,
+                      double radius, Vec2& out, double& sigma) {
+    const int x0 = static_cast<int>(std::ceil(start[0] - radius));
+    const int x1 = static_cast<int>(std::floor(start[0] + radius));
+    const int y0 = static_cast<int>(std::ceil(start[1] - radius));
+    const int y1 = static_cast<int>(std::floor(start[1] + radius));
+    if (x0 < 0 || y0 < 0 || x1 >= image.width() || y1 >= image.height())
+        return false;
+    std::vector<double> px, py, val;
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+            const double dx = x - start[0], dy = y - start[1];
+            const float v = image.at(x, y);
+            if (dx * dx + dy * dy > radius * radius || !std::isfinite(v))
+                continue;
+            px.push_back(dx);
+            py.push_back(dy);
+            val.push_back(static_cast<double>(v));
+        }
+    const Eigen::Index n = static_cast<Eigen::Index>(val.size());
+    if (n < 30)
+        return false;
+    constexpr int kParams = 9;
+    using Vec = Eigen::Matrix<double, kParams, 1>;
+    Vec p;
+    p << 0, 0, tu, tv, 1.0, 0, 0, 0, 0;
+    const double inv_r = 1.0 / radius;
+    const double k = 1.0 / std::sqrt(2.0);
+    const double two_over_sqrt_pi = 2.0 / std::sqrt(3.14159265358979323846);
+    // Residuals and Jacobian of the model at p.
+    Eigen::MatrixXd J(n, kParams);
+    Eigen::VectorXd r(n);
+    auto evaluate = [&](const Vec& q, bool jacobian) {
+        const double su = std::sin(q(2)), cu = std::cos(q(2)), sv = std::sin(q(3)),
+                     cv = std::cos(q(3));
+        const double s = q(4);
+        double cost = 0;
+        for (Eigen::Index i = 0; i < n; ++i) {
+            const double ex = px[static_cast<std::size_t>(i)] - q(0),
+                         ey = py[static_cast<std::size_t>(i)] - q(1);
+            const double d1 = -su * ex + cu * ey; // across the edge along u
+            const double d2 = -sv * ex + cv * ey; // across the edge along v
+            const double z1 = k * d1 / s, z2 = k * d2 / s;
+            const double e1 = std::erf(z1), e2 = std::erf(z2);
+            const double sx = px[static_cast<std::size_t>(i)] * inv_r,
+                         sy = py[static_cast<std::size_t>(i)] * inv_r;
+            const double model = q(5) + q(6) * sx + q(7) * sy + q(8) * e1 * e2;
+            r(i) = model - val[static_cast<std::size_t>(i)];
+            cost += r(i) * r(i);
+            if (!jacobian)
+                continue;
+            const double g1 = two_over_sqrt_pi * std::exp(-z1 * z1) * k / s; // d e1 / d d1
+            const double g2 = two_over_sqrt_pi * std::exp(-z2 * z2) * k / s;
+            const double m1 = q(8) * g1 * e2, m2 = q(8) * e1 * g2; // dM/dd1, dM/dd2
+            J(i, 0) = m1 * su + m2 * sv;                           // d d1/d cx = su
+            J(i, 1) = -m1 * cu - m2 * cv;
+            J(i, 2) = m1 * (-cu * ex - su * ey);
+            J(i, 3) = m2 * (-cv * ex - sv * ey);
+            J(i, 4) = -(m1 * d1 + m2 * d2) / s;
+            J(i, 5) = 1;
+            J(i, 6) = sx;
+            J(i, 7) = sy;
+            J(i, 8) = e1 * e2;
+        }
+        return cost;
+    };
+    // Shading and contrast first, linear for the starting geometry.
+    evaluate(p, true);
+    {
+        const Eigen::MatrixXd A = J.rightCols(4);
+        const Eigen::VectorXd b = r + A * p.tail(4); // r = A p_tail - val  ->  val = A p_tail - r
+        const Eigen::Vector4d lin = (A.transpose() * A).ldlt().solve(A.transpose() * b);
+        if (!lin.allFinite())
+            return false;
+        p.tail(4) = lin;
+    }
+    double cost = evaluate(p, true);
+    double lambda = 1e-3;
+    for (int it = 0; it < 40; ++it) {
+        const Eigen::Matrix<double, kParams, kParams> A = J.transpose() * J;
+        const Vec g = J.transpose() * r;
+        bool accepted = false;
+        for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {
+            Eigen::Matrix<double, kParams, kParams> M = A;
+            M.diagonal() += lambda * A.diagonal();
+            const Vec step = -M.ldlt().solve(g);
+            const Vec trial = p + step;
+            if (!trial.allFinite() || !(trial(4) > 0.05) || trial(4) > radius) {
+                lambda *= 10;
+                continue;
+            }
+            const double c = evaluate(trial, false);
+            if (c < cost) {
+                const double decrease = (cost - c) / cost;
+                p = trial;
+                cost = evaluate(p, true);
+                lambda = std::max(lambda * 0.3, 1e-9);
+                accepted = true;
+                if (decrease < 1e-10 || step.head(2).norm() < 1e-6)
+                    it = 1000;
+            } else {
+                lambda *= 10;
+            }
+        }
+        if (!accepted)
+            break;
+    }
+    out = {start[0] + p(0), start[1] + p(1)};
+    sigma = p(4);
+    return std::isfinite(out[0]) && std::isfinite(out[1]) && std::fabs(p(8)) > 0;
+}
+
+} // namespace
+
+namespace {
+
+// One pass over every corner on `texture`; the fitted blur of each refined
+// corner goes to `sigmas`.
+int refine_pass(const Image<float>& texture, const std::vector<Vec2>& start,
+                std::vector<Vec2>& points, int columns, int rows, double max_shift_px,
+                std::vector<double>& sigmas) {
+    int refined = 0;
+    auto at = [&](int i, int j) { return start[static_cast<std::size_t>(j * columns + i)]; };
+    for (int j = 0; j < rows; ++j)
+        for (int i = 0; i < columns; ++i) {
+            const Vec2 c = at(i, j);
+            // Edge directions from the neighbouring corners; the disc stays
+            // inside the four squares at the corner (40 % of the nearest spacing).
+            const Vec2 a = at(std::min(i + 1, columns - 1), j), am = at(std::max(i - 1, 0), j);
+            const Vec2 b = at(i, std::min(j + 1, rows - 1)), bm = at(i, std::max(j - 1, 0));
+            double nearest = 1e300;
+            for (const Vec2& q : {a, am, b, bm})
+                if (q[0] != c[0] || q[1] != c[1])
+                    nearest = std::min(nearest, dist(q, c));
+            const double radius = 0.4 * nearest;
+            if (!(radius >= 3))
+                continue;
+            const double tu = std::atan2(a[1] - am[1], a[0] - am[0]);
+            const double tv = std::atan2(b[1] - bm[1], b[0] - bm[0]);
+            Vec2 out{};
+            double sigma = 0;
+            if (!fit_corner_model(texture, c, tu, tv, radius, out, sigma))
+                continue;
+            if (dist(out, c) > max_shift_px)
+                continue;
+            points[static_cast<std::size_t>(j * columns + i)] = out;
+            sigmas.push_back(sigma);
+            ++refined;
+        }
+    return refined;
+}
+
+} // namespace
+
+int refine_corners_model(const Image<float>& texture, std::vector<Vec2>& points, int columns,
+                         int rows, double max_shift_px) {
+    const std::vector<Vec2> start = points;
+    std::vector<double> sigmas;
+    int refined = refine_pass(texture, start, points, columns, rows, max_shift_px, sigmas);
+    if (sigmas.empty())
+        return refined;
+    std::nth_element(sigmas.begin(),
+                     sigmas.begin() + static_cast<std::ptrdiff_t>(sigmas.size() / 2), sigmas.end());
+    const double blur = sigmas[sigmas.size() / 2];
+    if (blur >= kMinModelBlurPx)
+        return refined;
+    // A sharp image: edges are box-sampled ramps, not erf profiles, and
+    // nearly axis-aligned edges make the fit jump with the sub-pixel phase
+    // (up to 0.3 px measured at 0.25 px of optical blur). A symmetric
+    // Gaussian pre-blur makes the profile erf-like again without moving the
+    // corner (the pattern is point-symmetric about it).
+    Image<float> blurred = texture;
+    cv::Mat m(blurred.height(), blurred.width(), CV_32F, blurred.data());
+    cv::patchNaNs(m, 0.0);
+    cv::GaussianBlur(m, m, cv::Size(0, 0), kPreBlurPx);
+    points = start;
+    sigmas.clear();
+    return refine_pass(blurred, start, points, columns, rows, max_shift_px, sigmas);
+}
+
+std::vector<CornerTexture> corner_textures(const CaptureSet& capture, const DecodeResult& decoded) {
+    std::vector<CornerTexture> textures;
+    // The white frame, and the mean of every phase-shifted frame (each N-step
+    // block sums to N times the mean intensity A: a texture at half the
+    // white level, with noise averaged over all of them).
+    Image<float> phase_mean;
+    int frame = 0, phase_frames = 0;
+    for (const PatternBlock& block : capture.manifest.sequence) {
+        const int count = frame_count(block);
+        if (static_cast<std::size_t>(frame + count) > capture.frames.size())
+            break;
+        if (std::holds_alternative<WhiteBlock>(block) && textures.empty()) {
+            textures.push_back(
+                {frame_to_float(capture.frames[static_cast<std::size_t>(frame)]), "white frame"});
+        } else if (std::holds_alternative<PhaseBlock>(block)) {
+            for (int k = 0; k < count; ++k) {
+                const Frame& f = capture.frames[static_cast<std::size_t>(frame + k)];
+                if (phase_mean.empty())
+                    phase_mean = Image<float>(f.size());
+                float* dst = phase_mean.data();
+                const std::size_t n = phase_mean.pixel_count();
+                if (f.bit_depth == 8) {
+                    const std::uint8_t* src = f.u8.data();
+                    for (std::size_t i = 0; i < n; ++i)
+                        dst[i] += static_cast<float>(src[i]);
+                } else {
+                    const std::uint16_t* src = f.u16.data();
+                    for (std::size_t i = 0; i < n; ++i)
+                        dst[i] += static_cast<float>(src[i]);
+                }
+                ++phase_frames;
+            }
+        }
+        frame += count;
+    }
+    if (phase_frames > 0) {
+        const float inv = 1.0f / static_cast<float>(phase_frames);
+        for (float& v : phase_mean.storage())
+            v *= inv;
+        textures.push_back({std::move(phase_mean), "phase mean"});
+    }
+    // Last resort for finding the board only (its fringe residue under a
+    // projector gamma biases corners): the fringe maximum A + B.
+    if (!decoded.mean.empty() && !decoded.modulation.empty() &&
+        decoded.mean.size() == decoded.modulation.size()) {
+        Image<float> peak(decoded.mean.size());
+        const std::size_t n = peak.pixel_count();
+        for (std::size_t i = 0; i < n; ++i)
+            peak.data()[i] = decoded.mean.data()[i] + decoded.modulation.data()[i];
+        textures.push_back({std::move(peak), "phase mean + modulation"});
+    }
+    return textures;
+}
+
+double texture_at_board(const std::vector<Vec2>& p, int columns, int rows,
+                        const Image<float>& texture, double a, double b) {
+    const int i = std::clamp(static_cast<int>(std::lround(a)), 0, columns - 1);
+    const int j = std::clamp(static_cast<int>(std::lround(b)), 0, rows - 1);
+    auto at = [&](int ii, int jj) { return p[static_cast<std::size_t>(jj * columns + ii)]; };
+    const int i0 = std::max(i - 1, 0), i1 = std::min(i + 1, columns - 1);
+    const int j0 = std::max(j - 1, 0), j1 = std::min(j + 1, rows - 1);
+    const Vec2 c = at(i, j);
+    const Vec2 di{(at(i1, j)[0] - at(i0, j)[0]) / (i1 - i0),
+                  (at(i1, j)[1] - at(i0, j)[1]) / (i1 - i0)};
+    const Vec2 dj{(at(i, j1)[0] - at(i, j0)[0]) / (j1 - j0),
+                  (at(i, j1)[1] - at(i, j0)[1]) / (j1 - j0)};
+    const double x = c[0] + (a - i) * di[0] + (b - j) * dj[0];
+    const double y = c[1] + (a - i) * di[1] + (b - j) * dj[1];
+    // Mean over a box of a fifth of a square.
+    const int r = std::max(
+        1, static_cast<int>(0.1 * std::min(std::hypot(di[0], di[1]), std::hypot(dj[0], dj[1]))));
+    const int xc = static_cast<int>(std::lround(x)), yc = static_cast<int>(std::lround(y));
+    if (xc - r < 0 || yc - r < 0 || xc + r >= texture.width() || yc + r >= texture.height())
+        return std::numeric_limits<double>::quiet_NaN();
+    double sum = 0;
+    int count = 0;
+    for (int yy = yc - r; yy <= yc + r; ++yy)
+        for (int xx = xc - r; xx <= xc + r; ++xx) {
+            const float v = texture.at(xx, yy);
+            if (std::isfinite(v)) {
+                sum += static_cast<double>(v);
+                ++count;
+            }
+        }
+    return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
+}
+
+bool canonical_corner_order(std::vector<Vec2>& p, int columns, int rows,
+                            const Image<float>& texture) {
+    // Handedness first: a mirrored grid is flipped along i.
+    if (handedness(p, columns, rows) < 0)
+        p = reordered(p, columns, rows, true, false);
+    // Candidates related by rotations of the pattern onto itself.
+    std::vector<std::vector<Vec2>> candidates{p, reordered(p, columns, rows, true, true)};
+    if (columns == rows) {
+        // Quarter turns of a square pattern: transpose plus a flip keeps handedness.
+        const std::vector<Vec2> t = reordered(transposed(p, columns), columns, rows, true, false);
+        candidates.push_back(t);
+        candidates.push_back(reordered(t, columns, rows, true, true));
+    }
+    const bool colour_decides = (columns + rows) % 2 == 1;
+    std::size_t best = 0;
+    double best_score = -std::numeric_limits<double>::infinity();
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+        double score;
+        if (colour_decides) {
+            score = origin_black_evidence(candidates[c], columns, rows, texture);
+        } else {
+            const Vec2& o = candidates[c][0];
+            score = -(o[0] + o[1]); // nearest the image's top-left
+        }
+        if (score > best_score) {
+            best_score = score;
+            best = c;
+        }
+    }
+    p = candidates[best];
+    return origin_black_evidence(p, columns, rows, texture) >= 0;
+}
+
+CheckerboardCorners find_checkerboard(const std::vector<CornerTexture>& textures, int columns,
+                                      int rows, const CornerFinderOptions& options) {
+    CheckerboardCorners result;
+    if (textures.empty()) {
+        result.failure = "no texture to find the board on (no white frame and no phase)";
+        return result;
+    }
+    std::vector<cv::Point2f> found;
+    std::string tried;
+    for (const CornerTexture& texture : textures) {
+        const cv::Mat image8 = to_8bit(texture.image);
+        for (int pass = 0; pass < 2; ++pass) {
+            const bool sector = pass == 1;
+            if ((sector && !options.sector) || (!sector && !options.classic))
+                continue;
+            if (!tried.empty())
+                tried += ", ";
+            tried += (sector ? "sector" : "classic") + std::string(" on ") + texture.source;
+            if (!try_finder(image8, columns, rows, sector, found))
+                continue;
+            if (found.size() != static_cast<std::size_t>(columns * rows))
+                continue;
+            std::vector<Vec2> points(found.size());
+            for (std::size_t k = 0; k < found.size(); ++k)
+                points[k] = {static_cast<double>(found[k].x), static_cast<double>(found[k].y)};
+            double median = 0, minimum = 0;
+            neighbour_spacing(points, columns, rows, median, minimum);
+            if (!(minimum > 4))
+                continue; // degenerate detection
+            // Sub-pixel refinement on the float texture; the window stays
+            // well inside the nearest neighbouring squares.
+            const int half = options.refine_half_window > 0
+                                 ? options.refine_half_window
+                                 : std::max(3, static_cast<int>(0.2 * minimum));
+            // Refined on the preferred texture (the first), whichever one the
+            // board was found on.
+            const Image<float>& refine_on = textures.front().image;
+            cv::Mat texture_mat = as_mat(refine_on).clone();
+            cv::patchNaNs(texture_mat, 0.0);
+            cv::cornerSubPix(
+                texture_mat, found, cv::Size(half, half), cv::Size(-1, -1),
+                cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+            for (std::size_t k = 0; k < found.size(); ++k)
+                points[k] = {static_cast<double>(found[k].x), static_cast<double>(found[k].y)};
+            bool finite = true;
+            for (const Vec2& q : points)
+                finite = finite && std::isfinite(q[0]) && std::isfinite(q[1]);
+            if (!finite)
+                continue;
+            if (options.refinement == CornerRefinement::model)
+                refine_corners_model(refine_on, points, columns, rows);
+            result.origin_square_black = canonical_corner_order(points, columns, rows, refine_on);
+            result.points = std::move(points);
+            result.found = true;
+            result.finder = sector ? "sector" : "classic";
+            result.texture = texture.source;
+            result.spacing_px = median;
+            return result;
+        }
+    }
+    result.failure = "no " + std::to_string(columns) + " x " + std::to_string(rows) +
+                     " checkerboard found (tried " + tried + ")";
+    return result;
+}
+
+} // namespace fpp::calib

@@ -1,0 +1,268 @@
+// Stereo calibration of a session folder: validation, per-pose decoding and
+// corners, calibration.
+
+#include "fpp/calib/stereo_session.hpp"
+
+#include "fpp/error.hpp"
+#include "fpp/image_io.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <variant>
+
+namespace fpp::calib {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool has_phase(const Sequence& sequence, Axis axis) {
+    for (const PatternBlock& b : sequence)
+        if (const auto* p = std::get_if<PhaseBlock>(&b); p && p->axis == axis)
+            return true;
+    return false;
+}
+
+std::string size_text(Size s) {
+    return std::to_string(s.width) + " x " + std::to_string(s.height);
+}
+
+Image<std::uint8_t> to_8bit_view(const Image<float>& image) {
+    std::vector<float> values;
+    const std::size_t n = image.pixel_count();
+    const std::size_t stride = std::max<std::size_t>(1, n / 100000);
+    for (std::size_t i = 0; i < n; i += stride)
+        if (std::isfinite(image.data()[i]))
+            values.push_back(image.data()[i]);
+    float lo = 0, hi = 255;
+    if (!values.empty()) {
+        std::sort(values.begin(), values.end());
+        lo = values[values.size() / 200];
+        hi = values[values.size() - 1 - values.size() / 200];
+    }
+    if (!(hi > lo))
+        hi = lo + 1;
+    Image<std::uint8_t> out(image.size());
+    for (std::size_t i = 0; i < n; ++i) {
+        const float v = image.data()[i];
+        const float s = std::isfinite(v) ? (v - lo) * 255.0f / (hi - lo) : 0.0f;
+        out.data()[i] = static_cast<std::uint8_t>(std::clamp(s, 0.0f, 255.0f) + 0.5f);
+    }
+    return out;
+}
+
+// Sub-folders holding capture.yaml, by name.
+std::vector<fs::path> capture_folders(const fs::path& session) {
+    std::vector<fs::path> out;
+    std::error_code ec;
+    for (const fs::directory_entry& e : fs::directory_iterator(session, ec))
+        if (e.is_directory() && fs::exists(e.path() / "capture.yaml"))
+            out.push_back(e.path());
+    if (ec)
+        throw InputError(session, "", "cannot list the folder: " + ec.message());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+} // namespace
+
+std::vector<Vec3> checkerboard_points(int columns, int rows, double square_size) {
+    std::vector<Vec3> points;
+    points.reserve(static_cast<std::size_t>(columns * rows));
+    for (int j = 0; j < rows; ++j)
+        for (int i = 0; i < columns; ++i)
+            points.push_back({i * square_size, j * square_size, 0.0});
+    return points;
+}
+
+SessionResult calibrate_session(const fs::path& session, const StereoSessionOptions& options) {
+    const auto t_start = std::chrono::steady_clock::now();
+    const auto say = [&](const std::string& s) {
+        if (options.progress)
+            options.progress(s);
+    };
+    SessionResult result;
+    result.folder = session;
+    result.method = options.corners.method;
+    if (!fs::is_directory(session))
+        throw InputError(session, "", "not a folder");
+    const fs::path board_file = session / "board.yaml";
+    if (!fs::exists(board_file))
+        throw InputError(board_file, "", "missing: a session needs board.yaml (fpp-board/1)");
+    result.board = read_board(board_file);
+    if (result.board.kind != BoardDescription::Kind::checkerboard)
+        throw InputError(board_file, "kind",
+                         "stereo calibration needs a checkerboard (this board is a plane)");
+    const int columns = result.board.inner_columns, rows = result.board.inner_rows;
+
+    // Every manifest first: sizes and axes are checked before any decoding.
+    const std::vector<fs::path> folders = capture_folders(session);
+    if (folders.empty())
+        throw InputError(session, "", "no capture sets (sub-folders holding capture.yaml)");
+    std::vector<CaptureManifest> manifests;
+    for (const fs::path& f : folders) {
+        const fs::path yaml = f / "capture.yaml";
+        manifests.push_back(read_manifest(yaml));
+        const CaptureManifest& m = manifests.back();
+        if (manifests.size() == 1) {
+            result.camera_size = m.camera;
+            result.projector_size = m.projector;
+        } else if (!(m.camera == result.camera_size)) {
+            throw InputError(yaml, "camera",
+                             "camera size " + size_text(m.camera) + " differs from " +
+                                 folders.front().filename().string() + "'s " +
+                                 size_text(result.camera_size) +
+                                 "; all poses must come from one camera");
+        } else if (!(m.projector == result.projector_size)) {
+            throw InputError(yaml, "projector",
+                             "projector size " + size_text(m.projector) + " differs from " +
+                                 folders.front().filename().string() + "'s " +
+                                 size_text(result.projector_size));
+        }
+        for (Axis axis : {Axis::x, Axis::y})
+            if (!has_phase(m.sequence, axis))
+                throw InputError(yaml, "sequence",
+                                 std::string("no phase block along ") + to_string(axis) +
+                                     ": stereo calibration needs the projector's x and y "
+                                     "coordinate of every corner (phase in both directions)");
+    }
+
+    const std::vector<Vec3> board_points =
+        checkerboard_points(columns, rows, result.board.square_size);
+    for (std::size_t p = 0; p < folders.size(); ++p) {
+        SessionPose pose;
+        pose.folder = folders[p];
+        pose.name = folders[p].filename().string();
+        say("pose " + pose.name + " (" + std::to_string(p + 1) + "/" +
+            std::to_string(folders.size()) + "): decoding");
+        const CaptureSet capture = read_capture_set(folders[p]);
+        auto t0 = std::chrono::steady_clock::now();
+        DecodeResult decoded;
+        try {
+            decoded = decode(capture, options.decode);
+        } catch (const std::invalid_argument& e) {
+            throw InputError(folders[p] / "capture.yaml", "sequence",
+                             std::string("cannot be decoded: ") + e.what());
+        }
+        pose.decode_seconds = since(t0);
+        result.seconds_decode += pose.decode_seconds;
+
+        t0 = std::chrono::steady_clock::now();
+        const std::vector<CornerTexture> textures = corner_textures(capture, decoded);
+        pose.corners = find_checkerboard(textures, columns, rows, options.finder);
+        if (!textures.empty()) {
+            const CornerTexture* used = &textures.front();
+            for (const CornerTexture& t : textures)
+                if (t.source == pose.corners.texture)
+                    used = &t;
+            pose.texture = to_8bit_view(used->image);
+        }
+        if (!pose.corners.found) {
+            pose.skip_reason = pose.corners.failure;
+            say("  skipped " + pose.name + ": " + pose.skip_reason);
+            pose.corner_seconds = since(t0);
+            result.seconds_corners += pose.corner_seconds;
+            result.poses.push_back(std::move(pose));
+            continue;
+        }
+        for (int m = 0; m < kCornerMethods; ++m) {
+            ProjectorCornerOptions o = options.corners;
+            o.method = static_cast<CornerMethod>(m);
+            pose.projector[static_cast<std::size_t>(m)] = projector_corners(
+                decoded, pose.corners.points, columns, rows, pose.corners.origin_square_black, o);
+        }
+        pose.corner_seconds = since(t0);
+        result.seconds_corners += pose.corner_seconds;
+
+        // Ground truth of simulated captures: each method against truth_proj.
+        if (capture.manifest.truth && !capture.manifest.truth->projector.empty()) {
+            const Image<float> truth =
+                read_tiff_float(folders[p] / capture.manifest.truth->projector);
+            for (int m = 0; m < kCornerMethods; ++m) {
+                double sum = 0;
+                int count = 0;
+                const ProjectorCorners& pc = pose.projector[static_cast<std::size_t>(m)];
+                for (std::size_t k = 0; k < pose.corners.points.size(); ++k) {
+                    const Vec2& c = pose.corners.points[k];
+                    const double tx = sample_bilinear(truth, c[0], c[1], 0);
+                    const double ty = sample_bilinear(truth, c[0], c[1], 1);
+                    if (!pc.valid[k] || !std::isfinite(tx) || !std::isfinite(ty))
+                        continue;
+                    sum += std::pow(pc.points[k][0] - tx, 2) + std::pow(pc.points[k][1] - ty, 2);
+                    ++count;
+                }
+                pose.truth_rms[static_cast<std::size_t>(m)] = count ? std::sqrt(sum / count) : -1;
+                pose.truth_points = count;
+            }
+        }
+
+        const ProjectorCorners& chosen = pose.projector[static_cast<std::size_t>(result.method)];
+        const int valid = static_cast<int>(chosen.valid.size()) - chosen.failed;
+        std::ostringstream msg;
+        msg << "  " << pose.name << ": board found (" << pose.corners.finder << " finder on "
+            << pose.corners.texture << "), projector coordinates for " << valid << "/"
+            << chosen.valid.size() << " corners";
+        say(msg.str());
+        if (valid <
+                options.min_projector_corner_fraction * static_cast<double>(chosen.valid.size()) ||
+            valid < 6) {
+            pose.skip_reason = "projector coordinates for only " + std::to_string(valid) + " of " +
+                               std::to_string(chosen.valid.size()) +
+                               " corners (phase invalid around the board)";
+            say("  skipped " + pose.name + ": " + pose.skip_reason);
+        } else {
+            pose.usable = true;
+        }
+        result.poses.push_back(std::move(pose));
+    }
+
+    std::vector<PoseObservations> observations;
+    std::string skipped;
+    for (std::size_t p = 0; p < result.poses.size(); ++p) {
+        const SessionPose& pose = result.poses[p];
+        if (!pose.usable) {
+            skipped += "\n  " + pose.name + ": " + pose.skip_reason;
+            continue;
+        }
+        PoseObservations o;
+        o.name = pose.name;
+        o.board = board_points;
+        o.camera = pose.corners.points;
+        o.projector = pose.projector[static_cast<std::size_t>(result.method)].points;
+        observations.push_back(std::move(o));
+        result.calibrated.push_back(static_cast<int>(p));
+    }
+    if (observations.size() < 3)
+        throw InputError(session, "",
+                         "only " + std::to_string(observations.size()) + " of " +
+                             std::to_string(result.poses.size()) +
+                             " poses are usable; stereo calibration needs at least 3" + skipped);
+
+    const auto t_cal = std::chrono::steady_clock::now();
+    StereoOptions stereo = options.stereo;
+    stereo.progress = options.progress;
+    say("calibrating from " + std::to_string(observations.size()) + " poses");
+    result.stereo =
+        stereo_calibrate(observations, result.camera_size, result.projector_size, stereo);
+    if (options.compare_skew) {
+        StereoOptions other = stereo;
+        other.skew = !stereo.skew;
+        other.progress = nullptr;
+        say(std::string("for comparison: calibrating with skew ") +
+            (other.skew ? "estimated" : "fixed at 0"));
+        result.other_skew =
+            stereo_calibrate(observations, result.camera_size, result.projector_size, other);
+    }
+    result.seconds_calibration = since(t_cal);
+    result.stereo.calibration.origin = "fpp-calib stereo " + session.string();
+    result.seconds_total = since(t_start);
+    return result;
+}
+
+} // namespace fpp::calib

@@ -1,0 +1,316 @@
+// fpp-calib reconstruct CAPTURE --calib FILE --out cloud.ply [--xyz xyz.tiff]
+//
+// Decodes a capture set and reconstructs it with the stereo (SV) model of a
+// calibration file: ours, SLStudio's calibration.xml or SLMaster's
+// caliInfo.yml. Outputs (written only when everything succeeded):
+//   cloud.ply  binary little-endian PLY of the valid points (fpp/point_cloud.hpp)
+//   xyz.tiff   optional: 3-channel float32 X, Y, Z per camera pixel, mm, NaN = none
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+
+#include "fpp/atomic_file.hpp"
+#include "fpp/calib/stereo_calibration.hpp"
+#include "fpp/calib/sv_reconstruct.hpp"
+#include "fpp/capture_set.hpp"
+#include "fpp/decoder.hpp"
+#include "fpp/error.hpp"
+#include "fpp/image_io.hpp"
+#include "fpp/point_cloud.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <variant>
+
+namespace fpp::calib {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReconstructArgs {
+    std::string capture;
+    std::string calib;
+    std::string calib_format = "auto";
+    std::string out;
+    std::string xyz;
+    std::string axes = "auto";
+    std::string camera_size;    // "WxH", for calibrations without sizes
+    std::string projector_size; // "WxH"
+    DecodeOptions decode;
+};
+
+// "1280x1024" -> Size; throws InputError naming the option.
+Size parse_size_option(const std::string& text, const char* option) {
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
+        w < 1 || h < 1 || w > 65535 || h > 65535)
+        throw InputError("command line", option, "expected WIDTHxHEIGHT, got '" + text + "'");
+    return {w, h};
+}
+
+std::string size_text(Size s) {
+    return std::to_string(s.width) + "x" + std::to_string(s.height);
+}
+
+// The key a calibration format stores a size under, for error messages.
+std::string size_key(const StereoCalibration& c, bool camera) {
+    if (c.format == CalibrationFormat::slstudio)
+        return camera ? "frameWidth/frameHeight" : "screenResX/screenResY";
+    return camera ? "camera_size" : "projector_size";
+}
+
+// Sizes missing from the calibration (SLMaster) come from the options or the capture.
+void settle_sizes(StereoCalibration& calibration, const fs::path& calib_path,
+                  const ReconstructArgs& args, const CaptureManifest& manifest) {
+    struct Item {
+        Size& size;
+        const std::string& option_text;
+        const char* option;
+        Size capture;
+        bool camera;
+    };
+    for (Item item :
+         {Item{calibration.camera_size, args.camera_size, "--camera-size", manifest.camera, true},
+          Item{calibration.projector_size, args.projector_size, "--projector-size",
+               manifest.projector, false}}) {
+        const bool known = item.size.width > 0 && item.size.height > 0;
+        if (!item.option_text.empty()) {
+            const Size given = parse_size_option(item.option_text, item.option);
+            if (known && given != item.size)
+                throw InputError(calib_path, size_key(calibration, item.camera),
+                                 std::string("the file says ") + size_text(item.size) + ", " +
+                                     item.option + " says " + size_text(given));
+            item.size = given;
+        } else if (!known) {
+            item.size = item.capture;
+            std::cerr << "note: " << calib_path.string() << " records no "
+                      << (item.camera ? "camera" : "projector") << " size; using the capture's "
+                      << size_text(item.capture) << " (or give " << item.option << ")\n";
+        }
+    }
+    if (calibration.camera_size != manifest.camera)
+        throw InputError(calib_path, size_key(calibration, true),
+                         "the calibration is for a " + size_text(calibration.camera_size) +
+                             " camera, but the capture's frames are " + size_text(manifest.camera));
+    if (calibration.projector_size != manifest.projector)
+        throw InputError(calib_path, size_key(calibration, false),
+                         "the calibration is for a " + size_text(calibration.projector_size) +
+                             " projector, but the capture was projected at " +
+                             size_text(manifest.projector));
+}
+
+bool sequence_codes(const Sequence& sequence, Axis axis) {
+    return std::any_of(sequence.begin(), sequence.end(), [&](const PatternBlock& b) {
+        const auto* phase = std::get_if<PhaseBlock>(&b);
+        return phase && phase->axis == axis;
+    });
+}
+
+void check_output_path(const fs::path& path, const char* option) {
+    const fs::path folder = path.parent_path();
+    if (!folder.empty() && !fs::is_directory(folder))
+        throw InputError(path, option, "the folder " + folder.string() + " does not exist");
+    if (fs::is_directory(path))
+        throw InputError(path, option, "is a folder");
+}
+
+struct CloudSummary {
+    double z_min = 0, z_max = 0, z_p01 = 0, z_p99 = 0;
+};
+
+CloudSummary summarise(const PointCloud& cloud) {
+    std::vector<float> z;
+    z.reserve(cloud.xyz.pixel_count());
+    const float* p = cloud.xyz.data();
+    for (std::size_t i = 0; i < cloud.xyz.pixel_count(); ++i, p += 3)
+        if (std::isfinite(p[2]))
+            z.push_back(p[2]);
+    CloudSummary s;
+    if (z.empty())
+        return s;
+    auto at = [&](double q) {
+        const std::size_t k =
+            std::min(z.size() - 1, static_cast<std::size_t>(q * double(z.size())));
+        std::nth_element(z.begin(), z.begin() + std::ptrdiff_t(k), z.end());
+        return double(z[k]);
+    };
+    s.z_min = at(0.0);
+    s.z_max = at(1.0);
+    s.z_p01 = at(0.01);
+    s.z_p99 = at(0.99);
+    return s;
+}
+
+// RMS and maximum 3D error against a simulated capture's truth (pixels with
+// both a point and a true surface).
+std::string truth_comparison(const PointCloud& cloud, const CaptureSet& capture) {
+    if (!capture.manifest.truth || capture.manifest.truth->xyz.empty())
+        return {};
+    const Image<float> truth = read_tiff_float(capture.folder / capture.manifest.truth->xyz);
+    if (truth.size() != cloud.size() || truth.channels() != 3)
+        return {};
+    double sum = 0, worst = 0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < truth.pixel_count(); ++i) {
+        const float* a = cloud.xyz.data() + 3 * i;
+        const float* b = truth.data() + 3 * i;
+        if (!std::isfinite(a[2]) || !std::isfinite(b[2]))
+            continue;
+        const double d = std::sqrt(double(a[0] - b[0]) * double(a[0] - b[0]) +
+                                   double(a[1] - b[1]) * double(a[1] - b[1]) +
+                                   double(a[2] - b[2]) * double(a[2] - b[2]));
+        sum += d * d;
+        worst = std::max(worst, d);
+        ++n;
+    }
+    if (n == 0)
+        return {};
+    std::ostringstream s;
+    s << "error against ground truth: RMS " << std::sqrt(sum / double(n)) << " mm, max " << worst
+      << " mm over " << n << " points\n";
+    return s.str();
+}
+
+int run_reconstruct(const ReconstructArgs& args) {
+    args.decode.validate();
+    const fs::path out = args.out;
+    const fs::path xyz_out = args.xyz;
+    check_output_path(out, "--out");
+    if (!xyz_out.empty()) {
+        check_output_path(xyz_out, "--xyz");
+        if (fs::weakly_canonical(xyz_out) == fs::weakly_canonical(out))
+            throw InputError(xyz_out, "--xyz", "same path as --out");
+    }
+    const ReconstructAxes requested = parse_axes(args.axes);
+    const CalibrationFormat format = parse_calibration_format(args.calib_format);
+
+    const fs::path calib_path = args.calib;
+    StereoCalibration calibration = load_calibration(calib_path, format);
+    std::cerr << "calibration: " << calibration.origin << "\n";
+    std::cerr << "reading " << args.capture << "\n";
+    const CaptureSet capture = read_capture_set(args.capture);
+    const fs::path manifest_path = capture.folder / "capture.yaml";
+    settle_sizes(calibration, calib_path, args, capture.manifest);
+
+    const bool has_x = sequence_codes(capture.manifest.sequence, Axis::x);
+    const bool has_y = sequence_codes(capture.manifest.sequence, Axis::y);
+    if (!has_x)
+        throw InputError(manifest_path, "sequence",
+                         "no phase block along x: SV reconstruction needs the projector column");
+    if (requested == ReconstructAxes::xy && !has_y)
+        throw InputError(manifest_path, "sequence",
+                         "--axes xy needs the projector row, but the capture has no phase block "
+                         "along y (use --axes x)");
+
+    Stopwatch decode_watch;
+    DecodeResult decoded;
+    try {
+        decoded = decode(capture, args.decode);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(manifest_path, "sequence", e.what());
+    }
+    const double decode_seconds = decode_watch.seconds();
+
+    SvOptions sv;
+    sv.threads = args.decode.threads;
+    Stopwatch prepare_watch;
+    const SvReconstructor reconstructor(calibration, sv);
+    const double prepare_seconds = prepare_watch.seconds();
+    PointCloud cloud;
+    Stopwatch sv_watch;
+    const SvStats stats = reconstructor.reconstruct(decoded, requested, cloud);
+    const double sv_seconds = sv_watch.seconds();
+
+    std::vector<std::string> comments = {
+        "fpp-calib reconstruct: stereo (SV) model, camera frame, mm",
+        "capture " + fs::path(args.capture).filename().string() + ", calibration " +
+            calib_path.filename().string() + ", axes " + to_string(stats.axes),
+        "quality: fringe modulation (DN); intensity: mean intensity (DN); pixel: row * "
+        "organised_width + column"};
+    Stopwatch write_watch;
+    // The TIFF is published inside the PLY's atomic write, just before the
+    // PLY itself: a failure while writing either leaves neither.
+    write_atomically(out, [&](const fs::path& temp) {
+        write_file_synced(temp, encode_ply(cloud, comments));
+        if (!xyz_out.empty())
+            write_tiff(xyz_out, cloud.xyz);
+    });
+    const double write_seconds = write_watch.seconds();
+
+    const CloudSummary z = summarise(cloud);
+    const std::size_t pixels = cloud.xyz.pixel_count();
+    std::ostringstream report;
+    report << "axes: " << to_string(stats.axes) << " (decoded by " << decoded.method_x
+           << (stats.axes == ReconstructAxes::xy ? " / " + decoded.method_y : std::string())
+           << ")\n"
+           << "points: " << stats.points << " of " << pixels << " pixels ("
+           << 100.0 * double(stats.points) / double(pixels) << " %); decoded " << stats.decoded
+           << "; no point: outside the projector image " << stats.outside_projector
+           << ", other geometry " << stats.rejected << ", not converged " << stats.not_converged
+           << "\n";
+    if (stats.points > 0)
+        report << "depth Z: " << z.z_min << " .. " << z.z_max << " mm (1st-99th percentile "
+               << z.z_p01 << " .. " << z.z_p99 << " mm)\n";
+    if (stats.axes == ReconstructAxes::x)
+        report << "x-only solve: " << stats.mean_iterations() << " steps per point on average, at "
+               << "most " << stats.max_iterations << "\n";
+    else
+        report << "ray gap: RMS " << stats.rms_ray_gap_mm << " mm, max " << stats.max_ray_gap_mm
+               << " mm\n";
+    report << truth_comparison(cloud, capture);
+    report << "time: decode " << decode_seconds << " s, camera rays " << prepare_seconds
+           << " s, SV " << sv_seconds << " s, writing " << write_seconds << " s\n"
+           << "wrote " << out.string() << (xyz_out.empty() ? "" : " and " + xyz_out.string())
+           << "\n";
+    std::cout << report.str();
+    return 0;
+}
+
+} // namespace
+
+Action add_reconstruct_command(CLI::App& app) {
+    auto args = std::make_shared<ReconstructArgs>();
+    auto* cmd = app.add_subcommand(
+        "reconstruct",
+        "Decode a capture set and reconstruct a point cloud with a stereo calibration (SV model, "
+        "lens distortion compensated): binary PLY of the valid points, optional XYZ TIFF");
+    cmd->add_option("capture", args->capture, "capture set folder (holding capture.yaml)")
+        ->required();
+    cmd->add_option("--calib", args->calib,
+                    "calibration file: fpp-calib's YAML, SLStudio's calibration.xml or "
+                    "SLMaster's caliInfo.yml")
+        ->required();
+    cmd->add_option("--calib-format", args->calib_format,
+                    "format of --calib: auto (by its keys), fpp, slstudio, slmaster")
+        ->check(CLI::IsMember({"auto", "fpp", "slstudio", "slmaster"}))
+        ->capture_default_str();
+    cmd->add_option("--out", args->out, "output point cloud (.ply)")->required();
+    cmd->add_option("--xyz", args->xyz,
+                    "also write X, Y, Z per camera pixel as a 3-channel float32 TIFF (mm, NaN "
+                    "where no point)");
+    cmd->add_option("--axes", args->axes,
+                    "projector coordinates to use: auto (x and y when the capture codes both), "
+                    "x (column only, distortion compensated iteratively), xy (ray midpoint)")
+        ->check(CLI::IsMember({"auto", "x", "xy"}))
+        ->capture_default_str();
+    cmd->add_option("--camera-size", args->camera_size,
+                    "camera WIDTHxHEIGHT for calibrations that do not record it (SLMaster); "
+                    "default: the capture's");
+    cmd->add_option("--projector-size", args->projector_size,
+                    "projector WIDTHxHEIGHT for calibrations that do not record it (SLMaster); "
+                    "default: the capture's");
+    cmd->add_option("--min-modulation", args->decode.min_modulation,
+                    "minimum modulation as a fraction of full scale")
+        ->capture_default_str();
+    cmd->add_option("--threads", args->decode.threads, "worker threads (0 = all cores)")
+        ->capture_default_str();
+    return [args] { return run_reconstruct(*args); };
+}
+
+} // namespace fpp::calib

@@ -1,0 +1,113 @@
+// fpp-calib stereo SESSION --out calib.yaml [--report DIR] [--drop-outliers]
+//                          [--corner-method poly|bilinear|homography] [--no-skew]
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+
+#include "fpp/calib/calibration_report.hpp"
+#include "fpp/calib/stereo_calibration.hpp"
+#include "fpp/calib/stereo_session.hpp"
+#include "fpp/error.hpp"
+
+#include <iomanip>
+#include <iostream>
+#include <memory>
+
+namespace fpp::calib {
+
+namespace {
+struct StereoArgs {
+    std::string session;
+    std::string out;
+    std::string report;
+    std::string corner_method = "poly";
+    bool drop_outliers = false;
+    bool no_skew = false;
+    int threads = 0;
+};
+
+int run_stereo(const StereoArgs& args) {
+    // Output locations are checked before the work, so that bad arguments
+    // cost nothing and nothing is written on failure.
+    const std::filesystem::path out = args.out;
+    if (std::filesystem::is_directory(out))
+        throw InputError(out, "", "is a folder; --out names the calibration file to write");
+    if (!args.report.empty() && !report_folder_writable(args.report))
+        throw InputError(args.report, "",
+                         "exists and is not a calibration report; choose another --report folder");
+
+    StereoSessionOptions options;
+    options.corners.method = corner_method_from_string(args.corner_method);
+    options.stereo.skew = !args.no_skew;
+    options.stereo.drop_outliers = args.drop_outliers;
+    options.decode.threads = args.threads;
+    options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
+    const SessionResult result = calibrate_session(args.session, options);
+
+    const StereoResult& s = result.stereo;
+    for (const PoseResidual& p : s.calibration.poses)
+        if (!p.note.empty())
+            std::cerr << "pose " << p.name << ": " << p.note
+                      << (p.used ? " (kept; --drop-outliers drops it)" : "") << "\n";
+    if (!args.report.empty()) {
+        std::cerr << "writing the report to " << args.report << "\n";
+        write_calibration_report(args.report, result);
+    }
+    StereoCalibration calibration = s.calibration;
+    // Every pose of the session in order; skipped ones with their reason.
+    calibration.poses.clear();
+    std::size_t next = 0;
+    for (const SessionPose& p : result.poses) {
+        if (p.usable) {
+            calibration.poses.push_back(s.calibration.poses.at(next++));
+            continue;
+        }
+        PoseResidual r;
+        r.name = p.name;
+        r.used = false;
+        r.note = "skipped: " + p.skip_reason;
+        calibration.poses.push_back(r);
+    }
+    save_calibration(out, calibration);
+
+    std::cout << std::fixed << std::setprecision(4) << "calibrated from "
+              << result.calibrated.size() << " of " << result.poses.size() << " poses: camera RMS "
+              << s.calibration.camera_rms << " px, projector RMS " << s.calibration.projector_rms
+              << " px (skew " << (s.skew_estimated ? "estimated" : "fixed at 0") << ", corners by "
+              << to_string(result.method) << ")\n"
+              << std::setprecision(2) << "camera fu " << s.calibration.camera.fu << " fv "
+              << s.calibration.camera.fv << ", projector fu " << s.calibration.projector.fu
+              << " fv " << s.calibration.projector.fv << "\n"
+              << "wrote " << out.string() << " in " << result.seconds_total << " s\n";
+    return 0;
+}
+} // namespace
+
+Action add_stereo_command(CLI::App& app) {
+    auto args = std::make_shared<StereoArgs>();
+    auto* cmd = app.add_subcommand(
+        "stereo",
+        "Stereo-calibrate camera and projector from a session folder (board.yaml with kind "
+        "checkerboard and one capture set per pose, phase in x and y): corners on the white frame "
+        "(or the phase frames), their projector coordinates from the absolute phase, then a joint "
+        "bundle adjustment of both devices with skew");
+    cmd->add_option("session", args->session, "session folder")->required();
+    cmd->add_option("--out", args->out, "calibration file to write (YAML)")->required();
+    cmd->add_option(
+        "--report", args->report,
+        "report folder: summary.md and PNG figures (replaced if it holds an earlier report)");
+    cmd->add_option("--corner-method", args->corner_method,
+                    "projector coordinates of the corners: poly (the paper's local polynomial on "
+                    "the white squares), bilinear, homography (Moreno-Taubin)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"poly", "bilinear", "homography"}));
+    cmd->add_flag("--drop-outliers", args->drop_outliers,
+                  "drop poses whose RMS exceeds 2.5 x the median pose RMS and refine again");
+    cmd->add_flag("--no-skew", args->no_skew,
+                  "fix skew at 0 for both devices (estimated by default)");
+    cmd->add_option("--threads", args->threads, "decoder threads (0 = all cores)")
+        ->capture_default_str();
+    return [args] { return run_stereo(*args); };
+}
+
+} // namespace fpp::calib

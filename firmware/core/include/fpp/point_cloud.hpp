@@ -1,0 +1,83 @@
+#pragma once
+// Organised point clouds (one slot per camera pixel) and their PLY files.
+//
+// Conventions: camera frame, mm; pixel (column, row) of the camera image.
+// A slot without a point holds NaN in X, Y and Z.
+//
+// PLY layout written by write_ply (binary little-endian, 24 bytes a point):
+//
+//   ply
+//   format binary_little_endian 1.0
+//   comment <free text, one line each>
+//   obj_info organised_width <camera width>
+//   obj_info organised_height <camera height>
+//   element vertex <number of valid points>
+//   property float x            mm, camera frame
+//   property float y
+//   property float z
+//   property float quality      fringe modulation B, DN (NaN if unknown)
+//   property float intensity    mean intensity A, DN (NaN if unknown)
+//   property uint pixel         row * organised_width + column
+//   end_header
+//
+// Only slots with a point are written, in row-major order, each with the
+// index of its camera pixel: the organised structure survives (width and
+// height in obj_info, pixel per vertex) without NaN coordinates, which not
+// every viewer filters out (bounding boxes, octrees and normals estimated
+// from NaN vertices go wrong). Everything else is plain PLY 1.0 that the
+// readers of Open3D and CloudCompare (rply) and MeshLab (vcglib) parse:
+// `comment` and `obj_info` lines, old-style type names, scalar properties
+// they do not know (skipped, or offered as scalar fields by CloudCompare;
+// MeshLab takes `quality` as vertex quality). The header stays short (vcglib
+// reads header lines of up to 512 characters).
+
+#include "fpp/image.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace fpp {
+
+struct PointCloud {
+    Image<float> xyz;       // 3 channels per camera pixel: X, Y, Z (mm), NaN = no point
+    Image<float> quality;   // 1 channel, same size, or empty: modulation B (DN)
+    Image<float> intensity; // 1 channel, same size, or empty: mean intensity A (DN)
+
+    Size size() const { return xyz.size(); }
+    // Slots whose X, Y and Z are all finite.
+    std::size_t count_points() const;
+};
+
+// The PLY file as bytes (header and body), as write_ply writes it. `comments`
+// become `comment` lines (line breaks are replaced by spaces). Throws
+// std::invalid_argument if xyz is not 3-channel, quality or intensity is
+// neither empty nor a 1-channel image of xyz's size, or the image has more
+// than 2^32 pixels.
+std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& comments = {});
+
+// Writes encode_ply(...) atomically (temporary file, fsync, rename). Throws
+// IoError on operating-system failures, std::invalid_argument as encode_ply.
+void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
+               const std::vector<std::string>& comments = {});
+
+// A PLY point set read back: the vertex element's x, y, z and, when present,
+// quality, intensity and pixel (empty vectors when absent).
+struct PlyPoints {
+    Size organised;                    // from obj_info organised_width/height, {0, 0} if absent
+    std::vector<std::string> comments; // `comment` lines, without the keyword
+    std::vector<float> x, y, z;
+    std::vector<float> quality;
+    std::vector<float> intensity;
+    std::vector<std::uint32_t> pixel;
+    std::size_t size() const { return x.size(); }
+};
+
+// Reads a binary little-endian PLY whose first element is `vertex` with
+// scalar properties (any PLY scalar type, converted). Other elements after it
+// are ignored. Throws InputError naming the file for anything else (not PLY,
+// other encodings, list properties in `vertex`, no x/y/z, truncated body).
+PlyPoints read_ply(const std::filesystem::path& path);
+
+} // namespace fpp

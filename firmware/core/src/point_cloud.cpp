@@ -1,0 +1,343 @@
+#include "fpp/point_cloud.hpp"
+
+#include "fpp/atomic_file.hpp"
+#include "fpp/error.hpp"
+#include "fpp/yaml_fields.hpp"
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+namespace fpp {
+
+namespace {
+
+constexpr std::size_t kRecordBytes = 6 * 4; // x y z quality intensity (float), pixel (uint)
+
+bool has_point(const float* p) {
+    return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
+
+// Byte order reversal (std::byteswap is C++23).
+template <class U> U swap_bytes(U v) {
+    U r = 0;
+    for (std::size_t i = 0; i < sizeof(U); ++i) {
+        r = static_cast<U>((r << 8) | (v & 0xFF));
+        v = static_cast<U>(v >> 8);
+    }
+    return r;
+}
+
+// Little-endian bytes of a 32-bit value (PLY binary_little_endian).
+void put_u32(char* out, std::uint32_t v) {
+    if constexpr (std::endian::native == std::endian::big)
+        v = swap_bytes(v);
+    std::memcpy(out, &v, 4);
+}
+void put_f32(char* out, float f) {
+    put_u32(out, std::bit_cast<std::uint32_t>(f));
+}
+
+std::string one_line(const std::string& s) {
+    std::string r = s;
+    for (char& c : r)
+        if (c == '\n' || c == '\r')
+            c = ' ';
+    return r;
+}
+
+void check_cloud(const PointCloud& cloud) {
+    if (cloud.xyz.channels() != 3 && !cloud.xyz.empty())
+        throw std::invalid_argument("point cloud: xyz must have 3 channels");
+    for (const Image<float>* extra : {&cloud.quality, &cloud.intensity})
+        if (!extra->empty() && (extra->channels() != 1 || extra->size() != cloud.xyz.size()))
+            throw std::invalid_argument(
+                "point cloud: quality and intensity must be empty or 1-channel images of the "
+                "cloud's size");
+    if (cloud.xyz.pixel_count() > std::size_t{std::numeric_limits<std::uint32_t>::max()})
+        throw std::invalid_argument("point cloud: more pixels than a 32-bit index can number");
+}
+
+} // namespace
+
+std::size_t PointCloud::count_points() const {
+    if (xyz.channels() != 3)
+        return 0;
+    std::size_t n = 0;
+    const float* p = xyz.data();
+    for (std::size_t i = 0, count = xyz.pixel_count(); i < count; ++i, p += 3)
+        n += has_point(p) ? 1 : 0;
+    return n;
+}
+
+std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& comments) {
+    check_cloud(cloud);
+    const std::size_t points = cloud.count_points();
+    std::ostringstream header;
+    header << "ply\nformat binary_little_endian 1.0\n";
+    for (const auto& c : comments)
+        header << "comment " << one_line(c) << "\n";
+    header << "obj_info organised_width " << cloud.xyz.width() << "\n"
+           << "obj_info organised_height " << cloud.xyz.height() << "\n"
+           << "element vertex " << points << "\n"
+           << "property float x\nproperty float y\nproperty float z\n"
+           << "property float quality\nproperty float intensity\nproperty uint pixel\n"
+           << "end_header\n";
+    std::string bytes = header.str();
+    const std::size_t body = bytes.size();
+    bytes.resize(body + points * kRecordBytes);
+
+    constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+    const float* xyz = cloud.xyz.data();
+    const float* quality = cloud.quality.empty() ? nullptr : cloud.quality.data();
+    const float* intensity = cloud.intensity.empty() ? nullptr : cloud.intensity.data();
+    char* out = bytes.data() + body;
+    for (std::size_t i = 0, count = cloud.xyz.pixel_count(); i < count; ++i) {
+        const float* p = xyz + 3 * i;
+        if (!has_point(p))
+            continue;
+        put_f32(out, p[0]);
+        put_f32(out + 4, p[1]);
+        put_f32(out + 8, p[2]);
+        put_f32(out + 12, quality ? quality[i] : nan);
+        put_f32(out + 16, intensity ? intensity[i] : nan);
+        put_u32(out + 20, static_cast<std::uint32_t>(i));
+        out += kRecordBytes;
+    }
+    return bytes;
+}
+
+void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
+               const std::vector<std::string>& comments) {
+    write_file_atomically(path, encode_ply(cloud, comments));
+}
+
+namespace {
+
+enum class PlyType { i8, u8, i16, u16, i32, u32, f32, f64 };
+
+bool parse_type(const std::string& name, PlyType& type) {
+    static const struct {
+        const char* old_name;
+        const char* new_name;
+        PlyType type;
+    } kTypes[] = {{"char", "int8", PlyType::i8},      {"uchar", "uint8", PlyType::u8},
+                  {"short", "int16", PlyType::i16},   {"ushort", "uint16", PlyType::u16},
+                  {"int", "int32", PlyType::i32},     {"uint", "uint32", PlyType::u32},
+                  {"float", "float32", PlyType::f32}, {"double", "float64", PlyType::f64}};
+    for (const auto& t : kTypes)
+        if (name == t.old_name || name == t.new_name) {
+            type = t.type;
+            return true;
+        }
+    return false;
+}
+
+std::size_t type_bytes(PlyType t) {
+    switch (t) {
+    case PlyType::i8:
+    case PlyType::u8:
+        return 1;
+    case PlyType::i16:
+    case PlyType::u16:
+        return 2;
+    case PlyType::i32:
+    case PlyType::u32:
+    case PlyType::f32:
+        return 4;
+    case PlyType::f64:
+        return 8;
+    }
+    return 0;
+}
+
+template <class T> T load_le(const char* p) {
+    T v;
+    std::memcpy(&v, p, sizeof(T));
+    if constexpr (std::endian::native == std::endian::big && sizeof(T) > 1) {
+        using U =
+            std::conditional_t<sizeof(T) == 2, std::uint16_t,
+                               std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>;
+        v = std::bit_cast<T>(swap_bytes(std::bit_cast<U>(v)));
+    }
+    return v;
+}
+
+double load_value(const char* p, PlyType t) {
+    switch (t) {
+    case PlyType::i8:
+        return load_le<std::int8_t>(p);
+    case PlyType::u8:
+        return load_le<std::uint8_t>(p);
+    case PlyType::i16:
+        return load_le<std::int16_t>(p);
+    case PlyType::u16:
+        return load_le<std::uint16_t>(p);
+    case PlyType::i32:
+        return load_le<std::int32_t>(p);
+    case PlyType::u32:
+        return load_le<std::uint32_t>(p);
+    case PlyType::f32:
+        return double(load_le<float>(p));
+    case PlyType::f64:
+        return load_le<double>(p);
+    }
+    return 0;
+}
+
+} // namespace
+
+PlyPoints read_ply(const std::filesystem::path& path) {
+    const std::string bytes = yaml_fields::read_text_file(path); // binary-safe
+
+    // Header: lines up to and including "end_header".
+    std::size_t pos = 0;
+    auto next_line = [&](std::string& line) {
+        const std::size_t end = bytes.find('\n', pos);
+        if (end == std::string::npos)
+            throw InputError(path, "header", "no end_header line");
+        line = bytes.substr(pos, end - pos);
+        if (!line.empty() && line.back() == '\r')
+            line.pop_back();
+        pos = end + 1;
+    };
+    std::string line;
+    next_line(line);
+    if (line != "ply")
+        throw InputError(path, "header", "not a PLY file (first line is not 'ply')");
+
+    struct Property {
+        std::string name;
+        PlyType type;
+        std::size_t offset;
+    };
+    PlyPoints points;
+    std::vector<Property> props;
+    std::size_t vertex_count = 0;
+    std::size_t record = 0;
+    int element_index = -1;
+    bool format_seen = false;
+    long long organised_w = -1, organised_h = -1;
+    for (;;) {
+        next_line(line);
+        std::istringstream words(line);
+        std::string keyword;
+        words >> keyword;
+        if (keyword == "end_header")
+            break;
+        if (keyword == "comment") {
+            points.comments.push_back(line.size() > 8 ? line.substr(8) : std::string());
+        } else if (keyword == "obj_info") {
+            std::string key;
+            long long value = -1;
+            words >> key >> value;
+            if (key == "organised_width")
+                organised_w = value;
+            if (key == "organised_height")
+                organised_h = value;
+        } else if (keyword == "format") {
+            std::string encoding, version;
+            words >> encoding >> version;
+            if (encoding != "binary_little_endian")
+                throw InputError(path, "format",
+                                 "only binary_little_endian PLY is read, not '" + encoding + "'");
+            format_seen = true;
+        } else if (keyword == "element") {
+            std::string name;
+            long long count = -1;
+            words >> name >> count;
+            ++element_index;
+            if (element_index == 0) {
+                if (name != "vertex")
+                    throw InputError(path, "element", "the first element must be 'vertex'");
+                if (count < 0 || words.fail())
+                    throw InputError(path, "element vertex", "bad vertex count");
+                vertex_count = static_cast<std::size_t>(count);
+            }
+        } else if (keyword == "property") {
+            if (element_index < 0)
+                throw InputError(path, "property", "property before any element");
+            if (element_index > 0)
+                continue; // properties of later elements: ignored
+            std::string type_name, name;
+            words >> type_name >> name;
+            if (type_name == "list")
+                throw InputError(path, "property", "list properties in 'vertex' are not supported");
+            PlyType type{};
+            if (!parse_type(type_name, type) || name.empty())
+                throw InputError(path, "property", "bad property line '" + line + "'");
+            props.push_back({name, type, record});
+            record += type_bytes(type);
+        } else {
+            throw InputError(path, "header", "unknown header line '" + line + "'");
+        }
+    }
+    if (!format_seen)
+        throw InputError(path, "format", "missing format line");
+    if (element_index < 0)
+        throw InputError(path, "element", "no vertex element");
+    if (organised_w > 0 && organised_h > 0 && organised_w <= std::numeric_limits<int>::max() &&
+        organised_h <= std::numeric_limits<int>::max())
+        points.organised = {static_cast<int>(organised_w), static_cast<int>(organised_h)};
+
+    const Property* px = nullptr;
+    const Property* py = nullptr;
+    const Property* pz = nullptr;
+    const Property* pq = nullptr;
+    const Property* pi = nullptr;
+    const Property* pp = nullptr;
+    for (const auto& p : props) {
+        if (p.name == "x")
+            px = &p;
+        if (p.name == "y")
+            py = &p;
+        if (p.name == "z")
+            pz = &p;
+        if (p.name == "quality")
+            pq = &p;
+        if (p.name == "intensity")
+            pi = &p;
+        if (p.name == "pixel")
+            pp = &p;
+    }
+    if (!px || !py || !pz)
+        throw InputError(path, "element vertex", "no x, y, z properties");
+    if (record == 0 || (bytes.size() - pos) / record < vertex_count)
+        throw InputError(path, "element vertex",
+                         "truncated: " + std::to_string(vertex_count) + " vertices of " +
+                             std::to_string(record) + " bytes need more than the file holds");
+
+    points.x.resize(vertex_count);
+    points.y.resize(vertex_count);
+    points.z.resize(vertex_count);
+    if (pq)
+        points.quality.resize(vertex_count);
+    if (pi)
+        points.intensity.resize(vertex_count);
+    if (pp)
+        points.pixel.resize(vertex_count);
+    const char* base = bytes.data() + pos;
+    for (std::size_t i = 0; i < vertex_count; ++i, base += record) {
+        points.x[i] = static_cast<float>(load_value(base + px->offset, px->type));
+        points.y[i] = static_cast<float>(load_value(base + py->offset, py->type));
+        points.z[i] = static_cast<float>(load_value(base + pz->offset, pz->type));
+        if (pq)
+            points.quality[i] = static_cast<float>(load_value(base + pq->offset, pq->type));
+        if (pi)
+            points.intensity[i] = static_cast<float>(load_value(base + pi->offset, pi->type));
+        if (pp) {
+            const double v = load_value(base + pp->offset, pp->type);
+            if (!(v >= 0 && v <= double(std::numeric_limits<std::uint32_t>::max())))
+                throw InputError(path, "pixel",
+                                 "vertex " + std::to_string(i) + ": bad pixel index");
+            points.pixel[i] = static_cast<std::uint32_t>(v);
+        }
+    }
+    return points;
+}
+
+} // namespace fpp

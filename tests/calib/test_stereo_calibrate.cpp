@@ -1,0 +1,201 @@
+// Joint stereo calibration (stereo_calibrate) on synthetic observations: the
+// paper rig's corners projected exactly (or with known noise) through the
+// model, so that every recovered parameter can be compared with the truth.
+
+#include "fpp/calib/stereo_calibrate.hpp"
+#include "fpp/calib/stereo_session.hpp"
+#include "fpp/sim/rig.hpp"
+#include "fpp/sim/session.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+using namespace fpp;
+using calib::PoseObservations;
+
+// The paper rig without the terms outside the calibrated model.
+sim::Rig model_rig() {
+    sim::Rig rig = sim::Rig::paper();
+    for (LensModel* l : {&rig.camera, &rig.projector})
+        l->k4 = l->s1 = l->s2 = l->s3 = l->s4 = 0;
+    return rig;
+}
+
+// The session's 11 x 8 board at the session poses, seen by both devices;
+// `noise_px` Gaussian noise on every coordinate.
+std::vector<PoseObservations> observe(const sim::Rig& rig, int poses, double noise_px,
+                                      std::uint32_t seed = 3) {
+    sim::SessionOptions options;
+    options.poses = poses;
+    const std::vector<sim::Pose> board_poses = sim::session_poses(rig, options);
+    const sim::CheckerboardSpec spec = sim::session_checkerboard();
+    const std::vector<Vec3> board =
+        calib::checkerboard_points(spec.inner_columns, spec.inner_rows, spec.square_size);
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0.0, noise_px);
+    std::vector<PoseObservations> out;
+    for (std::size_t p = 0; p < board_poses.size(); ++p) {
+        // Board frame of the calibration: origin at inner corner (0, 0).
+        const sim::Checkerboard cb(board_poses[p], spec);
+        const std::vector<Vec3> corners = cb.inner_corners();
+        PoseObservations o;
+        o.name = "pose-" + std::to_string(p + 1);
+        o.board = board;
+        for (const Vec3& x : corners) {
+            const Vec2 c = rig.camera.project(x);
+            const Vec3 xp = mul(rig.R, x);
+            const Vec2 q =
+                rig.projector.project({xp[0] + rig.t[0], xp[1] + rig.t[1], xp[2] + rig.t[2]});
+            o.camera.push_back({c[0] + (noise_px > 0 ? noise(rng) : 0.0),
+                                c[1] + (noise_px > 0 ? noise(rng) : 0.0)});
+            o.projector.push_back({q[0] + (noise_px > 0 ? noise(rng) : 0.0),
+                                   q[1] + (noise_px > 0 ? noise(rng) : 0.0)});
+        }
+        out.push_back(std::move(o));
+    }
+    return out;
+}
+
+void expect_lens_near(const LensModel& got, const LensModel& want, double px, double rel) {
+    EXPECT_NEAR(got.fu, want.fu, px);
+    EXPECT_NEAR(got.fv, want.fv, px);
+    EXPECT_NEAR(got.cu, want.cu, px);
+    EXPECT_NEAR(got.cv, want.cv, px);
+    EXPECT_NEAR(got.skew, want.skew, px);
+    EXPECT_NEAR(got.k1, want.k1, rel * (1 + std::fabs(want.k1)));
+    EXPECT_NEAR(got.k2, want.k2, rel * (1 + std::fabs(want.k2)));
+    EXPECT_NEAR(got.k3, want.k3, rel * (1 + std::fabs(want.k3)));
+    EXPECT_NEAR(got.p1, want.p1, rel);
+    EXPECT_NEAR(got.p2, want.p2, rel);
+}
+
+TEST(StereoCalibrate, ExactObservationsRecoverTheRigWithSkew) {
+    const sim::Rig rig = model_rig();
+    const auto obs = observe(rig, 12, 0.0);
+    const calib::StereoResult r = calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size);
+    const calib::StereoCalibration& c = r.calibration;
+    EXPECT_LT(c.camera_rms, 1e-6);
+    EXPECT_LT(c.projector_rms, 1e-6);
+    // OpenCV's initialisation cannot model skew (0.84 px): the joint
+    // refinement is what removes that error.
+    EXPECT_GT(r.initial_camera_rms, 100 * c.camera_rms);
+    expect_lens_near(c.camera, rig.camera, 1e-4, 1e-5);
+    expect_lens_near(c.projector, rig.projector, 1e-4, 1e-5);
+    for (int k = 0; k < 9; ++k)
+        EXPECT_NEAR(c.R[static_cast<std::size_t>(k)], rig.R[static_cast<std::size_t>(k)], 1e-9);
+    for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(c.T[static_cast<std::size_t>(k)], rig.t[static_cast<std::size_t>(k)], 1e-6);
+    ASSERT_EQ(r.board_poses.size(), obs.size());
+    EXPECT_TRUE(r.outliers.empty());
+    EXPECT_TRUE(r.skew_estimated);
+}
+
+TEST(StereoCalibrate, NoisyObservationsGiveNoiseLevelRmsAndHonestSigmas) {
+    const sim::Rig rig = model_rig();
+    const double noise = 0.05;
+    const auto obs = observe(rig, 15, noise);
+    const calib::StereoResult r = calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size);
+    const calib::StereoCalibration& c = r.calibration;
+    // 2D RMS of isotropic noise sigma is sigma * sqrt(2), less the share the
+    // fit absorbs (~116 parameters for ~5300 coordinates).
+    EXPECT_NEAR(c.camera_rms, noise * std::sqrt(2.0), 0.006);
+    EXPECT_NEAR(c.projector_rms, noise * std::sqrt(2.0), 0.006);
+    // Every lens parameter within 4 of its own one-sigma uncertainty.
+    const auto within = [](double got, double want, double sigma, const char* what) {
+        EXPECT_GT(sigma, 0) << what;
+        EXPECT_LT(std::fabs(got - want), 4 * sigma)
+            << what << ": " << got << " vs " << want << " (sigma " << sigma << ")";
+    };
+    for (const auto& [got, want, sigma] :
+         {std::tuple{c.camera, rig.camera, r.camera_sigma},
+          std::tuple{c.projector, rig.projector, r.projector_sigma}}) {
+        within(got.fu, want.fu, sigma.fu, "fu");
+        within(got.fv, want.fv, sigma.fv, "fv");
+        within(got.cu, want.cu, sigma.cu, "cu");
+        within(got.cv, want.cv, sigma.cv, "cv");
+        within(got.skew, want.skew, sigma.skew, "skew");
+        within(got.k1, want.k1, sigma.k1, "k1");
+        within(got.k2, want.k2, sigma.k2, "k2");
+        within(got.k3, want.k3, sigma.k3, "k3");
+        within(got.p1, want.p1, sigma.p1, "p1");
+        within(got.p2, want.p2, sigma.p2, "p2");
+    }
+}
+
+TEST(StereoCalibrate, SkewOffKeepsSkewZeroAndFitsWorse) {
+    const sim::Rig rig = model_rig();
+    const auto obs = observe(rig, 10, 0.0);
+    calib::StereoOptions options;
+    options.skew = false;
+    const calib::StereoResult r =
+        calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size, options);
+    EXPECT_EQ(r.calibration.camera.skew, 0.0);
+    EXPECT_EQ(r.calibration.projector.skew, 0.0);
+    EXPECT_EQ(r.camera_sigma.skew, 0.0);
+    EXPECT_FALSE(r.skew_estimated);
+    // The rig's 0.84 px of skew cannot be absorbed exactly.
+    EXPECT_GT(r.calibration.camera_rms, 1e-3);
+}
+
+TEST(StereoCalibrate, OutlyingPoseIsReportedAndDroppedOnlyOnRequest) {
+    const sim::Rig rig = model_rig();
+    auto obs = observe(rig, 10, 0.02);
+    std::mt19937 rng(11);
+    std::normal_distribution<double> big(0.0, 0.5);
+    for (Vec2& c : obs[4].camera)
+        c = {c[0] + big(rng), c[1] + big(rng)};
+    const calib::StereoResult kept =
+        calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size);
+    ASSERT_EQ(kept.outliers, std::vector<int>{4});
+    EXPECT_TRUE(kept.calibration.poses[4].used);
+    EXPECT_NE(kept.calibration.poses[4].note.find("outlier"), std::string::npos);
+
+    calib::StereoOptions options;
+    options.drop_outliers = true;
+    const calib::StereoResult dropped =
+        calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size, options);
+    EXPECT_FALSE(dropped.calibration.poses[4].used);
+    EXPECT_LT(dropped.calibration.camera_rms, 0.04);
+    EXPECT_LT(dropped.calibration.camera_rms, 0.5 * kept.calibration.camera_rms);
+}
+
+TEST(StereoCalibrate, MissingProjectorCornersAreLeftOutOfTheProjectorTerms) {
+    const sim::Rig rig = model_rig();
+    auto obs = observe(rig, 6, 0.0);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (std::size_t k = 0; k < obs[0].projector.size(); k += 3)
+        obs[0].projector[k] = {nan, nan};
+    const calib::StereoResult r = calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size);
+    EXPECT_LT(r.calibration.projector_rms, 1e-6);
+    EXPECT_TRUE(std::isnan(r.projector_residuals[0][0][0]));
+    EXPECT_TRUE(std::isfinite(r.camera_residuals[0][0][0]));
+}
+
+TEST(StereoCalibrate, RejectsTooFewPosesAndMismatchedPoints) {
+    const sim::Rig rig = model_rig();
+    auto obs = observe(rig, 3, 0.0);
+    std::vector<PoseObservations> two(obs.begin(), obs.begin() + 2);
+    EXPECT_THROW(calib::stereo_calibrate(two, rig.camera_size, rig.projector_size),
+                 std::invalid_argument);
+    obs[1].projector.pop_back();
+    EXPECT_THROW(calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size),
+                 std::invalid_argument);
+}
+
+TEST(StereoCalibrate, RotationVectorRoundTrip) {
+    for (const Vec3& w :
+         {Vec3{0.1, -0.2, 0.3}, Vec3{0, 0, 0}, Vec3{3.0, 0.1, 0.0}, Vec3{1e-9, 0, 0}}) {
+        const Mat3 R = calib::rotation_from_vector(w);
+        const Vec3 back = calib::rotation_to_vector(R);
+        for (int k = 0; k < 3; ++k)
+            EXPECT_NEAR(back[static_cast<std::size_t>(k)], w[static_cast<std::size_t>(k)], 1e-12);
+    }
+    const Mat3 R = calib::rotation_from_vector({0, 0, 3.14159265358979323846 / 2});
+    EXPECT_NEAR(R[1], -1.0, 1e-15); // Rz(90 deg): x axis to y
+}
+
+} // namespace

@@ -1,0 +1,272 @@
+// fpp-calib reconstruct, run as a person would: a small simulated capture end
+// to end (PLY and XYZ TIFF against the ground truth), and bad inputs that
+// must exit with 2, name what is wrong and leave no output behind.
+
+#include "test_support.hpp"
+
+#include "fpp/calib/stereo_calibration.hpp"
+#include "fpp/image_io.hpp"
+#include "fpp/point_cloud.hpp"
+#include "fpp/sim/rig.hpp"
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+using fpp::test::TempDir;
+namespace fs = std::filesystem;
+
+struct ToolRun {
+    int exit_code = -1;
+    std::string output; // stdout and stderr
+};
+
+std::string quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s)
+        q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+std::string q(const fs::path& p) {
+    return quote(p.string());
+}
+
+ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
+    const fs::path log = log_folder / "tool.log";
+    const std::string cmd = quote(FPP_CALIB_EXE) + " " + args + " > " + q(log) + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    ToolRun run;
+    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(log);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    run.output = ss.str();
+    fs::remove(log);
+    return run;
+}
+
+// The paper rig with the camera binned 4x (400 x 300, same field of view).
+fpp::sim::Rig small_rig() {
+    fpp::sim::Rig rig = fpp::sim::Rig::paper().binned_camera(4);
+    rig.name = "paper-quarter";
+    return rig;
+}
+
+// Captures and calibrations shared by the tests (simulated once).
+class CliReconstruct : public ::testing::Test {
+  protected:
+    static void SetUpTestSuite() {
+        dir_ = new TempDir;
+        const fs::path rig_file = *dir_ / "rig.yaml";
+        std::ofstream(rig_file) << fpp::sim::rig_to_yaml(small_rig());
+        for (const char* sequence : {"gray-xy", "gray-x"}) {
+            const auto sim =
+                run_calib("simulate --rig " + q(rig_file) + " --scene plane --sequence " +
+                              sequence + " --out " + q(*dir_ / sequence),
+                          dir_->path());
+            ASSERT_EQ(sim.exit_code, 0) << sim.output;
+        }
+        fpp::calib::save_calibration(*dir_ / "calib.yaml",
+                                     fpp::calib::calibration_from_rig(small_rig()));
+    }
+    static void TearDownTestSuite() {
+        delete dir_;
+        dir_ = nullptr;
+    }
+    static fs::path path(const std::string& name) { return *dir_ / name; }
+
+    static TempDir* dir_;
+};
+
+TempDir* CliReconstruct::dir_ = nullptr;
+
+bool folder_is_empty(const fs::path& folder) {
+    return fs::is_empty(folder);
+}
+
+TEST_F(CliReconstruct, SimulatedPlaneEndToEnd) {
+    TempDir out;
+    const fs::path ply = out / "cloud.ply";
+    const fs::path xyz = out / "xyz.tiff";
+    const auto run = run_calib("reconstruct " + q(path("gray-xy")) + " --calib " +
+                                   q(path("calib.yaml")) + " --out " + q(ply) + " --xyz " + q(xyz),
+                               out.path());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_NE(run.output.find("axes: xy"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("error against ground truth"), std::string::npos) << run.output;
+
+    const fpp::PlyPoints cloud = fpp::read_ply(ply);
+    const fpp::Image<float> truth = fpp::read_tiff_float(path("gray-xy") / "truth_xyz.tiff");
+    const fpp::Image<float> map = fpp::read_tiff_float(xyz);
+    ASSERT_EQ(cloud.organised, (fpp::Size{400, 300}));
+    ASSERT_EQ(map.size(), (fpp::Size{400, 300}));
+    ASSERT_EQ(map.channels(), 3);
+    ASSERT_EQ(cloud.pixel.size(), cloud.size());
+    EXPECT_GT(cloud.size(), 400u * 300u * 99 / 100); // the plane fills the field
+    double sum = 0;
+    for (std::size_t k = 0; k < cloud.size(); ++k) {
+        const std::size_t i = cloud.pixel[k];
+        ASSERT_LT(i, truth.pixel_count());
+        // The TIFF holds the same point at that pixel.
+        EXPECT_EQ(map.data()[3 * i], cloud.x[k]);
+        EXPECT_EQ(map.data()[3 * i + 2], cloud.z[k]);
+        const double dx = double(cloud.x[k] - truth.data()[3 * i]);
+        const double dy = double(cloud.y[k] - truth.data()[3 * i + 1]);
+        const double dz = double(cloud.z[k] - truth.data()[3 * i + 2]);
+        sum += dx * dx + dy * dy + dz * dz;
+        EXPECT_GT(cloud.quality[k], 20.0f); // modulation, DN
+        EXPECT_GT(cloud.intensity[k], 20.0f);
+    }
+    EXPECT_LT(std::sqrt(sum / double(cloud.size())), 0.01); // mm
+    // Pixels without a point are NaN in the TIFF.
+    std::size_t nan_pixels = 0;
+    for (std::size_t i = 0; i < map.pixel_count(); ++i)
+        nan_pixels += std::isnan(map.data()[3 * i]);
+    EXPECT_EQ(nan_pixels + cloud.size(), map.pixel_count());
+}
+
+TEST_F(CliReconstruct, XOnlyCaptureUsesTheIterativeSolve) {
+    TempDir out;
+    const fs::path ply = out / "cloud.ply";
+    const auto run = run_calib("reconstruct " + q(path("gray-x")) + " --calib " +
+                                   q(path("calib.yaml")) + " --out " + q(ply),
+                               out.path());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_NE(run.output.find("axes: x "), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("x-only solve"), std::string::npos) << run.output;
+    EXPECT_GT(fpp::read_ply(ply).size(), 400u * 300u * 99 / 100);
+}
+
+// Runs a reconstruction expected to fail with exit code 2 and a message
+// holding every `needles`, and checks that nothing was written.
+void expect_input_error(const std::string& args, const std::vector<std::string>& needles) {
+    TempDir out;
+    const auto run = run_calib(
+        args + " --out " + q(out / "cloud.ply") + " --xyz " + q(out / "xyz.tiff"), out.path());
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    for (const auto& n : needles)
+        EXPECT_NE(run.output.find(n), std::string::npos) << run.output;
+    EXPECT_TRUE(folder_is_empty(out.path())) << "output left behind for: " << args;
+}
+
+TEST_F(CliReconstruct, AxisTheCaptureDoesNotCodeIsAnInputError) {
+    expect_input_error("reconstruct " + q(path("gray-x")) + " --calib " + q(path("calib.yaml")) +
+                           " --axes xy",
+                       {"capture.yaml", "sequence", "along y"});
+}
+
+TEST_F(CliReconstruct, CalibrationWithAMissingKeyIsAnInputError) {
+    TempDir dir;
+    std::ifstream in(path("calib.yaml"));
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    std::string text = buffer.str();
+    // Drop the T block (key line and its indented lines).
+    const std::size_t start = text.find("\nT: ");
+    ASSERT_NE(start, std::string::npos);
+    std::size_t end = text.find('\n', start + 1);
+    while (end != std::string::npos && end + 1 < text.size() && text[end + 1] == ' ')
+        end = text.find('\n', end + 1);
+    text.erase(start, end - start);
+    std::ofstream(dir / "broken.yaml") << text;
+    expect_input_error("reconstruct " + q(path("gray-xy")) + " --calib " + q(dir / "broken.yaml"),
+                       {"broken.yaml", "T: missing"});
+}
+
+TEST_F(CliReconstruct, CameraSizeMismatchIsAnInputError) {
+    TempDir dir;
+    // The full-resolution rig's calibration against the binned capture.
+    fpp::calib::save_calibration(dir / "full.yaml",
+                                 fpp::calib::calibration_from_rig(fpp::sim::Rig::paper()));
+    expect_input_error("reconstruct " + q(path("gray-xy")) + " --calib " + q(dir / "full.yaml"),
+                       {"full.yaml", "camera_size", "1600x1200", "400x300"});
+}
+
+TEST_F(CliReconstruct, ProjectorSizeMismatchIsAnInputError) {
+    TempDir dir;
+    fpp::calib::StereoCalibration c = fpp::calib::calibration_from_rig(small_rig());
+    c.projector_size = {1920, 1080};
+    fpp::calib::save_calibration(dir / "proj.yaml", c);
+    expect_input_error("reconstruct " + q(path("gray-xy")) + " --calib " + q(dir / "proj.yaml"),
+                       {"proj.yaml", "projector_size", "1920x1080", "1280x800"});
+}
+
+TEST_F(CliReconstruct, SizeOptionsFillOrContradictTheCalibration) {
+    TempDir dir;
+    // An SLMaster-style file: no sizes recorded.
+    const fpp::calib::StereoCalibration c = fpp::calib::calibration_from_rig(small_rig());
+    {
+        std::ofstream out(dir / "caliInfo.yml");
+        out << "%YAML:1.0\n---\n";
+        auto matrix = [&](const char* key, int rows, int cols, const std::vector<double>& v) {
+            out << key << ": !!opencv-matrix\n   rows: " << rows << "\n   cols: " << cols
+                << "\n   dt: d\n   data: [";
+            for (std::size_t i = 0; i < v.size(); ++i)
+                out << (i ? ", " : " ") << v[i];
+            out << " ]\n";
+        };
+        out.precision(17);
+        const auto& k = c.camera;
+        const auto& p = c.projector;
+        matrix("M1", 3, 3, {k.fu, k.skew, k.cu, 0, k.fv, k.cv, 0, 0, 1});
+        matrix("D1", 1, 5, {k.k1, k.k2, k.p1, k.p2, k.k3});
+        matrix("M4", 3, 3, {p.fu, p.skew, p.cu, 0, p.fv, p.cv, 0, 0, 1});
+        matrix("D4", 1, 5, {p.k1, p.k2, p.p1, p.p2, p.k3});
+        matrix("Rlp", 3, 3, std::vector<double>(c.R.begin(), c.R.end()));
+        matrix("Tlp", 3, 1, std::vector<double>(c.T.begin(), c.T.end()));
+    }
+    TempDir out;
+    auto run =
+        run_calib("reconstruct " + q(path("gray-xy")) + " --calib " + q(dir / "caliInfo.yml") +
+                      " --calib-format slmaster --out " + q(out / "cloud.ply"),
+                  out.path());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_NE(run.output.find("records no camera size"), std::string::npos) << run.output;
+    EXPECT_GT(fpp::read_ply(out / "cloud.ply").size(), 400u * 300u * 99 / 100);
+    // A size given on the command line that the capture contradicts.
+    expect_input_error("reconstruct " + q(path("gray-xy")) + " --calib " + q(dir / "caliInfo.yml") +
+                           " --camera-size 1280x1024",
+                       {"caliInfo.yml", "camera_size", "1280x1024", "400x300"});
+    expect_input_error("reconstruct " + q(path("gray-xy")) + " --calib " + q(dir / "caliInfo.yml") +
+                           " --projector-size 1280by800",
+                       {"--projector-size", "WIDTHxHEIGHT"});
+}
+
+TEST_F(CliReconstruct, MissingFilesAreInputErrors) {
+    TempDir dir;
+    expect_input_error("reconstruct " + q(path("gray-xy")) + " --calib " + q(dir / "none.yaml"),
+                       {"none.yaml"});
+    expect_input_error("reconstruct " + q(dir / "no-capture") + " --calib " + q(path("calib.yaml")),
+                       {"no-capture"});
+    // Output into a folder that does not exist.
+    TempDir out;
+    const auto run =
+        run_calib("reconstruct " + q(path("gray-xy")) + " --calib " + q(path("calib.yaml")) +
+                      " --out " + q(out / "missing" / "cloud.ply"),
+                  out.path());
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_NE(run.output.find("does not exist"), std::string::npos) << run.output;
+    EXPECT_TRUE(folder_is_empty(out.path()));
+}
+
+TEST_F(CliReconstruct, UnknownFormatNameIsRejected) {
+    TempDir out;
+    const auto run =
+        run_calib("reconstruct " + q(path("gray-xy")) + " --calib " + q(path("calib.yaml")) +
+                      " --calib-format matlab --out " + q(out / "c.ply"),
+                  out.path());
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_NE(run.output.find("matlab"), std::string::npos) << run.output;
+    EXPECT_TRUE(folder_is_empty(out.path()));
+}
+
+} // namespace

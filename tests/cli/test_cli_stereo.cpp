@@ -1,0 +1,231 @@
+// fpp-calib simulate-session and stereo, run as a person would: exit codes,
+// files written, and on bad input a clear error naming the file, exit code 2
+// and nothing written. Sessions use the camera binned 4x (400 x 300) so that
+// each takes a second or two.
+
+#include "test_support.hpp"
+
+#include "fpp/calib/stereo_calibration.hpp"
+#include "fpp/image_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+using fpp::test::TempDir;
+namespace fs = std::filesystem;
+
+struct ToolRun {
+    int exit_code = -1;
+    std::string output; // stdout and stderr
+};
+
+std::string quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s)
+        q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+ToolRun run_calib(const std::string& args, const TempDir& scratch) {
+    const fs::path log = scratch / "tool.log";
+    const std::string cmd =
+        quote(FPP_CALIB_EXE) + " " + args + " > " + quote(log.string()) + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    ToolRun run;
+    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(log);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    run.output = ss.str();
+    return run;
+}
+
+bool contains(const std::string& text, const std::string& what) {
+    return text.find(what) != std::string::npos;
+}
+
+// A session of `poses` poses, camera binned 4x.
+fs::path simulate_session(const TempDir& dir, const std::string& name, int poses,
+                          const std::string& extra = "") {
+    const fs::path session = dir / name;
+    const ToolRun run = run_calib("simulate-session --poses " + std::to_string(poses) +
+                                      " --binning 4 --out " + quote(session.string()) + " " + extra,
+                                  dir);
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    return session;
+}
+
+// The stereo command on `session`; the outputs must not exist afterwards
+// when it fails.
+ToolRun stereo(const TempDir& dir, const fs::path& session, const std::string& extra = "") {
+    return run_calib("stereo " + quote(session.string()) + " --out " +
+                         quote((dir / "calib.yaml").string()) + " --report " +
+                         quote((dir / "report").string()) + " " + extra,
+                     dir);
+}
+
+void expect_refused(const TempDir& dir, const ToolRun& run) {
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_FALSE(fs::exists(dir / "calib.yaml"));
+    EXPECT_FALSE(fs::exists(dir / "report"));
+}
+
+TEST(CliStereo, SimulatedSessionCalibratesAndWritesTheReport) {
+    TempDir dir;
+    const fs::path session = simulate_session(dir, "session", 6, "--seed 3");
+    EXPECT_TRUE(fs::exists(session / "board.yaml"));
+    EXPECT_TRUE(fs::exists(session / "pose-06" / "capture.yaml"));
+    const ToolRun run = stereo(dir, session);
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "calibrated from 6 of 6 poses")) << run.output;
+    EXPECT_TRUE(contains(run.output, "joint bundle adjustment"))
+        << run.output; // progress on stderr
+
+    const fpp::calib::StereoCalibration c = fpp::calib::load_calibration(dir / "calib.yaml");
+    EXPECT_EQ(c.camera_size, (fpp::Size{400, 300}));
+    EXPECT_EQ(c.projector_size, (fpp::Size{1280, 800}));
+    EXPECT_GT(c.camera_rms, 0);
+    EXPECT_LT(c.camera_rms, 0.1);
+    EXPECT_LT(c.projector_rms, 0.1);
+    EXPECT_NEAR(c.projector.fu, 1949.18, 5); // the paper's projector
+    ASSERT_EQ(c.poses.size(), 6u);
+    EXPECT_EQ(c.poses[0].name, "pose-01");
+    EXPECT_EQ(c.poses[0].corners, 88);
+
+    const fs::path report = dir / "report";
+    std::ifstream in(report / "summary.md");
+    std::stringstream summary;
+    summary << in.rdbuf();
+    EXPECT_TRUE(contains(summary.str(), "## Reprojection error")) << summary.str();
+    EXPECT_TRUE(contains(summary.str(), "Projector corner methods against ground truth"))
+        << summary.str();
+    for (const char* png : {"corners-pose-01.png", "corners-pose-06.png", "residuals-camera.png",
+                            "residuals-projector.png", "pose-rms.png"}) {
+        ASSERT_TRUE(fs::exists(report / png)) << png;
+        const fpp::PngInfo info = fpp::read_png_info(report / png);
+        EXPECT_EQ(info.bit_depth, 8) << png;
+        EXPECT_EQ(info.channels, 3) << png;
+        EXPECT_GT(info.size.width, 100) << png;
+    }
+
+    // Run again into the same report folder: the earlier report is replaced.
+    fs::remove(dir / "calib.yaml");
+    const ToolRun again = stereo(dir, session, "--corner-method homography --no-skew");
+    ASSERT_EQ(again.exit_code, 0) << again.output;
+    EXPECT_TRUE(contains(again.output, "corners by homography")) << again.output;
+    EXPECT_EQ(fpp::calib::load_calibration(dir / "calib.yaml").camera.skew, 0.0);
+    EXPECT_TRUE(fs::exists(report / "summary.md"));
+}
+
+TEST(CliStereo, FewerThanThreeUsablePosesIsAnError) {
+    TempDir dir;
+    const fs::path session = simulate_session(dir, "session", 2);
+    const ToolRun run = stereo(dir, session);
+    expect_refused(dir, run);
+    EXPECT_TRUE(contains(run.output, session.string())) << run.output;
+    EXPECT_TRUE(contains(run.output, "only 2 of 2 poses are usable")) << run.output;
+    EXPECT_TRUE(contains(run.output, "at least 3")) << run.output;
+}
+
+TEST(CliStereo, PosesOfDifferentSizesAreAnError) {
+    TempDir dir;
+    const fs::path session = simulate_session(dir, "session", 3);
+    // One pose from a camera binned 2x (800 x 600) slipped into the session.
+    const fs::path other = dir / "other";
+    ASSERT_EQ(
+        run_calib("simulate-session --poses 1 --binning 2 --out " + quote(other.string()), dir)
+            .exit_code,
+        0);
+    fs::rename(other / "pose-01", session / "pose-04");
+    const ToolRun run = stereo(dir, session);
+    expect_refused(dir, run);
+    EXPECT_TRUE(contains(run.output, (session / "pose-04" / "capture.yaml").string()))
+        << run.output;
+    EXPECT_TRUE(contains(run.output, "camera size 800 x 600 differs from pose-01's 400 x 300"))
+        << run.output;
+}
+
+TEST(CliStereo, BoardNeverFoundIsAnErrorWithEveryPosesReason) {
+    TempDir dir;
+    // White planes, described as a checkerboard.
+    const fs::path session = simulate_session(dir, "session", 3, "--kind plane");
+    std::ofstream(session / "board.yaml", std::ios::trunc)
+        << "format: fpp-board/1\nkind: checkerboard\ninner_corners: [11, 8]\nsquare_size: 15.0\n";
+    const ToolRun run = stereo(dir, session);
+    expect_refused(dir, run);
+    EXPECT_TRUE(contains(run.output, "only 0 of 3 poses are usable")) << run.output;
+    for (const char* pose : {"pose-01", "pose-02", "pose-03"})
+        EXPECT_TRUE(contains(run.output, std::string(pose) + ": no 11 x 8 checkerboard found"))
+            << run.output;
+    EXPECT_TRUE(contains(run.output, "skipped pose-01")) << run.output; // said while it happens
+}
+
+TEST(CliStereo, PhaseMissingOnAnAxisIsAnError) {
+    TempDir dir;
+    const fs::path session = simulate_session(dir, "session", 3, "--sequence gray-x");
+    const ToolRun run = stereo(dir, session);
+    expect_refused(dir, run);
+    EXPECT_TRUE(contains(run.output, (session / "pose-01" / "capture.yaml").string()))
+        << run.output;
+    EXPECT_TRUE(contains(run.output, "sequence")) << run.output;
+    EXPECT_TRUE(contains(run.output, "no phase block along y")) << run.output;
+}
+
+TEST(CliStereo, BoardFileMissingOrNotACheckerboardIsAnError) {
+    TempDir dir;
+    const fs::path session = simulate_session(dir, "session", 3);
+    fs::remove(session / "board.yaml");
+    ToolRun run = stereo(dir, session);
+    expect_refused(dir, run);
+    EXPECT_TRUE(contains(run.output, (session / "board.yaml").string())) << run.output;
+    EXPECT_TRUE(contains(run.output, "missing")) << run.output;
+
+    std::ofstream(session / "board.yaml") << "format: fpp-board/1\nkind: plane\n";
+    run = stereo(dir, session);
+    expect_refused(dir, run);
+    EXPECT_TRUE(contains(run.output, "kind")) << run.output;
+    EXPECT_TRUE(contains(run.output, "needs a checkerboard")) << run.output;
+
+    const fs::path empty = dir / "empty";
+    fs::create_directories(empty);
+    std::ofstream(empty / "board.yaml")
+        << "format: fpp-board/1\nkind: checkerboard\ninner_corners: [11, 8]\n"
+           "square_size: 15.0\n";
+    run = stereo(dir, empty);
+    expect_refused(dir, run);
+    EXPECT_TRUE(contains(run.output, "no capture sets")) << run.output;
+}
+
+TEST(CliStereo, ReportFolderThatIsNotAReportIsRefusedBeforeAnyWork) {
+    TempDir dir;
+    fs::create_directories(dir / "report");
+    std::ofstream(dir / "report" / "notes.txt") << "mine\n";
+    const ToolRun run = stereo(dir, dir / "no-such-session");
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_TRUE(contains(run.output, "not a calibration report")) << run.output;
+    EXPECT_TRUE(fs::exists(dir / "report" / "notes.txt"));
+    EXPECT_FALSE(fs::exists(dir / "calib.yaml"));
+}
+
+TEST(CliSimulateSession, RefusesToOverwriteAndChecksItsArguments) {
+    TempDir dir;
+    fs::create_directories(dir / "session");
+    ToolRun run =
+        run_calib("simulate-session --poses 2 --out " + quote((dir / "session").string()), dir);
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_TRUE(contains(run.output, "already exists")) << run.output;
+    EXPECT_TRUE(fs::is_empty(dir / "session"));
+    run = run_calib("simulate-session --kind sphere --out " + quote((dir / "s2").string()), dir);
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_FALSE(fs::exists(dir / "s2"));
+}
+
+} // namespace
