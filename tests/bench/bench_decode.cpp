@@ -97,6 +97,18 @@ void BM_DecodeBatch(benchmark::State& state) {
     state.SetBytesProcessed(std::int64_t(state.iterations()) * std::int64_t(fx.full_bytes));
 }
 
+// The same on one thread, for boards with fewer free cores than this machine.
+void BM_DecodeBatchOneThread(benchmark::State& state) {
+    const auto& fx = Fixture::get();
+    fpp::DecodeOptions options;
+    options.threads = 1;
+    for (auto _ : state) {
+        auto result = fpp::decode(fx.full, options);
+        benchmark::DoNotOptimize(result.proj_x.data());
+    }
+    state.SetBytesProcessed(std::int64_t(state.iterations()) * std::int64_t(fx.full_bytes));
+}
+
 // Scan after scan into the same result: no page faults or zero-filling of
 // fresh output images (about 25 MB at this size).
 void BM_DecodeBatchReuse(benchmark::State& state) {
@@ -174,6 +186,7 @@ void BM_OpenCV3StepPSP(benchmark::State& state) {
 
 BENCHMARK(BM_CopyInput)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DecodeBatch)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DecodeBatchOneThread)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DecodeBatchReuse)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StreamingPushPerFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StreamingFinish)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -214,6 +227,7 @@ int main(int argc, char** argv) {
 
     const double copy = reporter.get("BM_CopyInput");
     const double batch = reporter.get("BM_DecodeBatch");
+    const double one = reporter.get("BM_DecodeBatchOneThread");
     const double reuse = reporter.get("BM_DecodeBatchReuse");
     const double pushes = reporter.get("BM_StreamingPushPerFrame");
     const double finish = reporter.get("BM_StreamingFinish");
@@ -226,6 +240,9 @@ int main(int argc, char** argv) {
     if (copy > 0 && batch > 0)
         std::printf("  full decode / copy of input : %.2f (target <= 2)  [%.2f ms vs %.2f ms]\n",
                     batch / copy, batch * 1e3, copy * 1e3);
+    if (copy > 0 && one > 0)
+        std::printf("  same, on one thread         : %.2f              [%.2f ms]\n", one / copy,
+                    one * 1e3);
     if (copy > 0 && reuse > 0)
         std::printf("  same, reusing the result    : %.2f              [%.2f ms]\n", reuse / copy,
                     reuse * 1e3);

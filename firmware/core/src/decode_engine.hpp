@@ -1,15 +1,16 @@
 #pragma once
 // The decoder's state and its execution of a plan (decode_plan.hpp), shared by
-// the streaming form (frames pushed one by one, per-frame work in push, state
-// in full-size planes) and the batch form (all frames at hand). Work is done on
-// spans: runs of consecutive pixels in row-major order (a span may cross rows;
-// no per-pixel kernel looks at a neighbour). The batch form takes one span at
-// a time through every frame and the unwrapping while the span is in cache,
-// each phase block's frames in one pass, with its state in one span-sized
-// buffer per worker unless a neighbourhood stage needs whole images; so each
-// input byte is read once and each output written once. Both forms apply the
-// same operations in the same order to every pixel, without floating-point
-// contraction (phase_math.hpp), so they are bit-identical.
+// the streaming form (frames pushed one by one; each step runs once the frames
+// it reads are there, a phase block at its last frame with the earlier ones
+// kept in slots; state in full-size planes) and the batch form (all frames at
+// hand). Work is done on spans: runs of consecutive pixels in row-major order
+// (a span may cross rows; no per-pixel kernel looks at a neighbour). The batch
+// form takes one span at a time through every step and the unwrapping while
+// the span is in cache, with its state in one span-sized buffer per worker
+// unless a neighbourhood stage needs whole images; so each input sample is
+// read once and each output written once. Both forms run the same kernels on
+// the same samples, without floating-point contraction (phase_math.hpp), so
+// they are bit-identical.
 
 #include "decode_plan.hpp"
 #include "fpp/decoder.hpp"
@@ -64,13 +65,12 @@ class DecodeEngine {
         PlaneRef<std::uint16_t> threshold;
     };
 
-    // Batch mode: the plan's steps regrouped. A phase block's frames and its
-    // finish become one group; runs of gray planes of one block thresholded
-    // against one image become groups of up to four; other steps stay single.
-    enum class GroupKind { phase_block, gray_planes, single };
+    // Batch mode: the plan's steps in order, runs of gray planes of one block
+    // thresholded against one image grouped (up to four planes per pass).
+    enum class GroupKind { gray_planes, single };
     struct BatchGroup {
         GroupKind kind = GroupKind::single;
-        int first = 0; // index in batch_steps_
+        int first = 0; // index in plan_.steps
         int count = 1;
     };
 
@@ -99,8 +99,7 @@ class DecodeEngine {
     template <class T>
     void run_steps(int begin, int end, std::size_t offset, int n, std::byte* local) const;
     template <class T>
-    void run_phase_block(const BatchGroup& group, std::size_t offset, int n,
-                         std::byte* local) const;
+    void run_phase_block(const Step& step, std::size_t offset, int n, std::byte* local) const;
     template <class T>
     void run_gray_planes(const BatchGroup& group, std::size_t offset, int n,
                          std::byte* local) const;
@@ -155,9 +154,11 @@ class DecodeEngine {
 
     // Frames: sample source per frame index, waiting slots.
     std::vector<const void*> frame_base_;
-    std::vector<std::unique_ptr<std::uint16_t[]>> slots_; // sized for 16-bit
-    std::vector<Step> batch_steps_; // plan_.steps in batch order (saturation first flags redone)
+    // Streaming: frames read after their arrival (a phase block's frames wait
+    // for its last), allocated at the first frame for its sample size.
+    std::vector<std::unique_ptr<std::byte[]>> slots_;
     std::vector<BatchGroup> batch_groups_;
+    std::vector<int> prefetch_frames_; // batch: frames asked for at the start of a span
     std::vector<int> step_begin_; // per trigger frame: range in plan_.steps
     std::vector<int> step_end_;
     int received_ = 0;

@@ -1,6 +1,6 @@
 #pragma once
-// Per-pixel kernels applied as frames arrive. Each processes a contiguous run
-// of pixels (a span of the image, which may cross rows: no kernel looks at a
+// Per-pixel kernels of the decoding steps. Each processes a contiguous run of
+// pixels (a span of the image, which may cross rows: no kernel looks at a
 // neighbour) and is written as a simple loop over contiguous arrays that GCC
 // vectorises at -O3. `first` means "assign instead of accumulate", so no
 // buffer ever needs clearing and the order of operations per pixel is fixed by
@@ -10,9 +10,11 @@
 // the same type as the samples they are compared with, so the comparisons run
 // on 16 or 32 lanes per vector instead of being widened to 32 bits.
 
+#include "decode_weights.hpp"
 #include "phase_math.hpp"
 
 #include <cstdint>
+#include <type_traits>
 
 namespace fpp::detail {
 
@@ -31,20 +33,87 @@ FPP_KERNEL void saturation_row(const T* in, int n, T level, std::uint8_t bits, b
 
 // How a kernel that reads phase frames updates the saturation bytes.
 struct SatUpdate {
-    std::uint8_t* sat = nullptr; // null: leave them alone
-    std::uint8_t bits = 0;       // axis bits of the frames read
-    std::uint8_t keep = 0xff;    // 0 when this is the first write (assign), else 0xff (OR)
+    std::uint8_t* sat = nullptr;
+    std::uint8_t bits = 0;    // axis bits of the frames read
+    std::uint8_t keep = 0xff; // 0 when this is the first write (assign), else 0xff (OR)
 };
 
-// G consecutive frames k..k+G-1 of one phase block (G = 1 in streaming, up to
-// 4 when the frames are at hand): c += I cos(delta_k), s += I (-shift_sign
-// sin(delta_k)), a += I, frame after frame; the first frame of the block
-// assigns. The per-pixel operations and their order do not depend on G, so
-// the sums are bit-identical however the frames are grouped; only the
-// accumulators stay in registers between frames. With Sat, also ORs
-// `sat.bits` into the saturation bytes where any of the samples reaches
-// `level` (integer comparisons: the order does not matter).
-template <class T, int G, bool Sat, bool First>
+// Sums of a phase block over its N frames: c = sum I cos(delta_k),
+// s = sum I (-shift_sign sin(delta_k)), a = sum I; also ORs `sat.bits` into
+// the saturation bytes where any sample reaches `level`. Two forms, chosen by
+// N alone so that every decoding path of a block uses the same one:
+//  - phase_block_classes (N <= kMaxClassSteps): integer sums per weight class
+//    (decode_weights.hpp), then one multiply per class;
+//  - phase_frames_pass (larger N): frame after frame in order k = 0 .. N-1,
+//    G frames per pass with the sums in registers; the per-pixel operations
+//    and their order do not depend on G.
+
+// Integer class sums of frames K.. of the block, and the running maximum for
+// the saturation test, for one pixel.
+template <class T, class Acc, int N, int K>
+FPP_KERNEL void add_class_samples(const T* const* in, int x, Acc* cos_sum, Acc* sin_sum, Acc& sum,
+                                  T& peak) {
+    const T v = in[K][x];
+    peak = peak > v ? peak : v;
+    constexpr WeightClass c = cos_class(N, K);
+    constexpr WeightClass s = sin_class(N, K);
+    if constexpr (c.sign > 0)
+        cos_sum[c.index] = static_cast<Acc>(cos_sum[c.index] + v);
+    else if constexpr (c.sign < 0)
+        cos_sum[c.index] = static_cast<Acc>(cos_sum[c.index] - v);
+    if constexpr (s.sign > 0)
+        sin_sum[s.index] = static_cast<Acc>(sin_sum[s.index] + v);
+    else if constexpr (s.sign < 0)
+        sin_sum[s.index] = static_cast<Acc>(sin_sum[s.index] - v);
+    sum = static_cast<Acc>(sum + v);
+    if constexpr (K + 1 < N)
+        add_class_samples<T, Acc, N, K + 1>(in, x, cos_sum, sin_sum, sum, peak);
+}
+
+template <class T, int N>
+FPP_KERNEL void phase_block_classes(const T* const* in, int n, const float* class_cos_w,
+                                    const float* class_sin_w, T level, const SatUpdate& sat,
+                                    float* __restrict c, float* __restrict s, float* __restrict a) {
+    static_assert(N >= 3 && N <= kMaxClassSteps);
+    // 16-bit lanes for 8-bit samples: |sums| <= 16 * 255.
+    using Acc = std::conditional_t<sizeof(T) == 1, std::int16_t, std::int32_t>;
+    constexpr int kCos = cos_class_count(N);
+    constexpr int kSin = sin_class_count(N);
+    const T* p[N];
+    for (int k = 0; k < N; ++k)
+        p[k] = in[k];
+    float wc[kCos], ws[kSin];
+    for (int j = 0; j < kCos; ++j)
+        wc[j] = class_cos_w[j];
+    for (int j = 0; j < kSin; ++j)
+        ws[j] = class_sin_w[j];
+    std::uint8_t* __restrict sat_out = sat.sat;
+    const std::uint8_t bits = sat.bits;
+    const std::uint8_t keep = sat.keep;
+    for (int x = 0; x < n; ++x) {
+        Acc cos_sum[kCos] = {};
+        Acc sin_sum[kSin] = {};
+        Acc sum = 0;
+        T peak = 0;
+        add_class_samples<T, Acc, N, 0>(p, x, cos_sum, sin_sum, sum, peak);
+        sat_out[x] = static_cast<std::uint8_t>((sat_out[x] & keep) | (peak >= level ? bits : 0));
+        // Class sums below 2^24 convert to float exactly.
+        float cc = wc[0] * static_cast<float>(static_cast<std::int32_t>(cos_sum[0]));
+        for (int j = 1; j < kCos; ++j)
+            cc += wc[j] * static_cast<float>(static_cast<std::int32_t>(cos_sum[j]));
+        float ss = ws[0] * static_cast<float>(static_cast<std::int32_t>(sin_sum[0]));
+        for (int j = 1; j < kSin; ++j)
+            ss += ws[j] * static_cast<float>(static_cast<std::int32_t>(sin_sum[j]));
+        c[x] = cc;
+        s[x] = ss;
+        a[x] = static_cast<float>(static_cast<std::int32_t>(sum));
+    }
+}
+
+// G consecutive frames k..k+G-1 (G <= 4) of a block of more than
+// kMaxClassSteps steps: c += I cos(delta_k), s += I (-shift_sign sin(delta_k)),
+// a += I; the block's first frame assigns.
+template <class T, int G, bool First>
 FPP_KERNEL void phase_frames_pass(const T* const* in, int n, const float* cw, const float* sw,
                                   T level, const SatUpdate& sat, float* __restrict c,
                                   float* __restrict s, float* __restrict a) {
@@ -60,19 +129,17 @@ FPP_KERNEL void phase_frames_pass(const T* const* in, int n, const float* cw, co
     const float c0 = cw[0], c1 = cw[G > 1 ? 1 : 0], c2 = cw[G > 2 ? 2 : 0], c3 = cw[G > 3 ? 3 : 0];
     const float s0 = sw[0], s1 = sw[G > 1 ? 1 : 0], s2 = sw[G > 2 ? 2 : 0], s3 = sw[G > 3 ? 3 : 0];
     for (int x = 0; x < n; ++x) {
-        if constexpr (Sat) {
-            T m = i0[x];
-            if constexpr (G > 1)
-                m = m > i1[x] ? m : i1[x];
-            if constexpr (G > 2)
-                m = m > i2[x] ? m : i2[x];
-            if constexpr (G > 3)
-                m = m > i3[x] ? m : i3[x];
-            sat_out[x] = static_cast<std::uint8_t>((sat_out[x] & keep) | (m >= level ? bits : 0));
-        }
+        T m = i0[x];
+        if constexpr (G > 1)
+            m = m > i1[x] ? m : i1[x];
+        if constexpr (G > 2)
+            m = m > i2[x] ? m : i2[x];
+        if constexpr (G > 3)
+            m = m > i3[x] ? m : i3[x];
+        sat_out[x] = static_cast<std::uint8_t>((sat_out[x] & keep) | (m >= level ? bits : 0));
         const float v0 = static_cast<float>(i0[x]);
         float cc, ss, aa;
-        if constexpr (First) { // the block's first frame assigns
+        if constexpr (First) {
             cc = v0 * c0;
             ss = v0 * s0;
             aa = v0;
@@ -107,14 +174,14 @@ FPP_KERNEL void phase_frames_pass(const T* const* in, int n, const float* cw, co
 
 // One loop per case of `first`: a loop-invariant ?: on loads inside the loop
 // keeps GCC from vectorising it.
-template <class T, int G, bool Sat>
+template <class T, int G>
 FPP_KERNEL void phase_frames_row(const T* const* in, int n, const float* cw, const float* sw,
                                  bool first, T level, const SatUpdate& sat, float* c, float* s,
                                  float* a) {
     if (first)
-        phase_frames_pass<T, G, Sat, true>(in, n, cw, sw, level, sat, c, s, a);
+        phase_frames_pass<T, G, true>(in, n, cw, sw, level, sat, c, s, a);
     else
-        phase_frames_pass<T, G, Sat, false>(in, n, cw, sw, level, sat, c, s, a);
+        phase_frames_pass<T, G, false>(in, n, cw, sw, level, sat, c, s, a);
 }
 
 // Wrapped fraction of a period in [0, 1) from the sums, the phase offset

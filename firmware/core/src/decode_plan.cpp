@@ -1,5 +1,7 @@
 #include "decode_plan.hpp"
 
+#include "decode_weights.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -216,6 +218,14 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
                 info.cos_w.push_back(static_cast<float>(std::cos(delta)));
                 info.sin_w.push_back(static_cast<float>(-p->shift_sign * std::sin(delta)));
             }
+            if (p->steps <= kMaxClassSteps) {
+                const double step = 2.0 * std::numbers::pi / p->steps;
+                for (int j = 0; j < cos_class_count(p->steps); ++j)
+                    info.class_cos_w.push_back(static_cast<float>(std::cos(step * j)));
+                for (int j = 0; j < sin_class_count(p->steps); ++j)
+                    info.class_sin_w.push_back(
+                        static_cast<float>(-p->shift_sign * std::sin(step * (j + 1))));
+            }
             info.offset_fraction = static_cast<float>(p->phase_offset / (2.0 * std::numbers::pi));
             plan.phases.push_back(std::move(info));
         } else if (const auto* g = std::get_if<GrayBlock>(&block)) {
@@ -266,23 +276,16 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
     for (int b = 0; b < static_cast<int>(plan.phases.size()); ++b) {
         const PhaseInfo& p = plan.phases[static_cast<std::size_t>(b)];
         if (!p.used) continue;
-        const auto bit = static_cast<std::uint8_t>(1u << p.axis);
-        for (int k = 0; k < p.block.steps; ++k) {
-            Step s;
-            s.kind = StepKind::phase_frame;
-            s.trigger = s.frame = p.first_frame + k;
-            s.index = b;
-            s.k = k;
-            s.first = k == 0;
-            s.sat_bits = bit;
-            steps.push_back(s);
-        }
-        Step f;
-        f.kind = StepKind::phase_finish;
-        f.trigger = p.last_frame();
-        f.stage = 1;
-        f.index = b;
-        steps.push_back(f);
+        // The whole block once its last frame is there: the earlier frames
+        // wait in slots, and batch and streaming run the same kernel.
+        Step s;
+        s.kind = StepKind::phase_block;
+        s.trigger = p.last_frame();
+        s.frame = p.first_frame;
+        s.frames = p.block.steps;
+        s.index = b;
+        s.sat_bits = static_cast<std::uint8_t>(1u << p.axis);
+        steps.push_back(s);
     }
     std::uint8_t white_black_bits = 0;
     for (const auto& g : plan.grays)
@@ -351,11 +354,15 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
     // Frames read after they arrive wait in a slot; slots are reused once free.
     plan.frame_slot.assign(static_cast<std::size_t>(plan.frame_count), -1);
     std::vector<int> keep_until(static_cast<std::size_t>(plan.frame_count), -1);
-    for (const auto& s : plan.steps)
-        for (int fr : {s.frame, s.frame2})
-            if (fr >= 0 && s.trigger > fr)
-                keep_until[static_cast<std::size_t>(fr)] =
-                    std::max(keep_until[static_cast<std::size_t>(fr)], s.trigger);
+    auto keep = [&](int fr, int until) {
+        if (fr >= 0 && until > fr)
+            keep_until[static_cast<std::size_t>(fr)] =
+                std::max(keep_until[static_cast<std::size_t>(fr)], until);
+    };
+    for (const auto& s : plan.steps) {
+        for (int f = 0; f < s.frames; ++f) keep(s.frame < 0 ? -1 : s.frame + f, s.trigger);
+        keep(s.frame2, s.trigger);
+    }
     std::vector<int> slot_free_after; // per slot: last frame index that reads it
     for (int fr = 0; fr < plan.frame_count; ++fr) {
         const int until = keep_until[static_cast<std::size_t>(fr)];

@@ -1,7 +1,8 @@
 #pragma once
 // Decoding plan: which blocks a sequence decodes each axis with, and the list
-// of per-frame steps. Both the batch and the streaming decoder execute the same
-// steps in the same order, which is what makes them bit-identical.
+// of steps, each run once the frames it reads have arrived. Both the batch and
+// the streaming decoder execute the same steps in the same order, which is
+// what makes them bit-identical.
 
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
@@ -20,6 +21,10 @@ struct PhaseInfo {
     int axis = 0;             // 0 = x, 1 = y
     std::vector<float> cos_w; // cos(delta_k)
     std::vector<float> sin_w; // -shift_sign * sin(delta_k), so theta = atan2(sum sin_w I, sum cos_w I)
+    // Blocks of at most kMaxClassSteps steps sum by weight class
+    // (decode_weights.hpp) with these class weights instead of cos_w, sin_w.
+    std::vector<float> class_cos_w; // cos(2 pi j / N)
+    std::vector<float> class_sin_w; // -shift_sign * sin(2 pi (j + 1) / N)
     float offset_fraction = 0; // phase_offset / (2 pi)
     bool used = false;
     bool thresholds = false; // a gray or centerline block is thresholded against its mean
@@ -66,8 +71,7 @@ struct AxisPlan {
 };
 
 enum class StepKind {
-    phase_frame,       // accumulate one phase frame
-    phase_finish,      // sums -> wrapped fraction, modulation, mean
+    phase_block,       // all frames of a phase block -> wrapped fraction, modulation, mean
     white_black_frame, // accumulate white + black (gray threshold, doubled)
     gray_threshold,    // threshold one gray plane against white/black or the phase mean
     gray_inverse,      // compare a gray plane with its inverse frame
@@ -75,13 +79,14 @@ enum class StepKind {
 };
 
 struct Step {
-    StepKind kind = StepKind::phase_frame;
+    StepKind kind = StepKind::phase_block;
     int trigger = 0; // run once frame `trigger` has arrived
     int stage = 0;   // order among steps with the same trigger
-    int frame = -1;  // frame read (-1: none)
+    int frame = -1;  // frame read (-1: none); phase_block: its first frame
+    int frames = 1;  // frames read from `frame` on (phase_block: the block's steps)
     int frame2 = -1; // inverse frame (gray_inverse)
     int index = -1;  // phase, gray or centerline index
-    int k = 0;       // phase step or gray plane (0 = MSB)
+    int k = 0;       // gray plane (0 = MSB)
     bool first = false;     // first write of its accumulator or code: assign, not add
     bool sat_first = false; // first step reading a frame: assigns the saturation byte
     std::uint8_t sat_bits = 0; // axis bits (1 = x, 2 = y) of the frames read
