@@ -12,6 +12,9 @@ packages=(
   libopencv-dev libeigen3-dev libcli11-dev
   # tests and benchmarks (OpenCV's structured_light module is the speed baseline)
   libgtest-dev libgmock-dev libbenchmark-dev libopencv-contrib-dev
+  # PLY interoperability tests: the viewers' own readers, headless
+  # (MeshLab's meshlabserver needs an X server for its OpenGL context)
+  python3-open3d cloudcompare meshlab xvfb xauth
 )
 
 as_root() {

@@ -1,8 +1,13 @@
-// fpp-calib reconstruct CAPTURE --calib FILE --out cloud.ply [--xyz xyz.tiff]
+// fpp-calib reconstruct CAPTURE (--calib FILE | --table table.fpt) --out cloud.ply
+//                       [--xyz xyz.tiff] [--smooth RADIUS [--smooth-tolerance PX]]
 //
 // Decodes a capture set and reconstructs it with the stereo (SV) model of a
 // calibration file: ours, SLStudio's calibration.xml or SLMaster's
-// caliInfo.yml. Outputs (written only when everything succeeded):
+// caliInfo.yml; or with a hybrid coefficient table (fpp/table_kernel.hpp,
+// vertical fringes: the projector column only); optionally with the decoded
+// projector coordinates smoothed first (edge-preserving,
+// fpp/coordinate_filter.hpp). Outputs (written only when everything
+// succeeded):
 //   cloud.ply  binary little-endian PLY of the valid points (fpp/point_cloud.hpp)
 //   xyz.tiff   optional: 3-channel float32 X, Y, Z per camera pixel, mm, NaN = none
 
@@ -13,10 +18,14 @@
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/capture_set.hpp"
+#include "fpp/coefficient_table.hpp"
+#include "fpp/coordinate_filter.hpp"
 #include "fpp/decoder.hpp"
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
+#include "fpp/parallel.hpp"
 #include "fpp/point_cloud.hpp"
+#include "fpp/table_kernel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -35,6 +44,7 @@ namespace fs = std::filesystem;
 struct ReconstructArgs {
     std::string capture;
     std::string calib;
+    std::string table;
     std::string calib_format = "auto";
     std::string out;
     std::string xyz;
@@ -42,6 +52,7 @@ struct ReconstructArgs {
     std::string camera_size;    // "WxH", for calibrations without sizes
     std::string projector_size; // "WxH"
     DecodeOptions decode;
+    CoordinateFilterOptions smooth; // radius set to 0 (off) unless --smooth
 };
 
 // "1280x1024" -> Size; throws InputError naming the option.
@@ -179,6 +190,13 @@ std::string truth_comparison(const PointCloud& cloud, const CaptureSet& capture)
 
 int run_reconstruct(const ReconstructArgs& args) {
     args.decode.validate();
+    CoordinateFilterOptions smooth = args.smooth;
+    smooth.threads = args.decode.threads;
+    try {
+        smooth.validate();
+    } catch (const std::invalid_argument& e) {
+        throw InputError("command line", "--smooth", e.what());
+    }
     const fs::path out = args.out;
     const fs::path xyz_out = args.xyz;
     check_output_path(out, "--out");
@@ -189,20 +207,44 @@ int run_reconstruct(const ReconstructArgs& args) {
     }
     const ReconstructAxes requested = parse_axes(args.axes);
     const CalibrationFormat format = parse_calibration_format(args.calib_format);
+    const bool use_table = !args.table.empty();
+    if (use_table == !args.calib.empty())
+        throw InputError("command line", "--calib/--table",
+                         "give exactly one model: a stereo calibration (--calib) or a hybrid "
+                         "coefficient table (--table)");
+    if (use_table && requested == ReconstructAxes::xy)
+        throw InputError("command line", "--axes",
+                         "a coefficient table maps the projector column only (--axes x)");
 
-    const fs::path calib_path = args.calib;
-    StereoCalibration calibration = load_calibration(calib_path, format);
-    std::cerr << "calibration: " << calibration.origin << "\n";
+    const fs::path calib_path = use_table ? fs::path(args.table) : fs::path(args.calib);
+    StereoCalibration calibration;
+    CoefficientTable table;
     std::cerr << "reading " << args.capture << "\n";
     const CaptureSet capture = read_capture_set(args.capture);
     const fs::path manifest_path = capture.folder / "capture.yaml";
-    settle_sizes(calibration, calib_path, args, capture.manifest);
+    if (use_table) {
+        // Validated whole (header, every tile's CRC) and against the camera.
+        table = load_table(calib_path, &capture.manifest.camera);
+        if (table.info().phase_axis != Axis::x)
+            throw InputError(calib_path, "phase_axis", "maps the projector row; expected x");
+        if (!(table.info().projector == capture.manifest.projector))
+            throw InputError(calib_path, "projector_size",
+                             "the table is for a " + size_text(table.info().projector) +
+                                 " projector, the capture's is " +
+                                 size_text(capture.manifest.projector));
+        std::cerr << "table: " << to_string(table.info().model) << " model, camera "
+                  << size_text(table.info().camera) << "\n";
+    } else {
+        calibration = load_calibration(calib_path, format);
+        std::cerr << "calibration: " << calibration.origin << "\n";
+        settle_sizes(calibration, calib_path, args, capture.manifest);
+    }
 
     const bool has_x = sequence_codes(capture.manifest.sequence, Axis::x);
     const bool has_y = sequence_codes(capture.manifest.sequence, Axis::y);
     if (!has_x)
         throw InputError(manifest_path, "sequence",
-                         "no phase block along x: SV reconstruction needs the projector column");
+                         "no phase block along x: reconstruction needs the projector column");
     if (requested == ReconstructAxes::xy && !has_y)
         throw InputError(manifest_path, "sequence",
                          "--axes xy needs the projector row, but the capture has no phase block "
@@ -216,24 +258,51 @@ int run_reconstruct(const ReconstructArgs& args) {
         throw InputError(manifest_path, "sequence", e.what());
     }
     const double decode_seconds = decode_watch.seconds();
+    Stopwatch smooth_watch;
+    Image<float> scratch;
+    const CoordinateFilterReport smoothing = smooth_coordinates(decoded, smooth, scratch);
+    const double smooth_seconds = smooth_watch.seconds();
 
-    SvOptions sv;
-    sv.threads = args.decode.threads;
-    Stopwatch prepare_watch;
-    const SvReconstructor reconstructor(calibration, sv);
-    const double prepare_seconds = prepare_watch.seconds();
     PointCloud cloud;
-    Stopwatch sv_watch;
-    const SvStats stats = reconstructor.reconstruct(decoded, requested, cloud);
-    const double sv_seconds = sv_watch.seconds();
+    SvStats stats;
+    TableApplyStats table_stats;
+    double prepare_seconds = 0, model_seconds = 0;
+    if (use_table) {
+        ThreadPool pool(args.decode.threads);
+        Stopwatch watch;
+        table_stats = apply_table(table, decoded.proj_x, cloud, &pool);
+        model_seconds = watch.seconds();
+        cloud.quality = decoded.modulation;
+        cloud.intensity = decoded.mean;
+        stats.axes = ReconstructAxes::x;
+        stats.points = table_stats.points;
+    } else {
+        SvOptions sv;
+        sv.threads = args.decode.threads;
+        Stopwatch prepare_watch;
+        const SvReconstructor reconstructor(calibration, sv);
+        prepare_seconds = prepare_watch.seconds();
+        Stopwatch sv_watch;
+        stats = reconstructor.reconstruct(decoded, requested, cloud);
+        model_seconds = sv_watch.seconds();
+    }
 
     std::vector<std::string> comments = {
-        "fpp-calib reconstruct: stereo (SV) model, camera frame, mm",
-        "capture " + fs::path(args.capture).filename().string() + ", calibration " +
-            calib_path.filename().string() + ", axes " + to_string(stats.axes),
+        use_table ? "fpp-calib reconstruct: hybrid model (" +
+                        std::string(to_string(table.info().model)) +
+                        " coefficient table), camera frame, mm"
+                  : "fpp-calib reconstruct: stereo (SV) model, camera frame, mm",
+        "capture " + fs::path(args.capture).filename().string() +
+            (use_table ? ", table " : ", calibration ") + calib_path.filename().string() +
+            ", axes " + to_string(stats.axes),
         "quality: fringe modulation (DN); intensity: mean intensity (DN); pixel: row * "
         "organised_width + column"};
     Stopwatch write_watch;
+    if (smooth.radius > 0)
+        comments.push_back("projector coordinates smoothed over " +
+                           std::to_string(2 * smooth.radius + 1) + " x " +
+                           std::to_string(2 * smooth.radius + 1) +
+                           " px, edges kept (fpp-calib reconstruct --smooth)");
     // The TIFF is published inside the PLY's atomic write, just before the
     // PLY itself: a failure while writing either leaves neither.
     write_atomically(out, [&](const fs::path& temp) {
@@ -248,24 +317,45 @@ int run_reconstruct(const ReconstructArgs& args) {
     std::ostringstream report;
     report << "axes: " << to_string(stats.axes) << " (decoded by " << decoded.method_x
            << (stats.axes == ReconstructAxes::xy ? " / " + decoded.method_y : std::string())
-           << ")\n"
-           << "points: " << stats.points << " of " << pixels << " pixels ("
-           << 100.0 * double(stats.points) / double(pixels) << " %); decoded " << stats.decoded
-           << "; no point: outside the projector image " << stats.outside_projector
-           << ", other geometry " << stats.rejected << ", not converged " << stats.not_converged
-           << "\n";
+           << ")\n";
+    if (smooth.radius > 0) {
+        report << "smoothing: " << 2 * smooth.radius + 1 << " x " << 2 * smooth.radius + 1
+               << " px, tolerance " << smoothing.tolerance_x;
+        if (std::isfinite(smoothing.tolerance_y))
+            report << " (x) / " << smoothing.tolerance_y << " (y)";
+        report << " projector px"
+               << (smooth.tolerance_px > 0 ? "" : " (5 x the noise estimated from the scan)")
+               << "\n";
+    }
+    report << "points: " << stats.points << " of " << pixels << " pixels ("
+           << 100.0 * double(stats.points) / double(pixels) << " %); ";
+    if (use_table)
+        report << "decoded " << table_stats.phase_valid << "; no point: no model "
+               << table_stats.no_model << ", outside the calibrated phase range "
+               << table_stats.out_of_range << "\n";
+    else
+        report << "decoded " << stats.decoded << "; no point: outside the projector image "
+               << stats.outside_projector << ", other geometry " << stats.rejected
+               << ", not converged " << stats.not_converged << "\n";
     if (stats.points > 0)
         report << "depth Z: " << z.z_min << " .. " << z.z_max << " mm (1st-99th percentile "
                << z.z_p01 << " .. " << z.z_p99 << " mm)\n";
-    if (stats.axes == ReconstructAxes::x)
+    if (!use_table && stats.axes == ReconstructAxes::x)
         report << "x-only solve: " << stats.mean_iterations() << " steps per point on average, at "
                << "most " << stats.max_iterations << "\n";
-    else
+    else if (!use_table)
         report << "ray gap: RMS " << stats.rms_ray_gap_mm << " mm, max " << stats.max_ray_gap_mm
                << " mm\n";
     report << truth_comparison(cloud, capture);
-    report << "time: decode " << decode_seconds << " s, camera rays " << prepare_seconds
-           << " s, SV " << sv_seconds << " s, writing " << write_seconds << " s\n"
+    report << "time: decode " << decode_seconds << " s, ";
+    if (smooth.radius > 0)
+        report << "smoothing " << smooth_seconds << " s, ";
+    if (use_table)
+        report << "table " << model_seconds << " s, writing ";
+    else
+        report << "camera rays " << prepare_seconds << " s, SV " << model_seconds << " s, writing ";
+    report
+           << write_seconds << " s\n"
            << "wrote " << out.string() << (xyz_out.empty() ? "" : " and " + xyz_out.string())
            << "\n";
     std::cout << report.str();
@@ -276,16 +366,19 @@ int run_reconstruct(const ReconstructArgs& args) {
 
 Action add_reconstruct_command(CLI::App& app) {
     auto args = std::make_shared<ReconstructArgs>();
+    args->smooth.radius = 0;
     auto* cmd = app.add_subcommand(
         "reconstruct",
         "Decode a capture set and reconstruct a point cloud with a stereo calibration (SV model, "
-        "lens distortion compensated): binary PLY of the valid points, optional XYZ TIFF");
+        "lens distortion compensated) or a hybrid coefficient table: binary PLY of the valid "
+        "points, optional XYZ TIFF");
     cmd->add_option("capture", args->capture, "capture set folder (holding capture.yaml)")
         ->required();
     cmd->add_option("--calib", args->calib,
                     "calibration file: fpp-calib's YAML, SLStudio's calibration.xml or "
-                    "SLMaster's caliInfo.yml")
-        ->required();
+                    "SLMaster's caliInfo.yml");
+    cmd->add_option("--table", args->table,
+                    "hybrid coefficient table (.fpt, from fpp-calib hybrid) instead of --calib");
     cmd->add_option("--calib-format", args->calib_format,
                     "format of --calib: auto (by its keys), fpp, slstudio, slmaster")
         ->check(CLI::IsMember({"auto", "fpp", "slstudio", "slmaster"}))
@@ -307,6 +400,17 @@ Action add_reconstruct_command(CLI::App& app) {
                     "default: the capture's");
     cmd->add_option("--min-modulation", args->decode.min_modulation,
                     "minimum modulation as a fraction of full scale")
+        ->capture_default_str();
+    cmd->add_option("--smooth", args->smooth.radius,
+                    "smooth the decoded projector coordinates over (2 RADIUS + 1)^2 camera "
+                    "pixels first, keeping depth edges and masked pixels apart (0 = off, at most "
+                    "7; 2 suits dithered or defocused binary fringes)")
+        ->check(CLI::Range(0, CoordinateFilterOptions::kMaxRadius))
+        ->capture_default_str();
+    cmd->add_option("--smooth-tolerance", args->smooth.tolerance_px,
+                    "with --smooth: neighbours further than this from the local plane (projector "
+                    "px) are left out; 0 = 5 times the noise estimated from the scan")
+        ->check(CLI::Range(0.0, 10000.0))
         ->capture_default_str();
     cmd->add_option("--threads", args->decode.threads, "worker threads (0 = all cores)")
         ->capture_default_str();

@@ -21,6 +21,7 @@ struct SimulateArgs {
     std::uint64_t seed = 1;
     double read_noise = -1;
     bool no_effects = false;
+    int binning = 1;
 };
 
 int run_simulate(const SimulateArgs& args) {
@@ -29,6 +30,7 @@ int run_simulate(const SimulateArgs& args) {
     sim::Rig rig = sim::load_rig(args.rig);
     if (args.no_effects) rig = rig.without_effects();
     if (args.read_noise >= 0) rig.sensor.read_noise_dn = args.read_noise;
+    if (args.binning > 1) rig = rig.binned_camera(args.binning);
     const sim::Scene scene = sim::scene_from_argument(args.scene);
     const Sequence sequence = sequence_from_argument(args.sequence, rig.projector_size);
     std::cerr << "simulating " << frame_count(sequence) << " frames of scene '" << args.scene
@@ -56,6 +58,10 @@ Action add_simulate_command(CLI::App& app) {
         ->required();
     cmd->add_option("--seed", args->seed, "noise seed")->capture_default_str();
     cmd->add_option("--read-noise", args->read_noise, "override the rig's read noise (DN)");
+    cmd->add_option("--binning", args->binning,
+                    "camera pixel binning factor (as simulate-session --binning)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 8));
     cmd->add_flag("--no-effects", args->no_effects,
                   "switch off every effect outside the stereo model, and noise");
     return [args] { return run_simulate(*args); };

@@ -16,5 +16,7 @@ Action add_demo_command(CLI::App& app);
 Action add_simulate_session_command(CLI::App& app);
 Action add_stereo_command(CLI::App& app);
 Action add_reconstruct_command(CLI::App& app);
+Action add_hybrid_command(CLI::App& app);
+Action add_evaluate_command(CLI::App& app);
 
 } // namespace fpp::calib

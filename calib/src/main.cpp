@@ -27,6 +27,8 @@ int main(int argc, char** argv) {
     add(fpp::calib::add_simulate_session_command);
     add(fpp::calib::add_stereo_command);
     add(fpp::calib::add_reconstruct_command);
+    add(fpp::calib::add_hybrid_command);
+    add(fpp::calib::add_evaluate_command);
 
     try {
         app.parse(argc, argv);

@@ -1,7 +1,11 @@
 #include "test_support.hpp"
 
+#include <sys/wait.h>
+
 #include <cstdlib>
+#include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 
 namespace fpp::test {
@@ -38,6 +42,28 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
     std::error_code ec;
     std::filesystem::remove_all(path_, ec);
+}
+
+std::string shell_quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s)
+        q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+ToolRun run_tool(const std::string& exe, const std::string& args,
+                 const std::filesystem::path& scratch) {
+    const std::filesystem::path log = scratch / "tool.log";
+    const std::string cmd =
+        shell_quote(exe) + " " + args + " > " + shell_quote(log.string()) + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    ToolRun run;
+    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(log);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    run.output = ss.str();
+    return run;
 }
 
 } // namespace fpp::test

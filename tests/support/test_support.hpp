@@ -29,6 +29,21 @@ private:
     std::filesystem::path path_;
 };
 
+// A command-line tool run through the shell, as a person runs it.
+struct ToolRun {
+    int exit_code = -1;  // -1 if it did not exit normally (signal)
+    std::string output;  // stdout and stderr
+};
+
+// The argument in single quotes for /bin/sh.
+std::string shell_quote(const std::string& s);
+inline std::string shell_quote(const std::filesystem::path& p) { return shell_quote(p.string()); }
+
+// Runs `exe args` (args already quoted as needed), output captured through
+// a log file in `scratch`.
+ToolRun run_tool(const std::string& exe, const std::string& args,
+                 const std::filesystem::path& scratch);
+
 } // namespace fpp::test
 
 // Skips the test with a clear message when a real dataset is absent; in CI

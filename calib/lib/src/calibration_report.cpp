@@ -44,12 +44,6 @@ cv::Scalar pose_colour(int index, int count) {
     return cv::Scalar(c[0], c[1], c[2]);
 }
 
-void save_png(const fs::path& path, const cv::Mat& image) {
-    if (!cv::imwrite(path.string(), image))
-        throw IoError(path, "cannot write the PNG");
-    fsync_path(path);
-}
-
 cv::Point2f to_point(const Vec2& p, double scale) {
     return {static_cast<float>((p[0] + 0.5) * scale - 0.5),
             static_cast<float>((p[1] + 0.5) * scale - 0.5)};
@@ -345,30 +339,12 @@ std::string calibration_summary(const SessionResult& r) {
     return s.str();
 }
 
-bool report_folder_writable(const fs::path& folder) {
-    std::error_code ec;
-    if (!fs::exists(folder, ec))
-        return true;
-    if (!fs::is_directory(folder, ec))
-        return false;
-    return fs::is_empty(folder, ec) || fs::exists(folder / "summary.md", ec);
-}
-
 void write_calibration_report(const fs::path& folder, const SessionResult& r) {
     if (!report_folder_writable(folder))
         throw InputError(folder, "",
                          "exists and is not a calibration report; choose another --report folder");
     const int columns = r.board.inner_columns, rows = r.board.inner_rows;
-    const fs::path target = folder.filename().empty() ? folder.parent_path() : folder;
-    fs::path old;
-    std::error_code ec;
-    if (fs::exists(target, ec)) {
-        old = target;
-        old += ".old";
-        fs::remove_all(old, ec);
-        fs::rename(target, old);
-    }
-    write_folder_atomically(target, [&](const fs::path& temp) {
+    write_report_folder(folder, [&](const fs::path& temp) {
         write_file_synced(temp / "summary.md", calibration_summary(r));
         for (const SessionPose& p : r.poses) {
             const cv::Mat fig = corner_figure(p, columns, rows);
@@ -379,8 +355,6 @@ void write_calibration_report(const fs::path& folder, const SessionResult& r) {
         save_png(temp / "residuals-projector.png", residual_figure(r, true));
         save_png(temp / "pose-rms.png", rms_figure(r));
     });
-    if (!old.empty())
-        fs::remove_all(old, ec);
 }
 
 } // namespace fpp::calib

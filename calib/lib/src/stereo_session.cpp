@@ -3,6 +3,8 @@
 
 #include "fpp/calib/stereo_session.hpp"
 
+#include "fpp/calib/session_folder.hpp"
+
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
 
@@ -20,17 +22,6 @@ namespace {
 
 double since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-bool has_phase(const Sequence& sequence, Axis axis) {
-    for (const PatternBlock& b : sequence)
-        if (const auto* p = std::get_if<PhaseBlock>(&b); p && p->axis == axis)
-            return true;
-    return false;
-}
-
-std::string size_text(Size s) {
-    return std::to_string(s.width) + " x " + std::to_string(s.height);
 }
 
 Image<std::uint8_t> to_8bit_view(const Image<float>& image) {
@@ -57,19 +48,6 @@ Image<std::uint8_t> to_8bit_view(const Image<float>& image) {
     return out;
 }
 
-// Sub-folders holding capture.yaml, by name.
-std::vector<fs::path> capture_folders(const fs::path& session) {
-    std::vector<fs::path> out;
-    std::error_code ec;
-    for (const fs::directory_entry& e : fs::directory_iterator(session, ec))
-        if (e.is_directory() && fs::exists(e.path() / "capture.yaml"))
-            out.push_back(e.path());
-    if (ec)
-        throw InputError(session, "", "cannot list the folder: " + ec.message());
-    std::sort(out.begin(), out.end());
-    return out;
-}
-
 } // namespace
 
 std::vector<Vec3> checkerboard_points(int columns, int rows, double square_size) {
@@ -90,48 +68,16 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
     SessionResult result;
     result.folder = session;
     result.method = options.corners.method;
-    if (!fs::is_directory(session))
-        throw InputError(session, "", "not a folder");
-    const fs::path board_file = session / "board.yaml";
-    if (!fs::exists(board_file))
-        throw InputError(board_file, "", "missing: a session needs board.yaml (fpp-board/1)");
-    result.board = read_board(board_file);
-    if (result.board.kind != BoardDescription::Kind::checkerboard)
-        throw InputError(board_file, "kind",
-                         "stereo calibration needs a checkerboard (this board is a plane)");
-    const int columns = result.board.inner_columns, rows = result.board.inner_rows;
-
     // Every manifest first: sizes and axes are checked before any decoding.
-    const std::vector<fs::path> folders = capture_folders(session);
-    if (folders.empty())
-        throw InputError(session, "", "no capture sets (sub-folders holding capture.yaml)");
-    std::vector<CaptureManifest> manifests;
-    for (const fs::path& f : folders) {
-        const fs::path yaml = f / "capture.yaml";
-        manifests.push_back(read_manifest(yaml));
-        const CaptureManifest& m = manifests.back();
-        if (manifests.size() == 1) {
-            result.camera_size = m.camera;
-            result.projector_size = m.projector;
-        } else if (!(m.camera == result.camera_size)) {
-            throw InputError(yaml, "camera",
-                             "camera size " + size_text(m.camera) + " differs from " +
-                                 folders.front().filename().string() + "'s " +
-                                 size_text(result.camera_size) +
-                                 "; all poses must come from one camera");
-        } else if (!(m.projector == result.projector_size)) {
-            throw InputError(yaml, "projector",
-                             "projector size " + size_text(m.projector) + " differs from " +
-                                 folders.front().filename().string() + "'s " +
-                                 size_text(result.projector_size));
-        }
-        for (Axis axis : {Axis::x, Axis::y})
-            if (!has_phase(m.sequence, axis))
-                throw InputError(yaml, "sequence",
-                                 std::string("no phase block along ") + to_string(axis) +
-                                     ": stereo calibration needs the projector's x and y "
-                                     "coordinate of every corner (phase in both directions)");
-    }
+    const SessionFolder folder = read_session_folder(
+        session, BoardDescription::Kind::checkerboard, {Axis::x, Axis::y}, "stereo calibration",
+        "stereo calibration needs the projector's x and y coordinate of every corner (phase in "
+        "both directions)");
+    result.board = folder.board;
+    result.camera_size = folder.camera_size;
+    result.projector_size = folder.projector_size;
+    const int columns = result.board.inner_columns, rows = result.board.inner_rows;
+    const std::vector<fs::path>& folders = folder.poses;
 
     const std::vector<Vec3> board_points =
         checkerboard_points(columns, rows, result.board.square_size);

@@ -7,6 +7,7 @@
 //   residuals-projector.png one colour per pose, on the device's image
 //   pose-rms.png            per-pose camera and projector RMS bars
 
+#include "fpp/calib/report_folder.hpp"
 #include "fpp/calib/stereo_session.hpp"
 
 #include <filesystem>
@@ -16,10 +17,6 @@ namespace fpp::calib {
 
 // The Markdown summary (also what the tool prints).
 std::string calibration_summary(const SessionResult& result);
-
-// Whether `folder` may receive a report: absent, an empty folder, or an
-// earlier report (holding summary.md), which is replaced.
-bool report_folder_writable(const std::filesystem::path& folder);
 
 // Writes the report folder as a whole (temporary folder renamed into place;
 // an earlier report there is replaced). Throws IoError, or InputError if the

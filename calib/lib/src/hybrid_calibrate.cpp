@@ -1,0 +1,631 @@
+// Hybrid calibration: per-pose SV planes, correction onto them, per-pixel
+// cubic fits into a coefficient table.
+
+#include "fpp/calib/hybrid_calibrate.hpp"
+
+#include "fpp/calib/session_folder.hpp"
+#include "fpp/capture_set.hpp"
+#include "fpp/error.hpp"
+#include "fpp/parallel.hpp"
+#include "fpp/point_cloud.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <future>
+#include <iomanip>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+namespace fpp::calib {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string size_text(Size s) {
+    return std::to_string(s.width) + " x " + std::to_string(s.height);
+}
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Least-squares plane of the points flagged in `use` (orthogonal distances):
+// the centroid and the covariance's eigenvector of least eigenvalue.
+bool least_squares_plane(const Image<float>& xyz, const std::vector<char>& use, BoardPlane& plane) {
+    const std::size_t n = xyz.pixel_count();
+    const float* p = xyz.data();
+    // Shifted by the first point for conditioning (coordinates ~500 mm).
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    bool have_origin = false;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!use[i])
+            continue;
+        const Eigen::Vector3d q(double(p[3 * i]), double(p[3 * i + 1]), double(p[3 * i + 2]));
+        if (!have_origin) {
+            origin = q;
+            have_origin = true;
+        }
+        const Eigen::Vector3d r = q - origin;
+        sum += r;
+        outer += r * r.transpose();
+        ++count;
+    }
+    if (count < 3)
+        return false;
+    const Eigen::Vector3d mean = sum / double(count);
+    const Eigen::Matrix3d cov = outer / double(count) - mean * mean.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    if (eig.info() != Eigen::Success)
+        return false;
+    const Eigen::Vector3d values = eig.eigenvalues(); // ascending
+    // A line of points (or one point) fixes no plane.
+    if (!(values[1] > 1e-9 * values[2]) || !(values[2] > 0))
+        return false;
+    Eigen::Vector3d normal = eig.eigenvectors().col(0).normalized();
+    if (normal.z() < 0)
+        normal = -normal;
+    const Eigen::Vector3d centroid = origin + mean;
+    plane.normal = {normal.x(), normal.y(), normal.z()};
+    plane.d = normal.dot(centroid);
+    return std::isfinite(plane.d);
+}
+
+double signed_distance(const BoardPlane& plane, const float* q) {
+    return plane.normal[0] * double(q[0]) + plane.normal[1] * double(q[1]) +
+           plane.normal[2] * double(q[2]) - plane.d;
+}
+
+// One pose's samples kept for the per-pixel fits: the decoded column and the
+// SV depth along the pixel's ray (NaN where no point or an outlier).
+struct PoseSamples {
+    Image<float> phase;
+    Image<float> depth;
+    BoardPlane plane;
+};
+
+// Quadratic Savitzky-Golay smoothing of a flat board's phase map, separable:
+// rows, then columns. Weights of the centre value of a quadratic fit to
+// 2r + 1 equally spaced samples: (3(3r^2 + 3r - 1) - 15 k^2) / ((2r-1)(2r+1)(2r+3)).
+// A sample is smoothed only when its whole window is finite; else it keeps
+// its value.
+void smooth_phase(Image<float>& phase, int r, ThreadPool& pool) {
+    if (r <= 0)
+        return;
+    const int w = phase.width(), h = phase.height();
+    std::vector<double> weight(static_cast<std::size_t>(2 * r + 1));
+    const double den = double(2 * r - 1) * double(2 * r + 1) * double(2 * r + 3);
+    for (int k = -r; k <= r; ++k)
+        weight[static_cast<std::size_t>(k + r)] =
+            (3.0 * (3.0 * r * r + 3.0 * r - 1.0) - 15.0 * k * k) / den;
+    // Pass 1 along rows into `rows` (NaN where the window is incomplete).
+    Image<float> rows(phase.size(), 1, kNaN);
+    pool.parallel_for(h, 8, [&](int y0, int y1, int) {
+        for (int y = y0; y < y1; ++y) {
+            const float* in = phase.row(y);
+            float* out = rows.row(y);
+            for (int x = r; x < w - r; ++x) {
+                double sum = 0;
+                for (int k = -r; k <= r; ++k)
+                    sum += weight[static_cast<std::size_t>(k + r)] * double(in[x + k]);
+                out[x] = static_cast<float>(sum); // NaN if any sample is NaN
+            }
+        }
+    });
+    // Pass 2 along columns of `rows`, into phase where complete.
+    pool.parallel_for(h, 8, [&](int y0, int y1, int) {
+        for (int y = std::max(y0, r); y < std::min(y1, h - r); ++y)
+            for (int x = r; x < w - r; ++x) {
+                double sum = 0;
+                for (int k = -r; k <= r; ++k)
+                    sum += weight[static_cast<std::size_t>(k + r)] * double(rows.at(x, y + k));
+                if (std::isfinite(sum))
+                    phase.at(x, y) = static_cast<float>(sum);
+            }
+    });
+}
+
+// Solves the symmetric positive definite system a x = b (n <= 5) by LDL^T
+// in place. Returns false when a pivot is below 1/max_condition of the
+// largest (samples bunched at one phase).
+bool solve_normal_equations(int n, double a[5][5], double b[5], double max_condition) {
+    double dmax = 0;
+    for (int j = 0; j < n; ++j) {
+        double d = a[j][j];
+        for (int k = 0; k < j; ++k)
+            d -= a[j][k] * a[j][k] * a[k][k];
+        a[j][j] = d;
+        dmax = std::max(dmax, d);
+        if (!(d > dmax / max_condition))
+            return false;
+        for (int i = j + 1; i < n; ++i) {
+            double v = a[i][j];
+            for (int k = 0; k < j; ++k)
+                v -= a[i][k] * a[j][k] * a[k][k];
+            a[i][j] = v / d;
+        }
+    }
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k < i; ++k)
+            b[i] -= a[i][k] * b[k];
+    for (int i = 0; i < n; ++i)
+        b[i] /= a[i][i];
+    for (int i = n - 1; i >= 0; --i)
+        for (int k = i + 1; k < n; ++k)
+            b[i] -= a[k][i] * b[k];
+    return true;
+}
+
+// Least squares of value = sum_j c_j basis_j over samples; basis rows given by
+// `row(k, out)`, weights w_k. n unknowns (n <= 5).
+template <class Row>
+bool least_squares(int n, std::size_t samples, const Row& row, const double* value,
+                   const double* weight, double max_condition, double c[5]) {
+    double a[5][5] = {}, b[5] = {};
+    double r[5];
+    for (std::size_t k = 0; k < samples; ++k) {
+        row(k, r);
+        const double w = weight ? weight[k] : 1.0;
+        for (int i = 0; i < n; ++i) {
+            b[i] += w * r[i] * value[k];
+            for (int j = 0; j <= i; ++j)
+                a[i][j] += w * r[i] * r[j];
+        }
+    }
+    for (int i = 0; i < n; ++i)
+        for (int j = i + 1; j < n; ++j)
+            a[i][j] = a[j][i];
+    if (!solve_normal_equations(n, a, b, max_condition))
+        return false;
+    for (int i = 0; i < n; ++i)
+        c[i] = b[i];
+    return true;
+}
+
+double cubic(const double c[4], double t) {
+    return c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+}
+
+float percentile(std::vector<float> values, double q) {
+    if (values.empty())
+        return kNaN;
+    const auto k = static_cast<std::ptrdiff_t>(q * double(values.size() - 1));
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    return values[static_cast<std::size_t>(k)];
+}
+
+} // namespace
+
+void HybridOptions::validate() const {
+    auto bad = [](const std::string& field, const std::string& why) {
+        throw std::invalid_argument("hybrid option " + field + ": " + why);
+    };
+    if (min_poses < 4)
+        bad("min_poses", "a cubic needs at least 4 poses per pixel");
+    if (phase_smoothing_radius < 0 || phase_smoothing_radius > 50)
+        bad("phase_smoothing_radius", "must be in [0, 50] px");
+    if (!(max_condition >= 10))
+        bad("max_condition", "must be at least 10");
+    if (!(outlier_sigmas > 0))
+        bad("outlier_sigmas", "must be positive");
+    if (!(outlier_floor_mm >= 0))
+        bad("outlier_floor_mm", "must not be negative");
+    if (!(max_outlier_fraction >= 0 && max_outlier_fraction < 1))
+        bad("max_outlier_fraction", "must be in [0, 1)");
+    if (!(min_pose_coverage > 0 && min_pose_coverage <= 1))
+        bad("min_pose_coverage", "must be in (0, 1]");
+    if (min_usable_poses < 4)
+        bad("min_usable_poses", "at least 4 plane poses are needed for a cubic");
+    if (threads < 0)
+        bad("threads", "must not be negative");
+}
+
+bool fit_board_plane(Image<float>& xyz, const HybridOptions& options, BoardPlane& plane,
+                     PlaneFitStats& stats, bool drop_outliers) {
+    const std::size_t n = xyz.pixel_count();
+    float* p = xyz.data();
+    std::vector<char> use(n, 0);
+    std::size_t points = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (std::isfinite(p[3 * i]) && std::isfinite(p[3 * i + 1]) && std::isfinite(p[3 * i + 2])) {
+            use[i] = 1;
+            ++points;
+        }
+    const std::vector<char> valid = use;
+    BoardPlane fitted;
+    if (!least_squares_plane(xyz, use, fitted))
+        return false;
+    std::vector<float> abs_dist;
+    abs_dist.reserve(points);
+    auto distances = [&] {
+        abs_dist.clear();
+        for (std::size_t i = 0; i < n; ++i)
+            if (valid[i])
+                abs_dist.push_back(static_cast<float>(std::fabs(signed_distance(fitted, p + 3 * i))));
+    };
+    // Least trimmed squares first (concentration steps on the better half):
+    // a plain least-squares start lies between the board and whatever stands
+    // on it (a box covering a quarter of the image), and a threshold from
+    // its residuals would keep both.
+    for (int round = 0; round < 10; ++round) {
+        distances();
+        const float half = percentile(abs_dist, 0.5);
+        bool changed = false;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!valid[i])
+                continue;
+            const char in = std::fabs(signed_distance(fitted, p + 3 * i)) <= double(half) ? 1 : 0;
+            changed |= in != use[i];
+            use[i] = in;
+        }
+        if (!least_squares_plane(xyz, use, fitted))
+            return false;
+        if (!changed)
+            break;
+    }
+    // Then every point within max(k sigma, floor) of the plane, refitted until
+    // the inlier set settles.
+    for (int round = 0; round < 8; ++round) {
+        distances();
+        const double sigma = 1.4826 * double(percentile(abs_dist, 0.5));
+        const double limit = std::max(options.outlier_sigmas * sigma, options.outlier_floor_mm);
+        bool changed = false;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!valid[i])
+                continue;
+            const char in = std::fabs(signed_distance(fitted, p + 3 * i)) <= limit ? 1 : 0;
+            changed |= in != use[i];
+            use[i] = in;
+        }
+        if (!changed)
+            break;
+        if (!least_squares_plane(xyz, use, fitted))
+            return false;
+    }
+    stats = {};
+    stats.points = points;
+    double sum2 = 0;
+    std::size_t inliers = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!valid[i])
+            continue;
+        if (!use[i]) {
+            ++stats.outliers;
+            if (drop_outliers)
+                p[3 * i] = p[3 * i + 1] = p[3 * i + 2] = kNaN;
+            continue;
+        }
+        const double dist = signed_distance(fitted, p + 3 * i);
+        sum2 += dist * dist;
+        stats.max_mm = std::max(stats.max_mm, std::fabs(dist));
+        ++inliers;
+    }
+    stats.rms_mm = inliers ? std::sqrt(sum2 / double(inliers)) : 0.0;
+    plane = fitted;
+    return true;
+}
+
+std::string HybridResult::summary() const {
+    std::ostringstream s;
+    s.setf(std::ios::fixed);
+    s.precision(4);
+    const TableInfo& info = table.info();
+    s << "hybrid model: " << to_string(info.model) << ", camera " << size_text(info.camera)
+      << ", tiles " << info.tile_width << " x " << info.tile_height << "\n";
+    s << "poses: " << usable_poses << " of " << poses.size() << " used\n";
+    for (const HybridPose& p : poses) {
+        s << "  " << p.name << ": ";
+        if (p.usable)
+            s << p.points << " points, plane at " << std::setprecision(1) << p.distance_mm
+              << " mm, tilt " << p.tilt_deg << " deg, plane RMS " << std::setprecision(4)
+              << p.plane_rms_mm << " mm, max " << p.plane_max_mm << " mm, " << p.outliers
+              << " outliers\n";
+        else
+            s << "rejected: " << p.skip_reason << "\n";
+    }
+    const std::size_t total = pose_count.pixel_count();
+    s << "pixels modelled: " << pixels_modelled << " of " << total << " ("
+      << std::setprecision(2) << (total ? 100.0 * double(pixels_modelled) / double(total) : 0.0)
+      << " %); too few poses " << pixels_too_few_poses << ", ill-conditioned "
+      << pixels_ill_conditioned << "\n";
+    s.precision(4);
+    auto line = [&](const char* name, const Image<float>& rms) {
+        std::vector<float> v;
+        v.reserve(rms.pixel_count());
+        for (std::size_t i = 0; i < rms.pixel_count(); ++i)
+            if (std::isfinite(rms.data()[i]))
+                v.push_back(rms.data()[i]);
+        s << "fit RMS " << name << " (mm): median " << percentile(v, 0.5) << ", 99 % "
+          << percentile(v, 0.99) << ", max " << percentile(v, 1.0) << "\n";
+    };
+    line("X", rms_x);
+    line("Y", rms_y);
+    line("Z", rms_z);
+    s << "time: poses " << std::setprecision(2) << seconds_poses << " s, fit " << seconds_fit
+      << " s, total " << seconds_total << " s\n";
+    return s.str();
+}
+
+HybridResult calibrate_hybrid(const fs::path& session, const StereoCalibration& calibration,
+                              std::uint64_t calibration_hash, const HybridOptions& options) {
+    options.validate();
+    const auto t_start = std::chrono::steady_clock::now();
+    const auto say = [&](const std::string& s) {
+        if (options.progress)
+            options.progress(s);
+    };
+    const SessionFolder folder = read_session_folder(
+        session, BoardDescription::Kind::plane, {Axis::x}, "hybrid calibration",
+        "the hybrid model maps the projector column (vertical fringes) to X, Y, Z");
+    if (calibration.sizes_known() && !(calibration.camera_size == folder.camera_size))
+        throw InputError(folder.poses.front() / "capture.yaml", "camera",
+                         "camera size " + size_text(folder.camera_size) +
+                             " differs from the calibration's " +
+                             size_text(calibration.camera_size));
+    StereoCalibration calib = calibration;
+    if (!calib.sizes_known()) {
+        calib.camera_size = folder.camera_size;
+        calib.projector_size = folder.projector_size;
+    }
+    const SvReconstructor sv(calib, options.sv);
+    const Size camera = folder.camera_size;
+
+    HybridResult result;
+    std::vector<PoseSamples> samples;
+    // Reading the next pose's PNG frames overlaps decoding and SV of this one.
+    auto read_pose = [](const fs::path& f) { return read_capture_set(f); };
+    std::future<CaptureSet> next =
+        std::async(std::launch::async, read_pose, folder.poses.front());
+    PointCloud cloud;
+    for (std::size_t k = 0; k < folder.poses.size(); ++k) {
+        const auto t0 = std::chrono::steady_clock::now();
+        HybridPose pose;
+        pose.folder = folder.poses[k];
+        pose.name = pose.folder.filename().string();
+        say("pose " + pose.name + " (" + std::to_string(k + 1) + "/" +
+            std::to_string(folder.poses.size()) + ")");
+        const CaptureSet capture = next.get();
+        if (k + 1 < folder.poses.size())
+            next = std::async(std::launch::async, read_pose, folder.poses[k + 1]);
+        DecodeResult decoded;
+        try {
+            decoded = decode(capture, options.decode);
+        } catch (const std::invalid_argument& e) {
+            throw InputError(pose.folder / "capture.yaml", "sequence",
+                             std::string("cannot be decoded: ") + e.what());
+        }
+        sv.reconstruct(decoded, ReconstructAxes::x, cloud);
+        PlaneFitStats stats;
+        BoardPlane plane;
+        const bool fitted = fit_board_plane(cloud.xyz, options, plane, stats);
+        pose.points = stats.points;
+        pose.outliers = stats.outliers;
+        const double coverage = double(stats.points) / double(camera.area());
+        std::ostringstream why;
+        why.precision(3);
+        if (!fitted) {
+            why << "no plane: " << stats.points << " points in a degenerate layout";
+        } else if (coverage < options.min_pose_coverage) {
+            why << "only " << 100 * coverage << " % of the camera pixels got a point (need "
+                << 100 * options.min_pose_coverage << " %)";
+        } else if (double(stats.outliers) > options.max_outlier_fraction * double(stats.points)) {
+            why << "not planar: " << 100.0 * double(stats.outliers) / double(stats.points)
+                << " % of the points are off the best plane (limit "
+                << 100 * options.max_outlier_fraction << " %); something on the board?";
+        }
+        if (!why.str().empty()) {
+            pose.skip_reason = why.str();
+            say("  rejected " + pose.name + ": " + pose.skip_reason);
+        } else {
+            pose.usable = true;
+            pose.plane = plane;
+            pose.plane_rms_mm = stats.rms_mm;
+            pose.plane_max_mm = stats.max_mm;
+            pose.distance_mm = plane.d / plane.normal[2];
+            pose.tilt_deg = std::acos(std::clamp(plane.normal[2], -1.0, 1.0)) * 180.0 /
+                            std::numbers::pi;
+            PoseSamples s;
+            s.phase = std::move(decoded.proj_x);
+            smooth_phase(s.phase, options.phase_smoothing_radius, ThreadPool::shared(options.threads));
+            s.depth = Image<float>(camera);
+            const float* xyz = cloud.xyz.data();
+            for (std::size_t i = 0; i < camera.area(); ++i)
+                s.depth.data()[i] = xyz[3 * i + 2]; // NaN for outliers and no point
+            s.plane = plane;
+            samples.push_back(std::move(s));
+        }
+        pose.seconds = since(t0);
+        result.poses.push_back(std::move(pose));
+    }
+    result.usable_poses = static_cast<int>(samples.size());
+    result.seconds_poses = since(t_start);
+    if (result.usable_poses < options.min_usable_poses)
+        throw InputError(session, "",
+                         std::to_string(result.usable_poses) + " usable plane poses of " +
+                             std::to_string(result.poses.size()) + "; at least " +
+                             std::to_string(options.min_usable_poses) + " are needed");
+
+    say("fitting per-pixel cubics (" + std::to_string(result.usable_poses) + " poses)");
+    const auto t_fit = std::chrono::steady_clock::now();
+    TableInfo info;
+    info.camera = camera;
+    info.tile_width = options.tile_width;
+    info.tile_height = options.tile_height;
+    info.model = options.model;
+    info.phase_axis = Axis::x;
+    info.projector = folder.projector_size;
+    info.calibration_hash = calibration_hash;
+    info.created_unix_s = static_cast<std::int64_t>(
+        std::chrono::duration_cast<std::chrono::seconds>(
+            std::chrono::system_clock::now().time_since_epoch())
+            .count());
+    result.table = CoefficientTable(info);
+    result.rms_x = Image<float>(camera, 1, kNaN);
+    result.rms_y = Image<float>(camera, 1, kNaN);
+    result.rms_z = Image<float>(camera, 1, kNaN);
+    result.pose_count = Image<std::uint16_t>(camera);
+
+    const Image<float>& rays = sv.camera_rays();
+    const TableModel model = options.model;
+    const bool along_ray = model != TableModel::polynomial;
+    const std::size_t poses = samples.size();
+    ThreadPool& pool = ThreadPool::shared(options.threads);
+    const auto workers = static_cast<std::size_t>(pool.size());
+    std::vector<std::size_t> too_few(workers, 0), ill(workers, 0), modelled(workers, 0);
+    CoefficientTable& table = result.table;
+    pool.parallel_for(camera.height, 4, [&](int row_begin, int row_end, int worker) {
+        // Per pixel and pose: normalised phase t and corrected X, Y, Z
+        // (scratch allocated once per chunk of rows).
+        std::vector<double> phase(poses), t(poses), X(poses), Y(poses), Z(poses), w(poses);
+        const auto wk = static_cast<std::size_t>(worker);
+        const auto cubic_row = [&](std::size_t k, double* r) {
+            r[0] = 1;
+            r[1] = t[k];
+            r[2] = t[k] * t[k];
+            r[3] = r[2] * t[k];
+        };
+        const auto rational_row = [&](std::size_t k, double* r) {
+            cubic_row(k, r);
+            r[4] = -t[k] * Z[k];
+        };
+        for (int v = row_begin; v < row_end; ++v)
+            for (int u = 0; u < camera.width; ++u) {
+                const std::size_t i = std::size_t(v) * std::size_t(camera.width) + std::size_t(u);
+                const double xn = double(rays.data()[2 * i]), yn = double(rays.data()[2 * i + 1]);
+                std::size_t n = 0;
+                double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+                for (const PoseSamples& s : samples) {
+                    const double p = double(s.phase.data()[i]), z = double(s.depth.data()[i]);
+                    if (!std::isfinite(p) || !std::isfinite(z) || !std::isfinite(xn))
+                        continue;
+                    const Vec3& nrm = s.plane.normal;
+                    if (along_ray) {
+                        // The pixel's line of sight meets the plane.
+                        Z[n] = s.plane.d / (nrm[0] * xn + nrm[1] * yn + nrm[2]);
+                        X[n] = xn * Z[n];
+                        Y[n] = yn * Z[n];
+                    } else {
+                        // The paper's correction: foot of the perpendicular.
+                        const double x = xn * z, y = yn * z;
+                        const double dist = nrm[0] * x + nrm[1] * y + nrm[2] * z - s.plane.d;
+                        X[n] = x - dist * nrm[0];
+                        Y[n] = y - dist * nrm[1];
+                        Z[n] = z - dist * nrm[2];
+                    }
+                    phase[n] = p;
+                    lo = std::min(lo, p);
+                    hi = std::max(hi, p);
+                    ++n;
+                }
+                result.pose_count.data()[i] = static_cast<std::uint16_t>(n);
+                if (n < static_cast<std::size_t>(options.min_poses)) {
+                    ++too_few[wk];
+                    continue;
+                }
+                const double centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+                if (!(half > 0)) {
+                    ++ill[wk];
+                    continue;
+                }
+                for (std::size_t k = 0; k < n; ++k)
+                    t[k] = (phase[k] - centre) / half;
+                double cx[5] = {}, cy[5] = {}, cz[5] = {};
+                bool ok = true;
+                if (model == TableModel::polynomial) {
+                    ok = least_squares(4, n, cubic_row, X.data(), nullptr, options.max_condition,
+                                       cx) &&
+                         least_squares(4, n, cubic_row, Y.data(), nullptr, options.max_condition,
+                                       cy) &&
+                         least_squares(4, n, cubic_row, Z.data(), nullptr, options.max_condition,
+                                       cz);
+                } else if (model == TableModel::ray) {
+                    ok = least_squares(4, n, cubic_row, Z.data(), nullptr, options.max_condition,
+                                       cz);
+                } else {
+                    // Z (1 + d t) = cubic(t) is linear in the unknowns; a second
+                    // solve weighted by 1 / (1 + d t)^2 turns its residuals
+                    // into depth residuals (Sanathanan-Koerner).
+                    ok = least_squares(5, n, rational_row, Z.data(), nullptr,
+                                       options.max_condition, cz);
+                    if (ok) {
+                        for (std::size_t k = 0; k < n; ++k) {
+                            const double den = 1 + cz[4] * t[k];
+                            w[k] = 1 / (den * den);
+                        }
+                        ok = least_squares(5, n, rational_row, Z.data(), w.data(),
+                                           options.max_condition, cz);
+                    }
+                    // The pole must stay outside the calibrated range.
+                    ok = ok && std::fabs(cz[4]) < 0.9;
+                }
+                if (!ok) {
+                    ++ill[wk];
+                    continue;
+                }
+                const auto z_model = [&](double tk) {
+                    const double num = cubic(cz, tk);
+                    return model == TableModel::rational ? num / (1 + cz[4] * tk) : num;
+                };
+                double sum2[3] = {0, 0, 0};
+                for (std::size_t k = 0; k < n; ++k) {
+                    const double dz = z_model(t[k]) - Z[k];
+                    if (along_ray) {
+                        sum2[0] += dz * dz * xn * xn;
+                        sum2[1] += dz * dz * yn * yn;
+                    } else {
+                        const double dx = cubic(cx, t[k]) - X[k], dy = cubic(cy, t[k]) - Y[k];
+                        sum2[0] += dx * dx;
+                        sum2[1] += dy * dy;
+                    }
+                    sum2[2] += dz * dz;
+                }
+                result.rms_x.data()[i] = static_cast<float>(std::sqrt(sum2[0] / double(n)));
+                result.rms_y.data()[i] = static_cast<float>(std::sqrt(sum2[1] / double(n)));
+                result.rms_z.data()[i] = static_cast<float>(std::sqrt(sum2[2] / double(n)));
+                const auto put = [&](int plane, double value) {
+                    table.set(plane, u, v, static_cast<float>(value));
+                };
+                put(table_plane::centre, centre);
+                put(table_plane::inv_half_range, 1.0 / half);
+                if (model == TableModel::polynomial) {
+                    for (int k = 0; k < 4; ++k) {
+                        put(table_plane::poly_x + k, cx[k]);
+                        put(table_plane::poly_y + k, cy[k]);
+                        put(table_plane::poly_z + k, cz[k]);
+                    }
+                } else if (model == TableModel::ray) {
+                    for (int k = 0; k < 4; ++k)
+                        put(table_plane::ray_z + k, cz[k]);
+                    put(table_plane::ray_xn, xn);
+                    put(table_plane::ray_yn, yn);
+                } else {
+                    for (int k = 0; k < 4; ++k)
+                        put(table_plane::rational_z + k, cz[k]);
+                    put(table_plane::rational_d, cz[4]);
+                    put(table_plane::rational_xn, xn);
+                    put(table_plane::rational_yn, yn);
+                }
+                ++modelled[wk];
+            }
+    });
+    for (std::size_t w = 0; w < too_few.size(); ++w) {
+        result.pixels_too_few_poses += too_few[w];
+        result.pixels_ill_conditioned += ill[w];
+        result.pixels_modelled += modelled[w];
+    }
+    result.seconds_fit = since(t_fit);
+    result.seconds_total = since(t_start);
+    return result;
+}
+
+} // namespace fpp::calib

@@ -1,0 +1,95 @@
+// fpp-calib hybrid SESSION --calib calib.yaml --out table.fpt [--report DIR]
+//                         [--model rational|ray|polynomial] [--min-poses N]
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+
+#include "fpp/calib/hybrid_calibrate.hpp"
+#include "fpp/calib/hybrid_report.hpp"
+#include "fpp/calib/stereo_calibration.hpp"
+#include "fpp/coefficient_table.hpp"
+#include "fpp/error.hpp"
+#include "fpp/yaml_fields.hpp"
+
+#include <iostream>
+#include <memory>
+
+namespace fpp::calib {
+
+namespace {
+struct HybridArgs {
+    std::string session;
+    std::string calib;
+    std::string calib_format = "auto";
+    std::string out;
+    std::string report;
+    std::string model = "rational";
+    int min_poses = 6;
+    int threads = 0;
+};
+
+int run_hybrid(const HybridArgs& args) {
+    const std::filesystem::path out = args.out;
+    if (std::filesystem::is_directory(out))
+        throw InputError(out, "", "is a folder; --out names the table file to write");
+    if (!args.report.empty() && !report_folder_writable(args.report))
+        throw InputError(args.report, "",
+                         "exists and is not a hybrid calibration report; choose another folder");
+    const StereoCalibration calibration =
+        load_calibration(args.calib, parse_calibration_format(args.calib_format));
+    const std::string calib_bytes = yaml_fields::read_text_file(args.calib);
+
+    HybridOptions options;
+    options.model = parse_table_model(args.model);
+    options.min_poses = args.min_poses;
+    options.threads = args.threads;
+    options.decode.threads = args.threads;
+    options.sv.threads = args.threads;
+    options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
+    const HybridResult result = calibrate_hybrid(
+        args.session, calibration, fnv1a64(calib_bytes.data(), calib_bytes.size()), options);
+    if (!args.report.empty()) {
+        std::cerr << "writing the report to " << args.report << "\n";
+        write_hybrid_report(args.report, result);
+    }
+    write_table(out, result.table);
+    std::cout << result.summary() << "wrote " << out.string() << "\n";
+    return 0;
+}
+} // namespace
+
+Action add_hybrid_command(CLI::App& app) {
+    auto args = std::make_shared<HybridArgs>();
+    auto* cmd = app.add_subcommand(
+        "hybrid",
+        "Fit the hybrid model from a session of flat-board poses (board.yaml with kind plane, one "
+        "capture set per pose, vertical fringes): each pose reconstructed by SV with --calib, "
+        "corrected onto its best plane, then per camera pixel a cubic from projector column to "
+        "X, Y, Z; writes the coefficient table the scanner loads (.fpt)");
+    cmd->add_option("session", args->session, "session folder")->required();
+    cmd->add_option("--calib", args->calib, "stereo calibration file")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--calib-format", args->calib_format,
+                    "calibration format: auto, fpp, slstudio, slmaster")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"auto", "fpp", "slstudio", "slmaster"}));
+    cmd->add_option("--out", args->out, "table file to write (.fpt)")->required();
+    cmd->add_option("--report", args->report,
+                    "report folder: summary.md, fit RMS maps, pose counts, plane residuals "
+                    "(replaced if it holds an earlier report)");
+    cmd->add_option("--model", args->model,
+                    "rational: points corrected along the camera ray, Z a cubic over (1 + d t), "
+                    "X and Y from the ray (default); ray: the same with a cubic for Z; "
+                    "polynomial: the paper's perpendicular correction, cubics for X, Y, Z")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"rational", "ray", "polynomial"}));
+    cmd->add_option("--min-poses", args->min_poses,
+                    "poses a pixel needs for a model (at least 4)")
+        ->capture_default_str()
+        ->check(CLI::Range(4, 1000));
+    cmd->add_option("--threads", args->threads, "threads (0 = all cores)")->capture_default_str();
+    return [args] { return run_hybrid(*args); };
+}
+
+} // namespace fpp::calib

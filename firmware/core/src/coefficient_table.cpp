@@ -1,0 +1,685 @@
+// The coefficient table in memory and its file (.fpt).
+//
+// FILE FORMAT, version 1. All integers little-endian, unsigned unless marked
+// i64 (two's complement); coefficients IEEE-754 binary32, little-endian.
+// Offsets in bytes from the start of the file.
+//
+//   HEADER (128 bytes)
+//   off  size type  field
+//     0     8 char  magic: the ASCII bytes "FPPTABLE" (no terminator)
+//     8     4 u32   version: 1. A reader rejects any other value; a later
+//                   version may change everything after this field.
+//    12     4 u32   header_size: 128, bytes from offset 0 to the end of header_crc
+//    16     4 u32   camera_width   camera image the table belongs to, px, 1..65535
+//    20     4 u32   camera_height
+//    24     4 u32   tile_width     px, a multiple of 8 in 8..256
+//    28     4 u32   tile_height    px, a multiple of 8 in 8..256
+//    32     4 u32   model          1 = polynomial, 2 = ray, 3 = rational
+//    36     4 u32   planes         planes per pixel: 14 (polynomial) or 8 (ray)
+//    40     4 u32   phase_axis     0 = x (phase is a projector column),
+//                                  1 = y (a projector row)
+//    44     4 u32   projector_width   projector image the phase refers to, px, 1..65535
+//    48     4 u32   projector_height
+//    52     4 u32   phase_unit     1 = the phase p is in projector pixels along
+//                                  phase_axis (as decoded), normalised per pixel
+//                                  to t = (p - centre) * inv_half_range before
+//                                  the cubics are evaluated. No other value in
+//                                  version 1.
+//    56     8 u64   calibration_hash  FNV-1a 64 of the source calibration file's bytes
+//    64     8 i64   created_unix_s    creation time, seconds since 1970-01-01 UTC
+//    72     4 u32   tiles_x        ceil(camera_width / tile_width)
+//    76     4 u32   tiles_y        ceil(camera_height / tile_height)
+//    80     4 u32   tile_count     tiles_x * tiles_y
+//    84     4 u32   tile_bytes     planes * tile_width * tile_height * 4
+//    88     8 u64   crc_table_offset  128
+//    96     8 u64   data_offset    (128 + 4 * tile_count + 4) rounded up to a
+//                                  multiple of 4096
+//   104    20       reserved, zero
+//   124     4 u32   header_crc     CRC-32 of bytes 0..123
+//
+//   TILE CRC TABLE (at crc_table_offset = 128)
+//   128                   4 * tile_count  u32[tile_count]  CRC-32 of each tile's
+//                                         tile_bytes bytes, in tile order
+//   128 + 4 * tile_count  4               u32  CRC-32 of the tile_count CRCs
+//                                         above (their 4 * tile_count bytes)
+//   then zero bytes up to data_offset.
+//
+//   TILES (at data_offset; the file ends exactly at
+//          data_offset + tile_count * tile_bytes)
+//   Tile i = ty * tiles_x + tx (row-major over tiles) starts at
+//   data_offset + i * tile_bytes and covers camera pixels
+//   x in [tx * tile_width, (tx + 1) * tile_width), y likewise with ty and
+//   tile_height. It holds its planes one after the other, plane k at
+//   k * tile_width * tile_height floats into the tile, each plane in
+//   row-major order: pixel (x, y) is float
+//     (y - ty * tile_height) * tile_width + (x - tx * tile_width)
+//   of the plane. Planes (see fpp/coefficient_table.hpp, table_plane):
+//     polynomial: centre, inv_half_range, X0..X3, Y0..Y3, Z0..Z3
+//     ray:        centre, inv_half_range, Z0..Z3, xn, yn
+//   With t = (p - centre) * inv_half_range for a phase p, valid for |t| <= 1:
+//     polynomial: X = X0 + X1 t + X2 t^2 + X3 t^3, Y and Z alike (mm)
+//     ray:        Z = Z0 + Z1 t + Z2 t^2 + Z3 t^3 (mm), X = xn Z, Y = yn Z
+//   Camera frame, mm. A pixel without a model has a NaN centre (any NaN;
+//   its other planes mean nothing; a new table holds 0x7FC00000 and zeros);
+//   a pixel with a model has a finite centre, a finite inv_half_range > 0
+//   and finite coefficients (the loader checks this). Pixels of edge tiles
+//   outside the camera image are padding: written without a model, ignored
+//   by readers.
+//
+//   CRC-32: the IEEE 802.3 / zlib crc32() one (reflected polynomial
+//   0xEDB88320, initial value 0xFFFFFFFF, final XOR 0xFFFFFFFF);
+//   CRC-32("123456789") = 0xCBF43926.
+//
+//   Alignment: data_offset is a multiple of 4096 and tile_bytes of 256 (tile
+//   sides are multiples of 8), so in a page-aligned mapping of the file every
+//   tile and every plane starts on a 256-byte boundary and the tiles can be
+//   used in place as float arrays.
+
+#include "fpp/coefficient_table.hpp"
+
+#include "crc32.hpp"
+#include "fpp/atomic_file.hpp"
+#include "fpp/error.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cassert>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <new>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace fpp {
+
+// Coefficients are stored and mapped as native floats.
+static_assert(std::endian::native == std::endian::little,
+              "the .fpt coefficients are little-endian float32; add byte swapping for this host");
+static_assert(std::numeric_limits<float>::is_iec559 && sizeof(float) == 4);
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kMagic[8] = {'F', 'P', 'P', 'T', 'A', 'B', 'L', 'E'};
+constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kHeaderSize = 128;
+constexpr std::size_t kHeaderCrcOffset = 124;
+constexpr std::size_t kReservedOffset = 104;
+constexpr std::uint32_t kPhaseUnitProjectorPixels = 1;
+constexpr std::uint64_t kDataAlignment = 4096;
+constexpr int kMaxImageSide = 65535;
+constexpr int kTileStep = 8;
+constexpr int kMaxTileSide = 256;
+constexpr std::size_t kBlockAlignment = 64;
+
+struct Problem {
+    std::string field;
+    std::string message;
+};
+
+std::optional<Problem> check_side(const char* field, int value, int max) {
+    if (value < 1 || value > max)
+        return Problem{field, "must be in 1.." + std::to_string(max) + " (it is " +
+                                  std::to_string(value) + ")"};
+    return std::nullopt;
+}
+
+std::optional<Problem> check_tile_side(const char* field, int value) {
+    if (value < kTileStep || value > kMaxTileSide || value % kTileStep != 0)
+        return Problem{field,
+                       "must be a multiple of 8 in 8..256 (it is " + std::to_string(value) + ")"};
+    return std::nullopt;
+}
+
+bool valid_model(TableModel model) {
+    return model == TableModel::polynomial || model == TableModel::ray ||
+           model == TableModel::rational;
+}
+
+// The first thing wrong with a table layout, if any.
+std::optional<Problem> check_info(const TableInfo& info) {
+    if (auto p = check_side("camera_width", info.camera.width, kMaxImageSide))
+        return p;
+    if (auto p = check_side("camera_height", info.camera.height, kMaxImageSide))
+        return p;
+    if (auto p = check_tile_side("tile_width", info.tile_width))
+        return p;
+    if (auto p = check_tile_side("tile_height", info.tile_height))
+        return p;
+    if (!valid_model(info.model))
+        return Problem{"model", "must be 1 (polynomial), 2 (ray) or 3 (rational) (it is " +
+                                    std::to_string(static_cast<std::uint32_t>(info.model)) + ")"};
+    if (info.phase_axis != Axis::x && info.phase_axis != Axis::y)
+        return Problem{"phase_axis", "must be x or y"};
+    if (auto p = check_side("projector_width", info.projector.width, kMaxImageSide))
+        return p;
+    if (auto p = check_side("projector_height", info.projector.height, kMaxImageSide))
+        return p;
+    return std::nullopt;
+}
+
+// Where everything lies in the file of a (valid) layout.
+struct FileLayout {
+    std::uint64_t tile_count = 0;
+    std::uint64_t tile_bytes = 0;
+    std::uint64_t crc_table_offset = kHeaderSize;
+    std::uint64_t data_offset = 0;
+    std::uint64_t file_size = 0;
+};
+
+FileLayout file_layout(const TableInfo& info) {
+    FileLayout l;
+    l.tile_count = static_cast<std::uint64_t>(info.tile_count());
+    l.tile_bytes = static_cast<std::uint64_t>(table_planes(info.model)) *
+                   static_cast<std::uint64_t>(info.tile_pixels()) * sizeof(float);
+    const std::uint64_t crc_end = l.crc_table_offset + 4 * l.tile_count + 4;
+    l.data_offset = (crc_end + kDataAlignment - 1) / kDataAlignment * kDataAlignment;
+    l.file_size = l.data_offset + l.tile_count * l.tile_bytes;
+    return l;
+}
+
+void put_u32(unsigned char* out, std::uint32_t v) {
+    for (int i = 0; i < 4; ++i)
+        out[i] = static_cast<unsigned char>(v >> (8 * i));
+}
+void put_u64(unsigned char* out, std::uint64_t v) {
+    for (int i = 0; i < 8; ++i)
+        out[i] = static_cast<unsigned char>(v >> (8 * i));
+}
+std::uint32_t get_u32(const unsigned char* in) {
+    std::uint32_t v = 0;
+    for (int i = 3; i >= 0; --i)
+        v = (v << 8) | in[i];
+    return v;
+}
+std::uint64_t get_u64(const unsigned char* in) {
+    std::uint64_t v = 0;
+    for (int i = 7; i >= 0; --i)
+        v = (v << 8) | in[i];
+    return v;
+}
+
+std::string hex32(std::uint32_t v) {
+    static const char digits[] = "0123456789abcdef";
+    std::string s = "0x00000000";
+    for (int i = 0; i < 8; ++i)
+        s[9 - static_cast<std::size_t>(i)] = digits[(v >> (4 * i)) & 0xFu];
+    return s;
+}
+
+// The first pixel of a tile whose planes break the model rules (see the
+// format above), as "pixel (x, y): ..." in camera pixels, or "".
+std::string tile_value_problem(const float* tile, const TableInfo& info, int planes, int tx,
+                               int ty) {
+    const int tp = info.tile_pixels();
+    for (int i = 0; i < tp; ++i) {
+        const float centre = tile[table_plane::centre * tp + i];
+        if (std::isnan(centre))
+            continue; // no model
+        std::string what;
+        const float ihr = tile[table_plane::inv_half_range * tp + i];
+        if (!std::isfinite(centre)) {
+            what = "centre is infinite";
+        } else if (!std::isfinite(ihr) || !(ihr > 0.0f)) {
+            what = "inv_half_range is " + std::to_string(ihr) + " (must be finite and > 0)";
+        } else {
+            for (int k = table_plane::inv_half_range + 1; k < planes; ++k) {
+                if (!std::isfinite(tile[k * tp + i])) {
+                    what = "coefficient plane " + std::to_string(k) + " is not finite";
+                    break;
+                }
+            }
+        }
+        if (!what.empty()) {
+            const int x = tx * info.tile_width + i % info.tile_width;
+            const int y = ty * info.tile_height + i / info.tile_width;
+            return "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                   ") has a model (finite centre) but its " + what;
+        }
+    }
+    return {};
+}
+
+// Owns a POSIX file descriptor.
+class UniqueFd {
+  public:
+    explicit UniqueFd(int fd) : fd_(fd) {}
+    ~UniqueFd() {
+        if (fd_ >= 0)
+            ::close(fd_);
+    }
+    UniqueFd(const UniqueFd&) = delete;
+    UniqueFd& operator=(const UniqueFd&) = delete;
+    int get() const { return fd_; }
+    // Closes now, returning close()'s result (write-back errors show here).
+    int close_checked() { return ::close(std::exchange(fd_, -1)); }
+
+  private:
+    int fd_;
+};
+
+void write_all(int fd, const fs::path& path, const void* data, std::size_t size) {
+    const auto* p = static_cast<const char*>(data);
+    while (size > 0) {
+        const ssize_t n = ::write(fd, p, size);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            throw IoError(path, describe_errno("write failed", errno));
+        }
+        p += n;
+        size -= static_cast<std::size_t>(n);
+    }
+}
+
+// Reads exactly `size` bytes at `offset`; a short file is an InputError (it
+// may have shrunk since it was measured).
+void read_all(int fd, const fs::path& path, std::uint64_t offset, void* data, std::size_t size) {
+    auto* p = static_cast<char*>(data);
+    while (size > 0) {
+        const ssize_t n = ::pread(fd, p, size, static_cast<off_t>(offset));
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            throw IoError(path, describe_errno("read failed", errno));
+        }
+        if (n == 0)
+            throw InputError(path, "file size (truncated)", "the file ended early");
+        p += n;
+        offset += static_cast<std::uint64_t>(n);
+        size -= static_cast<std::size_t>(n);
+    }
+}
+
+float* allocate_block(std::size_t floats) {
+    return static_cast<float*>(
+        ::operator new[](floats * sizeof(float), std::align_val_t{kBlockAlignment}));
+}
+
+// The header bytes of a table (header_crc included).
+std::vector<unsigned char> encode_header(const TableInfo& info, const FileLayout& l) {
+    std::vector<unsigned char> h(kHeaderSize, 0);
+    unsigned char* b = h.data();
+    std::memcpy(b, kMagic, sizeof kMagic);
+    put_u32(b + 8, kVersion);
+    put_u32(b + 12, kHeaderSize);
+    put_u32(b + 16, static_cast<std::uint32_t>(info.camera.width));
+    put_u32(b + 20, static_cast<std::uint32_t>(info.camera.height));
+    put_u32(b + 24, static_cast<std::uint32_t>(info.tile_width));
+    put_u32(b + 28, static_cast<std::uint32_t>(info.tile_height));
+    put_u32(b + 32, static_cast<std::uint32_t>(info.model));
+    put_u32(b + 36, static_cast<std::uint32_t>(table_planes(info.model)));
+    put_u32(b + 40, info.phase_axis == Axis::x ? 0u : 1u);
+    put_u32(b + 44, static_cast<std::uint32_t>(info.projector.width));
+    put_u32(b + 48, static_cast<std::uint32_t>(info.projector.height));
+    put_u32(b + 52, kPhaseUnitProjectorPixels);
+    put_u64(b + 56, info.calibration_hash);
+    put_u64(b + 64, static_cast<std::uint64_t>(info.created_unix_s));
+    put_u32(b + 72, static_cast<std::uint32_t>(info.tiles_x()));
+    put_u32(b + 76, static_cast<std::uint32_t>(info.tiles_y()));
+    put_u32(b + 80, static_cast<std::uint32_t>(l.tile_count));
+    put_u32(b + 84, static_cast<std::uint32_t>(l.tile_bytes));
+    put_u64(b + 88, l.crc_table_offset);
+    put_u64(b + 96, l.data_offset);
+    put_u32(b + kHeaderCrcOffset, crc32(b, kHeaderCrcOffset));
+    return h;
+}
+
+// Decodes and checks a header whose magic, version and CRC have been checked.
+TableInfo decode_header(const fs::path& path, const unsigned char* b) {
+    auto fail = [&](const std::string& field, const std::string& message) {
+        throw InputError(path, field, message);
+    };
+    auto as_int = [&](const char* field, std::uint32_t v) {
+        if (v > static_cast<std::uint32_t>(std::numeric_limits<int>::max()))
+            fail(field, "out of range (" + std::to_string(v) + ")");
+        return static_cast<int>(v);
+    };
+    TableInfo info;
+    info.camera = {as_int("camera_width", get_u32(b + 16)),
+                   as_int("camera_height", get_u32(b + 20))};
+    info.tile_width = as_int("tile_width", get_u32(b + 24));
+    info.tile_height = as_int("tile_height", get_u32(b + 28));
+    const std::uint32_t model = get_u32(b + 32);
+    info.model = static_cast<TableModel>(model);
+    const std::uint32_t axis = get_u32(b + 40);
+    if (axis > 1)
+        fail("phase_axis", "must be 0 (x) or 1 (y) (it is " + std::to_string(axis) + ")");
+    info.phase_axis = axis == 0 ? Axis::x : Axis::y;
+    info.projector = {as_int("projector_width", get_u32(b + 44)),
+                      as_int("projector_height", get_u32(b + 48))};
+    info.calibration_hash = get_u64(b + 56);
+    info.created_unix_s = static_cast<std::int64_t>(get_u64(b + 64));
+    if (auto p = check_info(info))
+        fail(p->field, p->message);
+
+    const std::uint32_t planes = get_u32(b + 36);
+    if (planes != static_cast<std::uint32_t>(table_planes(info.model)))
+        fail("planes", "is " + std::to_string(planes) + " but the " + to_string(info.model) +
+                           " model has " + std::to_string(table_planes(info.model)));
+    const std::uint32_t unit = get_u32(b + 52);
+    if (unit != kPhaseUnitProjectorPixels)
+        fail("phase_unit",
+             "unknown code " + std::to_string(unit) + " (version 1 knows 1 = projector pixels)");
+    const FileLayout l = file_layout(info);
+    auto expect = [&](const char* field, std::uint64_t stored, std::uint64_t wanted) {
+        if (stored != wanted)
+            fail(field,
+                 "is " + std::to_string(stored) + ", the layout implies " + std::to_string(wanted));
+    };
+    expect("tiles_x", get_u32(b + 72), static_cast<std::uint64_t>(info.tiles_x()));
+    expect("tiles_y", get_u32(b + 76), static_cast<std::uint64_t>(info.tiles_y()));
+    expect("tile_count", get_u32(b + 80), l.tile_count);
+    expect("tile_bytes", get_u32(b + 84), l.tile_bytes);
+    expect("crc_table_offset", get_u64(b + 88), l.crc_table_offset);
+    expect("data_offset", get_u64(b + 96), l.data_offset);
+    for (std::size_t i = kReservedOffset; i < kHeaderCrcOffset; ++i)
+        if (b[i] != 0)
+            fail("reserved", "bytes 104..123 must be zero");
+    return info;
+}
+
+} // namespace
+
+const char* to_string(TableModel model) {
+    switch (model) {
+    case TableModel::polynomial:
+        return "polynomial";
+    case TableModel::ray:
+        return "ray";
+    case TableModel::rational:
+        return "rational";
+    }
+    return "unknown";
+}
+
+TableModel parse_table_model(const std::string& name) {
+    if (name == "polynomial")
+        return TableModel::polynomial;
+    if (name == "ray")
+        return TableModel::ray;
+    if (name == "rational")
+        return TableModel::rational;
+    throw std::invalid_argument("unknown table model '" + name + "' (polynomial, ray or rational)");
+}
+
+int table_planes(TableModel model) {
+    switch (model) {
+    case TableModel::polynomial:
+        return 14;
+    case TableModel::ray:
+        return 8;
+    case TableModel::rational:
+        return 9;
+    }
+    throw std::invalid_argument("unknown table model " +
+                                std::to_string(static_cast<std::uint32_t>(model)));
+}
+
+std::uint64_t fnv1a64(const void* data, std::size_t size) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    std::uint64_t h = 0xcbf29ce484222325ull; // offset basis
+    for (std::size_t i = 0; i < size; ++i) {
+        h ^= p[i];
+        h *= 0x100000001b3ull; // FNV prime
+    }
+    return h;
+}
+
+void CoefficientTable::AlignedFree::operator()(float* p) const noexcept {
+    ::operator delete[](p, std::align_val_t{kBlockAlignment});
+}
+
+CoefficientTable::CoefficientTable(const TableInfo& info) : info_(info) {
+    if (auto p = check_info(info))
+        throw std::invalid_argument("coefficient table: " + p->field + " " + p->message);
+    planes_ = table_planes(info.model);
+    const std::size_t tp = static_cast<std::size_t>(info.tile_pixels());
+    const std::size_t tiles = static_cast<std::size_t>(info.tile_count());
+    owned_.reset(allocate_block(tiles * static_cast<std::size_t>(planes_) * tp));
+    float* d = owned_.get();
+    for (std::size_t t = 0; t < tiles; ++t) {
+        float* tile = d + t * static_cast<std::size_t>(planes_) * tp;
+        std::fill(tile, tile + tp, std::numeric_limits<float>::quiet_NaN());
+        std::fill(tile + tp, tile + static_cast<std::size_t>(planes_) * tp, 0.0f);
+    }
+    data_ = d;
+}
+
+CoefficientTable::~CoefficientTable() = default;
+
+CoefficientTable::CoefficientTable(CoefficientTable&& other) noexcept
+    : info_(std::exchange(other.info_, TableInfo{})), planes_(std::exchange(other.planes_, 0)),
+      data_(std::exchange(other.data_, nullptr)), owned_(std::move(other.owned_)),
+      mapping_(std::move(other.mapping_)), mapped_(std::exchange(other.mapped_, false)) {}
+
+CoefficientTable& CoefficientTable::operator=(CoefficientTable&& other) noexcept {
+    if (this != &other) {
+        info_ = std::exchange(other.info_, TableInfo{});
+        planes_ = std::exchange(other.planes_, 0);
+        data_ = std::exchange(other.data_, nullptr);
+        owned_ = std::move(other.owned_);
+        mapping_ = std::move(other.mapping_);
+        mapped_ = std::exchange(other.mapped_, false);
+    }
+    return *this;
+}
+
+std::size_t CoefficientTable::index(int plane, int x, int y) const {
+    if (plane < 0 || plane >= planes_ || x < 0 || x >= info_.camera.width || y < 0 ||
+        y >= info_.camera.height)
+        throw std::out_of_range("coefficient table: plane " + std::to_string(plane) + " pixel (" +
+                                std::to_string(x) + ", " + std::to_string(y) +
+                                ") outside the table");
+    const int tx = x / info_.tile_width;
+    const int ty = y / info_.tile_height;
+    const std::size_t tp = static_cast<std::size_t>(info_.tile_pixels());
+    const std::size_t tile =
+        static_cast<std::size_t>(ty) * static_cast<std::size_t>(info_.tiles_x()) +
+        static_cast<std::size_t>(tx);
+    return (tile * static_cast<std::size_t>(planes_) + static_cast<std::size_t>(plane)) * tp +
+           static_cast<std::size_t>((y - ty * info_.tile_height) * info_.tile_width +
+                                    (x - tx * info_.tile_width));
+}
+
+float CoefficientTable::get(int plane, int x, int y) const {
+    return data_[index(plane, x, y)];
+}
+
+void CoefficientTable::set(int plane, int x, int y, float value) {
+    const std::size_t i = index(plane, x, y);
+    writable()[i] = value;
+}
+
+bool CoefficientTable::has_model(int x, int y) const {
+    return std::isfinite(get(table_plane::centre, x, y));
+}
+
+const float* CoefficientTable::tile(int tx, int ty) const {
+    assert(tx >= 0 && tx < info_.tiles_x() && ty >= 0 && ty < info_.tiles_y());
+    const std::size_t tile =
+        static_cast<std::size_t>(ty) * static_cast<std::size_t>(info_.tiles_x()) +
+        static_cast<std::size_t>(tx);
+    return data_ +
+           tile * static_cast<std::size_t>(planes_) * static_cast<std::size_t>(info_.tile_pixels());
+}
+
+float* CoefficientTable::writable() {
+    if (mapped_)
+        throw std::logic_error("coefficient table: a memory-mapped table is read-only");
+    return owned_.get();
+}
+
+void write_table(const std::filesystem::path& path, const CoefficientTable& table) {
+    if (table.empty())
+        throw std::invalid_argument("write_table: empty coefficient table");
+    const TableInfo& info = table.info();
+    const FileLayout l = file_layout(info);
+    const std::size_t tile_floats = static_cast<std::size_t>(l.tile_bytes / sizeof(float));
+
+    // Everything before the tiles: header, tile CRCs, their CRC, zero padding.
+    std::vector<unsigned char> prefix = encode_header(info, l);
+    prefix.resize(static_cast<std::size_t>(l.data_offset), 0);
+    unsigned char* crcs = prefix.data() + l.crc_table_offset;
+    for (int ty = 0; ty < info.tiles_y(); ++ty) {
+        for (int tx = 0; tx < info.tiles_x(); ++tx) {
+            const float* tile = table.tile(tx, ty);
+            // The loader rejects such a file: refuse to write it.
+            const std::string problem = tile_value_problem(tile, info, table.planes(), tx, ty);
+            if (!problem.empty())
+                throw std::invalid_argument("write_table: " + path.string() + ": " + problem);
+            const std::size_t i = static_cast<std::size_t>(ty * info.tiles_x() + tx);
+            put_u32(crcs + 4 * i, crc32(tile, static_cast<std::size_t>(l.tile_bytes)));
+        }
+    }
+    const std::size_t crc_bytes = static_cast<std::size_t>(4 * l.tile_count);
+    put_u32(crcs + crc_bytes, crc32(crcs, crc_bytes));
+
+    const float* data = table.tile(0, 0);
+    const std::size_t data_bytes =
+        static_cast<std::size_t>(l.tile_count) * tile_floats * sizeof(float);
+    write_atomically(path, [&](const fs::path& temp) {
+        UniqueFd fd(::open(temp.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC));
+        if (fd.get() < 0)
+            throw IoError(temp, describe_errno("cannot open for writing", errno));
+        write_all(fd.get(), temp, prefix.data(), prefix.size());
+        write_all(fd.get(), temp, data, data_bytes);
+        if (fd.close_checked() != 0)
+            throw IoError(temp, describe_errno("close failed", errno));
+    });
+}
+
+CoefficientTable load_table(const std::filesystem::path& path, const Size* expected_camera,
+                            bool map) {
+    UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+    if (fd.get() < 0)
+        throw IoError(path, describe_errno("cannot open", errno));
+    struct stat st {};
+    if (::fstat(fd.get(), &st) != 0)
+        throw IoError(path, describe_errno("cannot stat", errno));
+    if (!S_ISREG(st.st_mode))
+        throw InputError(path, "", "not a regular file");
+    const auto size = static_cast<std::uint64_t>(st.st_size);
+
+    // Magic and version come first: a later version may lay out the rest differently.
+    unsigned char header[kHeaderSize] = {};
+    read_all(fd.get(), path, 0, header,
+             static_cast<std::size_t>(std::min<std::uint64_t>(size, kHeaderSize)));
+    if (size < sizeof kMagic)
+        throw InputError(path, "magic",
+                         "too short to be a coefficient table (" + std::to_string(size) +
+                             " bytes)");
+    if (std::memcmp(header, kMagic, sizeof kMagic) != 0)
+        throw InputError(path, "magic",
+                         "not a coefficient table (.fpt): it does not start with FPPTABLE");
+    if (size < 12)
+        throw InputError(path, "file size (truncated)", "the file ends inside the header");
+    const std::uint32_t version = get_u32(header + 8);
+    if (version != kVersion)
+        throw InputError(path, "version",
+                         "unsupported version " + std::to_string(version) +
+                             " (this build reads version " + std::to_string(kVersion) + ")");
+    if (size < kHeaderSize)
+        throw InputError(path, "file size (truncated)",
+                         "the file ends inside the header (" + std::to_string(size) + " bytes)");
+    if (get_u32(header + 12) != kHeaderSize)
+        throw InputError(path, "header_size",
+                         "is " + std::to_string(get_u32(header + 12)) + ", version 1 has 128");
+    const std::uint32_t stored_header_crc = get_u32(header + kHeaderCrcOffset);
+    const std::uint32_t header_crc = crc32(header, kHeaderCrcOffset);
+    if (stored_header_crc != header_crc)
+        throw InputError(path, "header crc",
+                         "CRC-32 mismatch (stored " + hex32(stored_header_crc) + ", computed " +
+                             hex32(header_crc) + "): the header is corrupt");
+    const TableInfo info = decode_header(path, header);
+    if (expected_camera && !(*expected_camera == info.camera))
+        throw InputError(path, "camera_size",
+                         "the table is for a " + std::to_string(info.camera.width) + "x" +
+                             std::to_string(info.camera.height) + " camera, expected " +
+                             std::to_string(expected_camera->width) + "x" +
+                             std::to_string(expected_camera->height));
+    const FileLayout l = file_layout(info);
+    if (size < l.file_size)
+        throw InputError(path, "file size (truncated)",
+                         std::to_string(size) + " bytes, the header implies " +
+                             std::to_string(l.file_size));
+    if (size > l.file_size)
+        throw InputError(path, "file size (extra bytes)",
+                         std::to_string(size) + " bytes, the header implies " +
+                             std::to_string(l.file_size));
+
+    // Tile CRCs, their own CRC, and the zero padding up to the tiles.
+    const std::size_t crc_bytes = static_cast<std::size_t>(4 * l.tile_count);
+    std::vector<unsigned char> crc_block(
+        static_cast<std::size_t>(l.data_offset - l.crc_table_offset));
+    read_all(fd.get(), path, l.crc_table_offset, crc_block.data(), crc_block.size());
+    const std::uint32_t table_crc = crc32(crc_block.data(), crc_bytes);
+    if (get_u32(crc_block.data() + crc_bytes) != table_crc)
+        throw InputError(path, "crc table crc",
+                         "CRC-32 mismatch (stored " + hex32(get_u32(crc_block.data() + crc_bytes)) +
+                             ", computed " + hex32(table_crc) + "): the tile CRC table is corrupt");
+    if (std::any_of(crc_block.begin() + static_cast<std::ptrdiff_t>(crc_bytes + 4), crc_block.end(),
+                    [](unsigned char c) { return c != 0; }))
+        throw InputError(path, "padding",
+                         "bytes between the tile CRC table and the tiles must be zero");
+
+    CoefficientTable table;
+    table.info_ = info;
+    table.planes_ = table_planes(info.model);
+    const std::size_t data_bytes = static_cast<std::size_t>(l.tile_count * l.tile_bytes);
+    if (map) {
+        // The file must not shrink while mapped (access would raise SIGBUS):
+        // write_table replaces a file by renaming a new one over it, which
+        // leaves an existing mapping on the old file intact.
+        void* addr =
+            ::mmap(nullptr, static_cast<std::size_t>(size), PROT_READ, MAP_PRIVATE, fd.get(), 0);
+        if (addr == MAP_FAILED)
+            throw IoError(path, describe_errno("cannot map", errno));
+        const auto mapped_size = static_cast<std::size_t>(size);
+        table.mapping_ =
+            std::shared_ptr<void>(addr, [mapped_size](void* p) { ::munmap(p, mapped_size); });
+        // Read once front to back now (the CRCs); the kernel reads it in the same order.
+        ::madvise(addr, mapped_size, MADV_WILLNEED);
+        table.data_ = static_cast<const float*>(
+            static_cast<const void*>(static_cast<const unsigned char*>(addr) + l.data_offset));
+        table.mapped_ = true;
+    } else {
+        table.owned_.reset(allocate_block(data_bytes / sizeof(float)));
+        read_all(fd.get(), path, l.data_offset, table.owned_.get(), data_bytes);
+        table.data_ = table.owned_.get();
+    }
+
+    for (int ty = 0; ty < info.tiles_y(); ++ty) {
+        for (int tx = 0; tx < info.tiles_x(); ++tx) {
+            const int i = ty * info.tiles_x() + tx;
+            const float* tile = table.tile(tx, ty);
+            const std::uint32_t stored =
+                get_u32(crc_block.data() + 4 * static_cast<std::size_t>(i));
+            const std::uint32_t computed = crc32(tile, static_cast<std::size_t>(l.tile_bytes));
+            if (stored != computed)
+                throw InputError(path, "tile " + std::to_string(i) + " crc",
+                                 "CRC-32 mismatch (stored " + hex32(stored) + ", computed " +
+                                     hex32(computed) + "): tile (" + std::to_string(tx) + ", " +
+                                     std::to_string(ty) + ") of camera pixels x " +
+                                     std::to_string(tx * info.tile_width) + ".., y " +
+                                     std::to_string(ty * info.tile_height) + ".. is corrupt");
+            const std::string problem = tile_value_problem(tile, info, table.planes_, tx, ty);
+            if (!problem.empty())
+                throw InputError(path, "tile " + std::to_string(i) + " values", problem);
+        }
+    }
+    return table;
+}
+
+} // namespace fpp

@@ -1,0 +1,336 @@
+// Evaluation figures on synthetic clouds with known answers: errors against
+// the ground truth, cloud-to-cloud distances, guideline figures, the PLY to
+// point-set conversion, report figures.
+
+#include "test_support.hpp"
+
+#include "fpp/calib/evaluation.hpp"
+#include "fpp/calib/plots.hpp"
+#include "fpp/error.hpp"
+#include "fpp/point_cloud.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+
+namespace {
+
+using fpp::Image;
+using fpp::Size;
+using fpp::Vec3;
+using fpp::calib::CloudPoints;
+using fpp::test::TempDir;
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// A tilted plane seen by a 40 x 30 pinhole camera (f = 800 px, centre 20, 15):
+// X, Y, Z per pixel; columns 0..2 have no surface.
+Image<float> truth_image() {
+    Image<float> xyz(40, 30, 3, kNaN);
+    for (int y = 0; y < 30; ++y)
+        for (int x = 3; x < 40; ++x) {
+            const double z = 500 + 0.5 * x + 0.25 * y;
+            xyz.at(x, y, 0) = static_cast<float>((x - 20) * z / 800);
+            xyz.at(x, y, 1) = static_cast<float>((y - 15) * z / 800);
+            xyz.at(x, y, 2) = static_cast<float>(z);
+        }
+    return xyz;
+}
+
+TEST(Evaluation, TruthComparisonRecoversKnownOffset) {
+    const Image<float> truth = truth_image();
+    // Every true point moved 0.3 mm along its camera ray, away from the
+    // camera; every 10th pixel left without a point; two points where the
+    // truth has no surface.
+    constexpr double kShift = 0.3;
+    CloudPoints cloud;
+    cloud.organised = {40, 30};
+    double dz_sum = 0;
+    std::size_t expected_compared = 0, truth_pixels = 0;
+    for (int y = 0; y < 30; ++y)
+        for (int x = 3; x < 40; ++x) {
+            ++truth_pixels;
+            const auto pixel = static_cast<std::uint32_t>(y * 40 + x);
+            if (pixel % 10 == 0)
+                continue;
+            const double t[3] = {double(truth.at(x, y, 0)), double(truth.at(x, y, 1)),
+                                 double(truth.at(x, y, 2))};
+            const double n = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            const double k = 1 + kShift / n;
+            cloud.points.push_back({t[0] * k, t[1] * k, t[2] * k});
+            cloud.pixels.push_back(pixel);
+            dz_sum += t[2] * (k - 1);
+            ++expected_compared;
+        }
+    cloud.points.push_back({0, 0, 400});
+    cloud.pixels.push_back(1);
+    cloud.points.push_back({0, 0, 400});
+    cloud.pixels.push_back(2 * 40 + 2);
+
+    const auto t = fpp::calib::compare_with_truth(cloud, truth);
+    EXPECT_EQ(t.truth_pixels, truth_pixels);
+    EXPECT_EQ(t.compared, expected_compared);
+    EXPECT_EQ(t.no_surface, 2u);
+    EXPECT_DOUBLE_EQ(t.coverage, double(expected_compared) / double(truth_pixels));
+    EXPECT_NEAR(t.distance.mean, kShift, 1e-9);
+    EXPECT_NEAR(t.distance.rms, kShift, 1e-9);
+    EXPECT_NEAR(t.distance.max, kShift, 1e-9);
+    // Along the ray: Z moves by shift * Z / |P| (just under 0.3 mm here).
+    EXPECT_NEAR(t.dz.mean, dz_sum / double(expected_compared), 1e-9);
+    EXPECT_GT(t.dz.mean, 0.298);
+    EXPECT_LT(t.dz.stddev, 1e-3);
+    ASSERT_EQ(t.dz_values.size(), expected_compared);
+    ASSERT_EQ(t.dz_map.size(), (Size{40, 30}));
+    EXPECT_TRUE(std::isnan(t.dz_map.at(10, 0)));  // pixel 10: no point
+    EXPECT_TRUE(std::isnan(t.dz_map.at(1, 0)));   // no surface
+    EXPECT_NEAR(t.dz_map.at(11, 0), t.dz_values[7], 1e-6);
+}
+
+TEST(Evaluation, TruthComparisonRejectsMismatches) {
+    const Image<float> truth = truth_image();
+    CloudPoints unorganised;
+    unorganised.points = {{0, 0, 500}};
+    EXPECT_THROW(fpp::calib::compare_with_truth(unorganised, truth), std::invalid_argument);
+    CloudPoints other_size;
+    other_size.organised = {20, 15};
+    EXPECT_THROW(fpp::calib::compare_with_truth(other_size, truth), std::invalid_argument);
+}
+
+// An organised 60 x 40 cloud on a gently curved surface, 1 mm pixel pitch.
+CloudPoints surface_cloud(const Vec3& shift = {0, 0, 0}, int skip_every = 0) {
+    CloudPoints c;
+    c.organised = {60, 40};
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 60; ++x) {
+            const auto pixel = static_cast<std::uint32_t>(y * 60 + x);
+            if (skip_every && pixel % static_cast<std::uint32_t>(skip_every) == 0)
+                continue;
+            c.points.push_back({x + shift[0], y + shift[1],
+                                500 + 0.002 * (x - 30) * (x - 30) + shift[2]});
+            c.pixels.push_back(pixel);
+        }
+    return c;
+}
+
+TEST(Evaluation, PerPixelCloudToCloud) {
+    const CloudPoints a = surface_cloud();
+    const auto self = fpp::calib::compare_per_pixel(a, a);
+    EXPECT_TRUE(self.per_pixel);
+    EXPECT_EQ(self.matched, a.points.size());
+    EXPECT_EQ(self.distance.rms, 0.0);
+    EXPECT_EQ(self.dz.max_abs, 0.0);
+
+    // A shifted copy with holes: the distance is the shift wherever both exist.
+    const CloudPoints b = surface_cloud({0.03, -0.04, 0.12}, 7);
+    const auto d = fpp::calib::compare_per_pixel(a, b);
+    EXPECT_EQ(d.matched, b.points.size());
+    EXPECT_EQ(d.only_first, a.points.size() - b.points.size());
+    EXPECT_EQ(d.only_second, 0u);
+    EXPECT_NEAR(d.distance.rms, 0.13, 1e-9);
+    EXPECT_NEAR(d.distance.max, 0.13, 1e-9);
+    EXPECT_NEAR(d.dz.mean, -0.12, 1e-9); // first - second
+    EXPECT_NEAR(d.dz.stddev, 0.0, 1e-9);
+    EXPECT_TRUE(std::isnan(d.dz_map.at(0, 0))); // pixel 0 skipped in b
+    EXPECT_NEAR(d.dz_map.at(1, 0), -0.12, 1e-6);
+
+    CloudPoints other_size = surface_cloud();
+    other_size.organised = {30, 80};
+    EXPECT_THROW(fpp::calib::compare_per_pixel(a, other_size), std::invalid_argument);
+    CloudPoints unorganised = a;
+    unorganised.organised = {};
+    unorganised.pixels.clear();
+    EXPECT_THROW(fpp::calib::compare_per_pixel(a, unorganised), std::invalid_argument);
+}
+
+TEST(Evaluation, NearestNeighbourCloudToCloud) {
+    const CloudPoints a = surface_cloud();
+    const auto self = fpp::calib::compare_nearest(a, a);
+    EXPECT_FALSE(self.per_pixel);
+    EXPECT_EQ(self.matched, a.points.size());
+    EXPECT_EQ(self.distance.max, 0.0);
+    // Shifted by 0.1 mm along Z: with a 1 mm pitch and a slope under 0.12,
+    // each point's nearest neighbour is its own copy, about 0.1 mm away
+    // (0.1 * cos(slope) from the surface, but the copy itself is 0.1 away).
+    CloudPoints flat;
+    for (int y = 0; y < 30; ++y)
+        for (int x = 0; x < 30; ++x)
+            flat.points.push_back({double(x), double(y), 500.0});
+    CloudPoints lifted = flat;
+    for (Vec3& p : lifted.points)
+        p[2] += 0.1;
+    const auto d = fpp::calib::compare_nearest(flat, lifted);
+    EXPECT_EQ(d.matched, flat.points.size());
+    EXPECT_NEAR(d.distance.rms, 0.1, 1e-12);
+    EXPECT_NEAR(d.distance.min, 0.1, 1e-12);
+    const auto none = fpp::calib::compare_nearest(flat, lifted, 0.05);
+    EXPECT_EQ(none.matched, 0u);
+    EXPECT_EQ(none.only_first, flat.points.size());
+    EXPECT_THROW(fpp::calib::compare_nearest(flat, CloudPoints{}), std::invalid_argument);
+}
+
+TEST(Evaluation, CloudPointsFromPly) {
+    TempDir dir;
+    fpp::PointCloud cloud;
+    cloud.xyz = Image<float>(8, 6, 3, kNaN);
+    for (int x = 0; x < 8; ++x) {
+        cloud.xyz.at(x, 2, 0) = static_cast<float>(x);
+        cloud.xyz.at(x, 2, 1) = 2.0f;
+        cloud.xyz.at(x, 2, 2) = 500.0f;
+    }
+    fpp::write_ply(dir / "c.ply", cloud);
+    fpp::PlyPoints ply = fpp::read_ply(dir / "c.ply");
+    const CloudPoints c = fpp::calib::cloud_points(ply, dir / "c.ply");
+    EXPECT_TRUE(c.is_organised());
+    EXPECT_EQ(c.organised, (Size{8, 6}));
+    ASSERT_EQ(c.points.size(), 8u);
+    EXPECT_EQ(c.pixels[3], 2u * 8u + 3u);
+    EXPECT_EQ(c.points[3][0], 3.0);
+    const CloudPoints direct = fpp::calib::cloud_points(cloud);
+    EXPECT_EQ(direct.pixels, c.pixels);
+
+    fpp::PlyPoints bad = ply;
+    bad.pixel[5] = 48; // 8 x 6 = 48 pixels: out of range
+    try {
+        fpp::calib::cloud_points(bad, "bad.ply");
+        FAIL() << "pixel index out of range accepted";
+    } catch (const fpp::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("bad.ply"), std::string::npos);
+        EXPECT_NE(std::string(e.what()).find("vertex 5"), std::string::npos) << e.what();
+    }
+    bad.pixel[5] = bad.pixel[4];
+    EXPECT_THROW(fpp::calib::cloud_points(bad, "bad.ply"), fpp::InputError);
+
+    fpp::PlyPoints plain = ply;
+    plain.pixel.clear();
+    plain.x[0] = kNaN;
+    const CloudPoints u = fpp::calib::cloud_points(plain, "plain.ply");
+    EXPECT_FALSE(u.is_organised());
+    EXPECT_EQ(u.points.size(), 7u); // the NaN vertex dropped
+    EXPECT_TRUE(u.pixels.empty());
+}
+
+TEST(Evaluation, ErrorStatsAndCsv) {
+    const std::vector<double> v = {1, -1, 3};
+    const auto s = fpp::calib::error_stats(v);
+    EXPECT_EQ(s.count, 3u);
+    EXPECT_DOUBLE_EQ(s.mean, 1.0);
+    EXPECT_DOUBLE_EQ(s.rms, std::sqrt(11.0 / 3));
+    EXPECT_DOUBLE_EQ(s.stddev, std::sqrt(8.0 / 3));
+    EXPECT_EQ(s.min, -1.0);
+    EXPECT_EQ(s.max, 3.0);
+    EXPECT_EQ(s.max_abs, 3.0);
+    EXPECT_EQ(fpp::calib::error_stats({}).count, 0u);
+    EXPECT_EQ(fpp::calib::figures_csv({{"cloud.fit.rms", 0.0501234567891, "mm"},
+                                       {"cloud.points", 12, ""}}),
+              "name,value,unit\ncloud.fit.rms,0.0501234568,mm\ncloud.points,12,\n");
+}
+
+TEST(Evaluation, FlatnessExcludesTheGuidelineShare) {
+    // 50 x 50 points, uniform noise within +-0.05 mm, 7 spikes of +-1 mm:
+    // 0.3 % of 2500 is 7.5, so 7 points are excluded -> only the spikes.
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> noise(-0.05, 0.05);
+    std::vector<Vec3> points;
+    for (int y = 0; y < 50; ++y)
+        for (int x = 0; x < 50; ++x)
+            points.push_back({2.0 * x, 2.0 * y, 600 + 0.1 * x + noise(rng)});
+    for (int k = 0; k < 7; ++k)
+        points[static_cast<std::size_t>(k * 311 + 40)][2] += (k % 2 ? 1.0 : -1.0);
+    const auto f = fpp::calib::flatness_figures(points);
+    EXPECT_GT(f.flatness, 1.9);
+    EXPECT_EQ(f.trimmed.excluded, 7u);
+    EXPECT_LT(f.trimmed.range, 0.1 + 2e-3);
+    EXPECT_GT(f.trimmed.range, 0.09);
+    EXPECT_NEAR(f.trimmed.rms, 0.1 / std::sqrt(12.0), 0.003); // uniform noise
+    EXPECT_DOUBLE_EQ(f.flatness, f.fit.fit.max - f.fit.fit.min);
+}
+
+TEST(Evaluation, ProbingAndSpacingFigures) {
+    std::mt19937 rng(8);
+    std::normal_distribution<double> n01;
+    std::normal_distribution<double> noise(0, 0.01);
+    // 2000 points on the side of a sphere facing a camera at the origin (-Z).
+    auto cap = [&](const Vec3& c, double r) {
+        std::vector<Vec3> out;
+        while (out.size() < 2000) {
+            const double d[3] = {n01(rng), n01(rng), n01(rng)};
+            const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if (d[2] / len > -0.3)
+                continue;
+            const double rr = r + noise(rng);
+            out.push_back({c[0] + rr * d[0] / len, c[1] + rr * d[1] / len, c[2] + rr * d[2] / len});
+        }
+        return out;
+    };
+    const std::vector<Vec3> sphere = cap({0, 0, 600}, 12.5);
+    const auto p = fpp::calib::probing_figures(sphere, 25.0);
+    ASSERT_TRUE(p.size_error.has_value());
+    EXPECT_DOUBLE_EQ(*p.size_error, p.diameter - 25.0);
+    EXPECT_NEAR(p.diameter, 25.0, 0.006); // 5 x the Monte Carlo sigma, scaled to 0.01 mm noise
+    EXPECT_DOUBLE_EQ(p.form, p.fit.fit.max - p.fit.fit.min);
+    EXPECT_GT(p.form, 5.5 * 0.01); // range of 2000 Gaussian residuals: ~6.8 sigma
+    EXPECT_LT(p.form, 10 * 0.01);
+    EXPECT_EQ(p.form_trimmed.excluded, 6u);
+    EXPECT_LT(p.form_trimmed.range, p.form);
+    EXPECT_FALSE(fpp::calib::probing_figures(sphere, std::nullopt).size_error.has_value());
+
+    std::vector<Vec3> bar = sphere;
+    const std::vector<Vec3> second = cap({250, 0, 610}, 12.5);
+    bar.insert(bar.end(), second.begin(), second.end());
+    const double nominal = std::sqrt(250.0 * 250.0 + 10.0 * 10.0);
+    const auto b = fpp::calib::ball_bar_figures(bar, nominal, 25.0);
+    ASSERT_TRUE(b.spacing_error.has_value());
+    EXPECT_NEAR(*b.spacing_error, 0.0, 0.01);
+    EXPECT_DOUBLE_EQ(*b.spacing_error, b.length - nominal);
+    EXPECT_NEAR(*b.size_error_first, 0.0, 0.006);
+    EXPECT_NEAR(*b.size_error_second, 0.0, 0.006);
+    EXPECT_EQ(b.cluster.size(), bar.size());
+}
+
+// ---------------------------------------------------------------- plots
+
+TEST(Plots, NumbersAndColours) {
+    EXPECT_DOUBLE_EQ(fpp::calib::nice_ceil(0.13), 0.2);
+    EXPECT_DOUBLE_EQ(fpp::calib::nice_ceil(0.2), 0.2);
+    EXPECT_DOUBLE_EQ(fpp::calib::nice_ceil(3.1), 5.0);
+    EXPECT_DOUBLE_EQ(fpp::calib::nice_ceil(7), 10.0);
+    std::vector<double> values(1000);
+    for (std::size_t i = 0; i < values.size(); ++i)
+        values[i] = (i % 2 ? 1.0 : -1.0) * 0.0001 * double(i); // |v| up to 0.0999
+    values[3] = 50;                                            // one spike
+    EXPECT_DOUBLE_EQ(fpp::calib::symmetric_limit(values, 0.99), 0.1);
+    EXPECT_DOUBLE_EQ(fpp::calib::symmetric_limit(std::vector<double>{}, 0.99, 0.5), 0.5);
+    const cv::Vec3b white = fpp::calib::diverging_colour(0);
+    EXPECT_GT(white[0], 240);
+    EXPECT_GT(white[2], 240);
+    const cv::Vec3b red = fpp::calib::diverging_colour(1), blue = fpp::calib::diverging_colour(-1);
+    EXPECT_GT(red[2], red[0]);   // BGR: more red than blue
+    EXPECT_GT(blue[0], blue[2]); // more blue than red
+    EXPECT_EQ(fpp::calib::diverging_colour(5), red); // clamped
+}
+
+TEST(Plots, MapAndHistogramFigures) {
+    Image<float> values(40, 30, 1, 0.0f);
+    values.at(0, 0) = kNaN;
+    values.at(39, 29) = 0.2f;
+    const cv::Mat map = fpp::calib::signed_map_figure(values, 0.2, "test map");
+    // Enlarged to at least 480 px wide, plus the colour bar panel.
+    EXPECT_GE(map.cols, 480 + 100);
+    EXPECT_EQ(map.type(), CV_8UC3);
+    // The map's pixels: 12x enlargement, drawn at (10, 40).
+    const cv::Vec3b nan_pixel = map.at<cv::Vec3b>(40 + 5, 10 + 5);
+    EXPECT_EQ(nan_pixel, cv::Vec3b(90, 90, 90));
+    const cv::Vec3b top = map.at<cv::Vec3b>(40 + 29 * 12 + 5, 10 + 39 * 12 + 5);
+    EXPECT_EQ(top, fpp::calib::diverging_colour(1));
+
+    const std::vector<double> a = {-0.1, 0.0, 0.05, 0.3}, b = {0.01, 0.02};
+    const cv::Mat h = fpp::calib::histogram_figure({{"SV", a}, {"hybrid", b}}, -0.2, 0.2,
+                                                   "error (mm)", "two series");
+    EXPECT_EQ(h.type(), CV_8UC3);
+    EXPECT_GT(h.cols, 400);
+}
+
+} // namespace

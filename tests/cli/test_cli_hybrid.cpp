@@ -1,0 +1,147 @@
+// fpp-calib hybrid and reconstruct --table, run as a person would: a stereo
+// calibration from a checkerboard session, a table from a plane session, a
+// scan reconstructed with it; bad input gives exit code 2, a message naming
+// the file and what is wrong, and nothing written. Camera binned 4x
+// (400 x 300) so that each step takes a second or two.
+
+#include "test_support.hpp"
+
+#include "fpp/coefficient_table.hpp"
+#include "fpp/point_cloud.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+namespace {
+
+using fpp::test::shell_quote;
+using fpp::test::TempDir;
+using fpp::test::ToolRun;
+namespace fs = std::filesystem;
+
+ToolRun run_calib(const std::string& args, const TempDir& scratch) {
+    return fpp::test::run_tool(FPP_CALIB_EXE, args, scratch.path());
+}
+
+bool contains(const std::string& text, const std::string& what) {
+    return text.find(what) != std::string::npos;
+}
+
+// Sessions, calibration and table made once for the tests of this file.
+struct Made {
+    TempDir dir;
+    fs::path calib, planes, table, report;
+};
+
+const Made& made() {
+    static Made* m = [] {
+        auto* out = new Made;
+        const fs::path boards = out->dir / "boards";
+        out->planes = out->dir / "planes";
+        out->calib = out->dir / "calib.yaml";
+        out->table = out->dir / "table.fpt";
+        out->report = out->dir / "report";
+        auto must = [&](const std::string& args) {
+            const ToolRun run = run_calib(args, out->dir);
+            EXPECT_EQ(run.exit_code, 0) << args << "\n" << run.output;
+        };
+        must("simulate-session --poses 8 --binning 4 --out " + shell_quote(boards));
+        must("stereo " + shell_quote(boards) + " --out " + shell_quote(out->calib));
+        must("simulate-session --kind plane --sequence gray-x --poses 8 --binning 4 --out " +
+             shell_quote(out->planes));
+        return out;
+    }();
+    return *m;
+}
+
+TEST(CliHybrid, TableFromPlanesReconstructsAScan) {
+    const Made& m = made();
+    TempDir dir;
+    const fs::path table = dir / "table.fpt", report = dir / "report";
+    const ToolRun hybrid = run_calib("hybrid " + shell_quote(m.planes) + " --calib " +
+                                         shell_quote(m.calib) + " --out " + shell_quote(table) +
+                                         " --report " + shell_quote(report),
+                                     dir);
+    ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
+    EXPECT_TRUE(contains(hybrid.output, "poses: 8 of 8 used")) << hybrid.output;
+    EXPECT_TRUE(contains(hybrid.output, "hybrid model: rational")) << hybrid.output;
+    const fpp::Size camera{400, 300};
+    const fpp::CoefficientTable loaded = fpp::load_table(table, &camera);
+    EXPECT_EQ(loaded.info().model, fpp::TableModel::rational);
+    for (const char* f : {"summary.md", "poses.csv", "fit-rms-x.png", "fit-rms-y.png",
+                          "fit-rms-z.png", "pose-count.png", "plane-residuals.png"})
+        EXPECT_TRUE(fs::exists(report / f)) << f;
+
+    const fs::path scan = dir / "scan", cloud = dir / "cloud.ply";
+    ASSERT_EQ(run_calib("simulate --rig " + shell_quote(fpp::test::source_dir() /
+                                                        "board/sim/paper-rig-effects.yaml") +
+                            " --scene inclined-plane --sequence gray-x --binning 4 --out " +
+                            shell_quote(scan),
+                        dir)
+                  .exit_code,
+              0);
+    const ToolRun rec = run_calib("reconstruct " + shell_quote(scan) + " --table " +
+                                      shell_quote(table) + " --out " + shell_quote(cloud),
+                                  dir);
+    ASSERT_EQ(rec.exit_code, 0) << rec.output;
+    EXPECT_TRUE(contains(rec.output, "error against ground truth")) << rec.output;
+    const fpp::PlyPoints points = fpp::read_ply(cloud);
+    // The inclined plane fills about 98 % of the field.
+    EXPECT_GT(points.size(), 110000u);
+    EXPECT_EQ(points.organised.width, 400);
+    EXPECT_TRUE(contains(points.comments.front(), "hybrid model (rational"));
+}
+
+TEST(CliHybrid, BadInputExitsWithTwoAndWritesNothing) {
+    const Made& m = made();
+    TempDir dir;
+    // A checkerboard session is not a plane session.
+    const fs::path table = dir / "t.fpt";
+    ToolRun run = run_calib("hybrid " + shell_quote(m.dir / "boards") + " --calib " +
+                                shell_quote(m.calib) + " --out " + shell_quote(table),
+                            dir);
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_TRUE(contains(run.output, "board.yaml")) << run.output;
+    EXPECT_FALSE(fs::exists(table));
+
+    // A table with one flipped bit in its coefficients.
+    ASSERT_EQ(run_calib("hybrid " + shell_quote(m.planes) + " --calib " + shell_quote(m.calib) +
+                            " --out " + shell_quote(table),
+                        dir)
+                  .exit_code,
+              0);
+    {
+        std::fstream f(table, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekg(-100, std::ios::end);
+        char c = 0;
+        f.read(&c, 1);
+        c = static_cast<char>(c ^ 0x10);
+        f.seekp(-100, std::ios::end);
+        f.write(&c, 1);
+    }
+    const fs::path scan = dir / "scan", cloud = dir / "cloud.ply";
+    ASSERT_EQ(run_calib("simulate --scene plane --sequence gray-x --binning 4 --out " +
+                            shell_quote(scan),
+                        dir)
+                  .exit_code,
+              0);
+    run = run_calib("reconstruct " + shell_quote(scan) + " --table " + shell_quote(table) +
+                        " --out " + shell_quote(cloud),
+                    dir);
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_TRUE(contains(run.output, "t.fpt")) << run.output;
+    EXPECT_TRUE(contains(run.output, "crc")) << run.output;
+    EXPECT_FALSE(fs::exists(cloud));
+
+    // Both models at once.
+    run = run_calib("reconstruct " + shell_quote(scan) + " --table " + shell_quote(table) +
+                        " --calib " + shell_quote(m.calib) + " --out " + shell_quote(cloud),
+                    dir);
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_TRUE(contains(run.output, "exactly one model")) << run.output;
+    EXPECT_FALSE(fs::exists(cloud));
+}
+
+} // namespace
