@@ -50,12 +50,16 @@ fpp::CoefficientTable make_table(fpp::TableModel model) {
                     table.set(tp::poly_y + k, x, y, yn * z[k]);
                     table.set(tp::poly_z + k, x, y, z[k]);
                 } else {
-                    table.set(tp::ray_z + k, x, y, z[k]);
+                    table.set(tp::ray_z + k, x, y, z[k]); // = rational_z + k
                 }
             }
             if (model == fpp::TableModel::ray) {
                 table.set(tp::ray_xn, x, y, xn);
                 table.set(tp::ray_yn, x, y, yn);
+            } else if (model == fpp::TableModel::rational) {
+                table.set(tp::rational_d, x, y, 0.1f);
+                table.set(tp::rational_xn, x, y, xn);
+                table.set(tp::rational_yn, x, y, yn);
             }
         }
     }
@@ -80,13 +84,16 @@ struct Fixture {
     fpp::Image<float> phase = make_phase();
     fpp::CoefficientTable polynomial = make_table(fpp::TableModel::polynomial);
     fpp::CoefficientTable ray = make_table(fpp::TableModel::ray);
+    fpp::CoefficientTable rational = make_table(fpp::TableModel::rational);
 
     static const Fixture& get() {
         static const Fixture f;
         return f;
     }
     const fpp::CoefficientTable& table(fpp::TableModel model) const {
-        return model == fpp::TableModel::polynomial ? polynomial : ray;
+        return model == fpp::TableModel::polynomial ? polynomial
+               : model == fpp::TableModel::ray      ? ray
+                                                    : rational;
     }
     static std::size_t table_bytes(const fpp::CoefficientTable& t) {
         return static_cast<std::size_t>(t.info().tile_count()) *
@@ -187,7 +194,8 @@ int main(int argc, char** argv) {
     if (benchmark::ReportUnrecognizedArguments(argc, argv))
         return 1;
     const int all = fpp::ThreadPool::resolve_threads(0);
-    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray}) {
+    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray,
+                                     fpp::TableModel::rational}) {
         const std::string m = fpp::to_string(model);
         benchmark::RegisterBenchmark(("copy_input/" + m).c_str(), copy_input, model)
             ->Unit(benchmark::kMillisecond)
@@ -212,7 +220,8 @@ int main(int argc, char** argv) {
 
     std::printf("\nsummary (%dx%d frame, tiles 32x8, best of the repetitions; %d threads = all)\n",
                 kCamera.width, kCamera.height, all);
-    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray}) {
+    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray,
+                                     fpp::TableModel::rational}) {
         const std::string m = fpp::to_string(model);
         const double copy = reporter.ms("copy_input/" + m);
         const double one = reporter.ms("apply_table/" + m + "/1_thread");
@@ -230,7 +239,8 @@ int main(int argc, char** argv) {
                 "  %-10s load (all CRCs and values checked): mapped %.1f ms, read %.1f ms\n", "",
                 mapped, read);
     }
-    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray}) {
+    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray,
+                                     fpp::TableModel::rational}) {
         std::error_code ec;
         fs::remove(table_file_path(model), ec);
     }

@@ -21,28 +21,14 @@ namespace {
 using fpp::test::TempDir;
 namespace fs = std::filesystem;
 
-struct ToolRun {
-    int exit_code = -1;
-    std::string output; // stdout and stderr
-};
+using fpp::test::ToolRun;
 
 std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
+    return fpp::test::shell_quote(s);
 }
 
 ToolRun run_calib(const std::string& args, const TempDir& scratch) {
-    const fs::path log = scratch / "tool.log";
-    const std::string cmd = quote(FPP_CALIB_EXE) + " " + args + " > " + quote(log.string()) + " 2>&1";
-    const int status = std::system(cmd.c_str());
-    ToolRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(log);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    run.output = ss.str();
-    return run;
+    return fpp::test::run_tool(FPP_CALIB_EXE, args, scratch.path());
 }
 
 // The paper rig with the camera shrunk 4x (same field of view) so that a

@@ -31,16 +31,10 @@ namespace fs = std::filesystem;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-struct ToolRun {
-    int exit_code = -1;
-    std::string output; // stdout and stderr
-};
+using fpp::test::ToolRun;
 
 std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s)
-        q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
+    return fpp::test::shell_quote(s);
 }
 
 std::string q(const fs::path& p) {
@@ -48,17 +42,7 @@ std::string q(const fs::path& p) {
 }
 
 ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    const fs::path log = log_folder / "tool.log";
-    const std::string cmd = quote(FPP_CALIB_EXE) + " " + args + " > " + q(log) + " 2>&1";
-    const int status = std::system(cmd.c_str());
-    ToolRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(log);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    run.output = ss.str();
-    fs::remove(log);
-    return run;
+    return fpp::test::run_tool(FPP_CALIB_EXE, args, log_folder);
 }
 
 // figures.csv as name -> value (checks the header and the three columns).

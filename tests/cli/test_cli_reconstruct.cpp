@@ -24,16 +24,10 @@ namespace {
 using fpp::test::TempDir;
 namespace fs = std::filesystem;
 
-struct ToolRun {
-    int exit_code = -1;
-    std::string output; // stdout and stderr
-};
+using fpp::test::ToolRun;
 
 std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s)
-        q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
+    return fpp::test::shell_quote(s);
 }
 
 std::string q(const fs::path& p) {
@@ -41,17 +35,7 @@ std::string q(const fs::path& p) {
 }
 
 ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    const fs::path log = log_folder / "tool.log";
-    const std::string cmd = quote(FPP_CALIB_EXE) + " " + args + " > " + q(log) + " 2>&1";
-    const int status = std::system(cmd.c_str());
-    ToolRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(log);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    run.output = ss.str();
-    fs::remove(log);
-    return run;
+    return fpp::test::run_tool(FPP_CALIB_EXE, args, log_folder);
 }
 
 // The paper rig with the camera binned 4x (400 x 300, same field of view).

@@ -59,10 +59,13 @@ ToolRun run_tool(const std::string& exe, const std::string& args,
     const int status = std::system(cmd.c_str());
     ToolRun run;
     run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(log);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    run.output = ss.str();
+    {
+        std::ifstream in(log);
+        std::stringstream ss;
+        ss << in.rdbuf();
+        run.output = ss.str();
+    }
+    std::filesystem::remove(log); // the folder holds only what the tool wrote
     return run;
 }
 

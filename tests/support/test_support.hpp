@@ -40,7 +40,7 @@ std::string shell_quote(const std::string& s);
 inline std::string shell_quote(const std::filesystem::path& p) { return shell_quote(p.string()); }
 
 // Runs `exe args` (args already quoted as needed), output captured through
-// a log file in `scratch`.
+// a log file in `scratch` that is removed afterwards.
 ToolRun run_tool(const std::string& exe, const std::string& args,
                  const std::filesystem::path& scratch);
 

@@ -94,6 +94,8 @@ fpp::CoefficientTable make_table(const fpp::TableInfo& info) {
             table.set(fpp::table_plane::inv_half_range, x, y, 1.0f / (120.0f + float(x % 13)));
             for (int k = 2; k < table.planes(); ++k)
                 table.set(k, x, y, std::sin(float(x * 31 + y * 17 + k * 7)) * 300.0f);
+            if (info.model == fpp::TableModel::rational) // |d| < 1: no pole in range
+                table.set(fpp::table_plane::rational_d, x, y, std::sin(float(x + y)) * 0.5f);
         }
     }
     return table;
@@ -218,6 +220,9 @@ TEST(TableModel, NamesAndPlanes) {
     EXPECT_THROW(fpp::parse_table_model("cubic"), std::invalid_argument);
     EXPECT_EQ(fpp::table_planes(fpp::TableModel::polynomial), 14);
     EXPECT_EQ(fpp::table_planes(fpp::TableModel::ray), 8);
+    EXPECT_STREQ(fpp::to_string(fpp::TableModel::rational), "rational");
+    EXPECT_EQ(fpp::parse_table_model("rational"), fpp::TableModel::rational);
+    EXPECT_EQ(fpp::table_planes(fpp::TableModel::rational), 9);
 }
 
 TEST(CoefficientTable, NewTableHasNoModelAnywhere) {
@@ -287,6 +292,7 @@ TEST(TableFile, RoundTripIsBitExactForBothModelsAndTileSizes) {
     };
     const Case cases[] = {{fpp::TableModel::polynomial, {100, 37}, 32, 8},
                           {fpp::TableModel::ray, {100, 37}, 32, 8},
+                          {fpp::TableModel::rational, {100, 37}, 32, 8},
                           {fpp::TableModel::ray, {100, 37}, 256, 64},
                           {fpp::TableModel::polynomial, {64, 16}, 8, 16},
                           {fpp::TableModel::polynomial, {1, 1}, 8, 8}};
@@ -512,6 +518,13 @@ TEST(TableFile, InvalidCoefficientsAreRejectedOnLoadAndOnWrite) {
     // Without a model the other planes do not matter.
     table.set(fpp::table_plane::centre, 33, 9, std::numeric_limits<float>::quiet_NaN());
     EXPECT_NO_THROW(fpp::write_table(w.dir / "ok.fpt", table));
+
+    // A rational pixel whose denominator 1 + d t vanishes inside |t| <= 1.
+    fpp::CoefficientTable rational = make_table(make_info(fpp::TableModel::rational));
+    EXPECT_NO_THROW(fpp::write_table(w.dir / "rational.fpt", rational));
+    rational.set(fpp::table_plane::rational_d, 33, 9, -1.0f);
+    EXPECT_THROW(fpp::write_table(w.dir / "pole.fpt", rational), std::invalid_argument);
+    EXPECT_FALSE(fs::exists(w.dir / "pole.fpt"));
 }
 
 TEST(TableFile, MissingFileIsAnIoError) {

@@ -246,11 +246,15 @@ bool fit_board_plane(Image<float>& xyz, const HybridOptions& options, BoardPlane
     if (!least_squares_plane(xyz, use, fitted))
         return false;
     std::vector<float> abs_dist;
-    abs_dist.reserve(points);
+    abs_dist.reserve(std::min<std::size_t>(points, 200000));
+    // Quantiles of |distance| from a spread-out sample of at most ~100k
+    // points: as good as all of them for a threshold, and much cheaper.
+    const std::size_t stride = std::max<std::size_t>(1, points / 100000);
     auto distances = [&] {
         abs_dist.clear();
+        std::size_t k = 0;
         for (std::size_t i = 0; i < n; ++i)
-            if (valid[i])
+            if (valid[i] && k++ % stride == 0)
                 abs_dist.push_back(static_cast<float>(std::fabs(signed_distance(fitted, p + 3 * i))));
     };
     // Least trimmed squares first (concentration steps on the better half):

@@ -15,7 +15,8 @@
 //    24     4 u32   tile_width     px, a multiple of 8 in 8..256
 //    28     4 u32   tile_height    px, a multiple of 8 in 8..256
 //    32     4 u32   model          1 = polynomial, 2 = ray, 3 = rational
-//    36     4 u32   planes         planes per pixel: 14 (polynomial) or 8 (ray)
+//    36     4 u32   planes         planes per pixel: 14 (polynomial), 8 (ray),
+//                                  9 (rational)
 //    40     4 u32   phase_axis     0 = x (phase is a projector column),
 //                                  1 = y (a projector row)
 //    44     4 u32   projector_width   projector image the phase refers to, px, 1..65535
@@ -56,13 +57,16 @@
 //   of the plane. Planes (see fpp/coefficient_table.hpp, table_plane):
 //     polynomial: centre, inv_half_range, X0..X3, Y0..Y3, Z0..Z3
 //     ray:        centre, inv_half_range, Z0..Z3, xn, yn
+//     rational:   centre, inv_half_range, Z0..Z3, d, xn, yn
 //   With t = (p - centre) * inv_half_range for a phase p, valid for |t| <= 1:
 //     polynomial: X = X0 + X1 t + X2 t^2 + X3 t^3, Y and Z alike (mm)
 //     ray:        Z = Z0 + Z1 t + Z2 t^2 + Z3 t^3 (mm), X = xn Z, Y = yn Z
+//     rational:   Z = (Z0 + Z1 t + Z2 t^2 + Z3 t^3) / (1 + d t) (mm),
+//                 X = xn Z, Y = yn Z
 //   Camera frame, mm. A pixel without a model has a NaN centre (any NaN;
 //   its other planes mean nothing; a new table holds 0x7FC00000 and zeros);
-//   a pixel with a model has a finite centre, a finite inv_half_range > 0
-//   and finite coefficients (the loader checks this). Pixels of edge tiles
+//   a pixel with a model has a finite centre, a finite inv_half_range > 0,
+//   finite coefficients and, rational, |d| < 1 (the loader checks this). Pixels of edge tiles
 //   outside the camera image are padding: written without a model, ignored
 //   by readers.
 //
@@ -240,6 +244,10 @@ std::string tile_value_problem(const float* tile, const TableInfo& info, int pla
                     break;
                 }
             }
+            // The denominator 1 + d t must not vanish for |t| <= 1.
+            const float d = tile[table_plane::rational_d * tp + i];
+            if (what.empty() && info.model == TableModel::rational && !(std::fabs(d) < 1.0f))
+                what = "pole coefficient d is " + std::to_string(d) + " (|d| must be < 1)";
         }
         if (!what.empty()) {
             const int x = tx * info.tile_width + i % info.tile_width;
