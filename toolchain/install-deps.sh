@@ -10,6 +10,10 @@ packages=(
   libpng-dev libtiff-dev libyaml-cpp-dev
   # host tool
   libopencv-dev libeigen3-dev libcli11-dev
+  # device drivers: Aravis 0.8 (its pkg-config file requires libusb-1.0),
+  # libdrm (KMS display), libgpiod 1.6 (trigger, button, LED); aravis-tools and
+  # gpiod give the fake GigE camera and the command-line GPIO tools
+  libaravis-dev aravis-tools libusb-1.0-0-dev libdrm-dev libgpiod-dev gpiod
   # tests and benchmarks (OpenCV's structured_light module is the speed baseline)
   libgtest-dev libgmock-dev libbenchmark-dev libopencv-contrib-dev
   # PLY interoperability tests: the viewers' own readers, headless

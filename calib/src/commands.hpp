@@ -18,5 +18,6 @@ Action add_stereo_command(CLI::App& app);
 Action add_reconstruct_command(CLI::App& app);
 Action add_hybrid_command(CLI::App& app);
 Action add_evaluate_command(CLI::App& app);
+Action add_paper_experiments_command(CLI::App& app);
 
 } // namespace fpp::calib

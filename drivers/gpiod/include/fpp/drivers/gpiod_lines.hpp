@@ -1,0 +1,70 @@
+#pragma once
+// The scanner head's GPIO roles over libgpiod (character device /dev/gpiochipN).
+// Each object requests its line when built and holds it until destroyed; the
+// scanner keeps them for the life of the process. Active-low wiring is set in
+// the request, so callers and the kernel speak logical levels.
+//
+// Built against the libgpiod 1.x API (Debian 12); the calls are confined to
+// src/gpio_line_v1.cpp behind an internal line interface so that a 2.x
+// implementation can sit beside it.
+#include <chrono>
+#include <memory>
+#include <string>
+
+#include <fpp/drivers/gpio.hpp>
+
+namespace fpp::drivers {
+
+struct GpioLineConfig {
+    std::string chip = "gpiochip0"; // name, number ("0"), label or /dev path
+    unsigned int offset = 0;        // line offset on the chip
+    bool active_low = false;
+};
+
+namespace gpio_detail {
+class Line; // the version-specific line request (src/gpio_line.hpp)
+}
+
+class GpiodTriggerOutput final : public TriggerOutput {
+public:
+    // Requests the line as an output, inactive. Throws DeviceError naming chip
+    // and line ("gpiochip0 line 17") if the chip or line cannot be had.
+    explicit GpiodTriggerOutput(const GpioLineConfig& config,
+                                const std::string& consumer = "fpp-trigger");
+    ~GpiodTriggerOutput() override;
+    void pulse(std::chrono::microseconds width) override;
+
+private:
+    std::unique_ptr<gpio_detail::Line> line_;
+};
+
+class GpiodButtonInput final : public ButtonInput {
+public:
+    // Requests both edges of the line; a logical rising edge is a press.
+    // Presses closer than `debounce` to another edge are bounces (Debouncer).
+    GpiodButtonInput(const GpioLineConfig& config, std::chrono::milliseconds debounce,
+                     const std::string& consumer = "fpp-button");
+    ~GpiodButtonInput() override;
+    bool wait_press(std::chrono::milliseconds timeout) override;
+    int drain() override;
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
+
+// A single-colour LED: off -> dark, ready -> lit, scanning -> blinking at
+// 4 Hz, error -> blinking at 1 Hz (a thread of its own drives the blinking).
+class GpiodStatusLed final : public StatusLed {
+public:
+    explicit GpiodStatusLed(const GpioLineConfig& config, const std::string& consumer = "fpp-led");
+    ~GpiodStatusLed() override;
+    void set(LedState state) override;
+    LedState state() const;
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
+
+} // namespace fpp::drivers

@@ -1,0 +1,46 @@
+#pragma once
+// One requested GPIO line, independent of the libgpiod version. Each libgpiod
+// major version implements open_output_line / open_edge_line in a file of its
+// own (gpio_line_v1.cpp for 1.x).
+#include <fpp/drivers/gpiod_lines.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace fpp::drivers::gpio_detail {
+
+struct Edge {
+    std::int64_t timestamp_ns = 0; // kernel event time
+    bool rising = false;           // logical (after active-low)
+};
+
+class Line {
+public:
+    virtual ~Line() = default;
+    // Logical level of an output line.
+    virtual void set(bool active) = 0;
+    // Waits up to `timeout` for an edge of an input line; nullopt on timeout.
+    virtual std::optional<Edge> wait_edge(std::chrono::nanoseconds timeout) = 0;
+    const std::string& name() const { return name_; }
+
+protected:
+    explicit Line(std::string name) : name_(std::move(name)) {}
+
+private:
+    std::string name_;
+};
+
+// "gpiochip0 line 17": the device name in DeviceError messages.
+inline std::string line_name(const GpioLineConfig& config) {
+    return config.chip + " line " + std::to_string(config.offset);
+}
+
+// Throw DeviceError(line_name(config), ...) when the chip or line cannot be had.
+std::unique_ptr<Line> open_output_line(const GpioLineConfig& config, const std::string& consumer,
+                                       bool initial_active);
+std::unique_ptr<Line> open_edge_line(const GpioLineConfig& config, const std::string& consumer);
+
+} // namespace fpp::drivers::gpio_detail

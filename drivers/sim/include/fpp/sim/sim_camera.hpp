@@ -1,0 +1,83 @@
+#pragma once
+// The camera of the virtual scanner behind fpp::drivers::Camera. At each
+// trigger (software or the sim trigger line) it notes the pattern that the
+// SimDisplay has on screen at that instant and renders the scene under it:
+// a trigger fired before its flip completed captures the previous pattern,
+// exactly the mistake a real rig would make. Fault hooks for tests.
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include <fpp/drivers/camera.hpp>
+#include <fpp/drivers/clock.hpp>
+#include <fpp/sim/renderer.hpp>
+#include <fpp/sim/sim_display.hpp>
+
+namespace fpp::sim {
+
+enum class CameraFault {
+    none,
+    gone,       // the camera disappears: every later call throws
+    timeout,    // the frame of this trigger never arrives
+    dropped,    // a frame was lost inside the camera: this one arrives with its id one too far
+    incomplete, // the frame arrives with missing packets
+};
+
+// What the sensor saw for one trigger.
+struct Exposure {
+    std::uint64_t frame_id = 0;
+    std::int64_t start_ns = 0;
+    int pattern = SimDisplay::kNothing;        // on screen at exposure start
+    int pattern_at_end = SimDisplay::kNothing; // on screen at exposure end
+};
+
+class SimCamera final : public drivers::Camera {
+public:
+    // The renderer must outlive the camera. Settings: trigger mode, exposure
+    // (time spent before the frame is read out) and frame timeout are used.
+    SimCamera(const Renderer& renderer, const SimDisplay& display, drivers::Clock& clock,
+              const drivers::CameraSettings& settings, std::uint64_t noise_seed = 1);
+
+    Size size() const override;
+    int bit_depth() const override;
+    void start() override;
+    void stop() override;
+    void software_trigger() override;
+    drivers::CapturedFrame next_frame(std::chrono::milliseconds timeout) override;
+
+    // --- simulation side ---
+    // The trigger input (wired to SimTrigger); ignored while stopped or in
+    // software trigger mode, as on a real camera.
+    void line_trigger(std::int64_t t_ns);
+    // Fault at the `at_trigger`-th trigger (0-based) since construction.
+    void inject_fault(CameraFault fault, int at_trigger);
+    // Every exposure taken, in order.
+    const std::vector<Exposure>& exposures() const { return exposures_; }
+    bool streaming() const { return streaming_; }
+
+private:
+    void expose(std::int64_t t_ns);
+    void check_present() const;
+    const Renderer& renderer_;
+    const SimDisplay& display_;
+    drivers::Clock& clock_;
+    drivers::CameraSettings settings_;
+    std::uint64_t seed_;
+    bool streaming_ = false;
+    bool gone_ = false;
+    std::uint64_t next_frame_id_ = 1;
+    int triggers_ = 0;
+    CameraFault fault_ = CameraFault::none;
+    int fault_at_ = -1;
+    struct Pending {
+        Exposure exposure;
+        bool incomplete = false;
+    };
+    std::deque<Pending> queue_;
+    std::vector<Exposure> exposures_;
+    Image<std::uint8_t> dark_; // projector off
+};
+
+} // namespace fpp::sim

@@ -1,0 +1,98 @@
+#include "fpp/sim/sim_camera.hpp"
+
+#include "fpp/drivers/device_error.hpp"
+
+namespace fpp::sim {
+
+namespace {
+const char* const kDevice = "sim camera";
+}
+
+SimCamera::SimCamera(const Renderer& renderer, const SimDisplay& display, drivers::Clock& clock,
+                     const drivers::CameraSettings& settings, std::uint64_t noise_seed)
+    : renderer_(renderer), display_(display), clock_(clock), settings_(settings),
+      seed_(noise_seed), dark_(renderer.rig().projector_size) {}
+
+Size SimCamera::size() const { return renderer_.rig().camera_size; }
+
+int SimCamera::bit_depth() const { return renderer_.rig().sensor.bit_depth > 8 ? 16 : 8; }
+
+void SimCamera::check_present() const {
+    if (gone_) throw drivers::DeviceError(kDevice, "camera gone (no response)");
+}
+
+void SimCamera::start() {
+    check_present();
+    streaming_ = true;
+}
+
+void SimCamera::stop() {
+    streaming_ = false;
+    queue_.clear(); // buffers go back to the pool
+}
+
+void SimCamera::inject_fault(CameraFault fault, int at_trigger) {
+    fault_ = fault;
+    fault_at_ = at_trigger;
+}
+
+void SimCamera::software_trigger() {
+    check_present();
+    if (settings_.trigger != drivers::TriggerMode::software)
+        throw drivers::DeviceError(kDevice, "software trigger while triggered by line " +
+                                                settings_.trigger_source);
+    if (!streaming_) throw drivers::DeviceError(kDevice, "software trigger while stopped");
+    expose(clock_.now_ns());
+}
+
+void SimCamera::line_trigger(std::int64_t t_ns) {
+    if (gone_ || !streaming_ || settings_.trigger != drivers::TriggerMode::line) return;
+    expose(t_ns);
+}
+
+void SimCamera::expose(std::int64_t t_ns) {
+    const int trigger = triggers_++;
+    CameraFault fault = trigger == fault_at_ ? fault_ : CameraFault::none;
+    if (fault == CameraFault::gone) {
+        gone_ = true;
+        return;
+    }
+    if (fault == CameraFault::dropped) ++next_frame_id_;
+    Exposure e;
+    e.frame_id = next_frame_id_++;
+    e.start_ns = t_ns;
+    e.pattern = display_.on_screen_at(t_ns);
+    const auto exposure_ns = static_cast<std::int64_t>(settings_.exposure_us * 1000.0);
+    e.pattern_at_end = display_.on_screen_at(t_ns + exposure_ns);
+    exposures_.push_back(e);
+    if (fault == CameraFault::timeout) return;
+    queue_.push_back({e, fault == CameraFault::incomplete});
+}
+
+drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) {
+    check_present();
+    if (queue_.empty()) {
+        clock_.sleep_for(timeout);
+        throw drivers::DeviceError(kDevice, "no frame within " + std::to_string(timeout.count()) +
+                                                " ms");
+    }
+    Pending p = queue_.front();
+    queue_.pop_front();
+    // The frame is complete once the exposure ends.
+    clock_.sleep_until_ns(p.exposure.start_ns +
+                          static_cast<std::int64_t>(settings_.exposure_us * 1000.0));
+    if (p.incomplete)
+        throw drivers::DeviceError(kDevice, "frame " + std::to_string(p.exposure.frame_id) +
+                                                " incomplete (missing packets)");
+    const Image<std::uint8_t>& light =
+        p.exposure.pattern == SimDisplay::kNothing
+            ? dark_
+            : display_.pattern(static_cast<std::size_t>(p.exposure.pattern));
+    drivers::CapturedFrame out;
+    out.frame = renderer_.render(light, Renderer::frame_seed(seed_, static_cast<int>(p.exposure.frame_id)));
+    out.frame_id = p.exposure.frame_id;
+    out.timestamp_ns = p.exposure.start_ns;
+    return out;
+}
+
+} // namespace fpp::sim

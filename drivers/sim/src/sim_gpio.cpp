@@ -1,0 +1,63 @@
+#include "fpp/sim/sim_gpio.hpp"
+
+namespace fpp::sim {
+
+SimTrigger::SimTrigger(drivers::Clock& clock, std::function<void(std::int64_t)> wire)
+    : clock_(clock), wire_(std::move(wire)) {}
+
+void SimTrigger::pulse(std::chrono::microseconds width) {
+    const std::int64_t rise = clock_.now_ns();
+    pulses_.push_back(rise);
+    if (wire_) wire_(rise);
+    clock_.sleep_until_ns(rise + std::chrono::duration_cast<std::chrono::nanoseconds>(width).count());
+}
+
+SimButton::SimButton(std::chrono::milliseconds debounce) : debounce_(debounce) {}
+
+void SimButton::press(int bounces) {
+    {
+        std::lock_guard lock(mutex_);
+        const auto now = std::chrono::steady_clock::now();
+        for (int i = 0; i <= bounces; ++i) edges_.push_back(now + std::chrono::microseconds(100 * i));
+    }
+    edge_.notify_all();
+}
+
+void SimButton::take_press_locked() {
+    const auto first = edges_.front();
+    while (!edges_.empty() && edges_.front() - first < debounce_) edges_.pop_front();
+}
+
+bool SimButton::wait_press(std::chrono::milliseconds timeout) {
+    std::unique_lock lock(mutex_);
+    if (!edge_.wait_for(lock, timeout, [&] { return !edges_.empty(); })) return false;
+    take_press_locked();
+    return true;
+}
+
+int SimButton::drain() {
+    std::lock_guard lock(mutex_);
+    int presses = 0;
+    while (!edges_.empty()) {
+        take_press_locked();
+        ++presses;
+    }
+    return presses;
+}
+
+void SimLed::set(drivers::LedState state) {
+    std::lock_guard lock(mutex_);
+    history_.push_back(state);
+}
+
+std::vector<drivers::LedState> SimLed::history() const {
+    std::lock_guard lock(mutex_);
+    return history_;
+}
+
+drivers::LedState SimLed::state() const {
+    std::lock_guard lock(mutex_);
+    return history_.back();
+}
+
+} // namespace fpp::sim

@@ -1,0 +1,102 @@
+#pragma once
+// The board configuration file (format fpp-scanner-board/1): which devices
+// the scanner drives and how. Read strictly: unknown or duplicate keys, wrong
+// types and out-of-range values throw InputError(file, field, message).
+// Relative paths are relative to the board file's folder.
+//
+//   format: fpp-scanner-board/1
+//   name: <text>
+//   display: {card: auto | /dev/dri/cardN, connector: auto | HDMI-A-1, mode: auto | WxH}
+//   gpio: {chip: gpiochip0, trigger_line: N, button_line: N, led_line: N,
+//          trigger_active_low: bool, button_active_low: bool, led_active_low: bool,
+//          debounce_ms: N}
+//   camera: {driver: sim | aravis, device: <id or address, "" = first>,
+//            pixel_format: Mono8 | Mono12 | Mono16, exposure_us: R,
+//            trigger: line | software, trigger_source: Line0,
+//            packet_size: N (0 = driver default), buffer_count: N, frame_timeout_ms: N}
+//   sequence: <standard sequence name> | [capture-set spec blocks]
+//   table: <path.fpt>                  optional: without it only capture mode works
+//   store: {directory: <path>, max_mb: N}   oldest scans pruned beyond N MiB
+//   timing: {settle_us: N, trigger_pulse_us: N, flip_timeout_ms: N}
+//   sim: {rig: <rig yaml>, scene: <scene name or yaml>, binning: N,
+//         flip_latency_us: N, clock: virtual | steady, seed: N}   (camera.driver sim only)
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include <fpp/drivers/camera.hpp>
+#include <fpp/pattern_block.hpp>
+
+namespace fpp::scanner {
+
+inline constexpr const char* kBoardConfigFormat = "fpp-scanner-board/1";
+
+struct DisplayConfig {
+    std::string card = "auto";
+    std::string connector = "auto";
+    std::string mode = "auto"; // "auto" (preferred mode) or "WIDTHxHEIGHT"
+};
+
+struct GpioConfig {
+    std::string chip = "gpiochip0";
+    int trigger_line = 0;
+    int button_line = 1;
+    int led_line = 2;
+    bool trigger_active_low = false;
+    bool button_active_low = true;
+    bool led_active_low = false;
+    std::chrono::milliseconds debounce{30};
+};
+
+enum class CameraDriver { sim, aravis };
+
+struct CameraConfig {
+    CameraDriver driver = CameraDriver::sim;
+    std::string device; // Aravis id or IP address; "" = first found
+    drivers::CameraSettings settings;
+};
+
+struct StoreConfig {
+    std::filesystem::path directory;
+    std::uint64_t max_bytes = 0; // oldest scans pruned beyond this (store.max_mb MiB)
+};
+
+struct TimingConfig {
+    std::chrono::microseconds settle{0};            // after the flip event, before the trigger
+    std::chrono::microseconds trigger_pulse{100};
+    std::chrono::milliseconds flip_timeout{100};
+};
+
+struct SimConfig {
+    std::filesystem::path rig;
+    std::string scene = "composite"; // named scene or resolved yaml path
+    int binning = 1;
+    std::chrono::microseconds flip_latency{16'667};
+    bool virtual_clock = true;
+    std::uint64_t seed = 1;
+};
+
+struct BoardConfig {
+    std::filesystem::path file; // where it was read from
+    std::string name;
+    DisplayConfig display;
+    GpioConfig gpio;
+    CameraConfig camera;
+    std::string sequence_name;   // standard sequence, or "" when blocks are given
+    Sequence sequence_blocks;    // when given as blocks
+    std::optional<std::filesystem::path> table;
+    StoreConfig store;
+    TimingConfig timing;
+    std::optional<SimConfig> sim; // present exactly when camera.driver is sim
+
+    // The sequence for a projector of this size (throws InputError naming
+    // field "sequence" if it does not fit that projector).
+    Sequence sequence(Size projector) const;
+};
+
+BoardConfig read_board_config(const std::filesystem::path& path);
+BoardConfig parse_board_config(const std::string& yaml_text, const std::filesystem::path& origin);
+
+} // namespace fpp::scanner

@@ -1,0 +1,29 @@
+#pragma once
+// The scan store: one folder per scan (scan-YYYYMMDD-HHMMSS-mmm, UTC, so that
+// names sort by time) under one directory, pruned oldest first to a size limit.
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace fpp::scanner {
+
+// Creates the store directory if needed and checks that it is writable
+// (throws IoError otherwise).
+void prepare_store(const std::filesystem::path& directory);
+
+// A folder name for a scan starting now that does not exist yet.
+std::filesystem::path new_scan_folder(const std::filesystem::path& directory);
+
+// Scan folders in the store, oldest first.
+std::vector<std::filesystem::path> list_scans(const std::filesystem::path& directory);
+
+// Bytes held by the files under `folder`.
+std::uint64_t folder_bytes(const std::filesystem::path& folder);
+
+// Removes the oldest scans until the store holds at most `max_bytes`, never
+// removing `keep`. Returns the folders removed.
+std::vector<std::filesystem::path> prune_store(const std::filesystem::path& directory,
+                                               std::uint64_t max_bytes,
+                                               const std::filesystem::path& keep);
+
+} // namespace fpp::scanner

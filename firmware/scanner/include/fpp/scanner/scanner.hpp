@@ -1,0 +1,109 @@
+#pragma once
+// The scan: idle, button, then per pattern flip -> flip event -> settle ->
+// trigger -> frame, each frame pushed to the streaming decoder while the next
+// pattern flips; then finish, apply the table, write the outputs atomically
+// into the scan store, prune it, back to idle.
+//
+// Written against the driver interfaces only: the same code runs on the
+// virtual scanner and on hardware.
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <fpp/coefficient_table.hpp>
+#include <fpp/decoder.hpp>
+#include <fpp/drivers/camera.hpp>
+#include <fpp/drivers/clock.hpp>
+#include <fpp/drivers/display.hpp>
+#include <fpp/drivers/gpio.hpp>
+#include <fpp/scanner/board_config.hpp>
+#include <fpp/scanner/log.hpp>
+
+namespace fpp::scanner {
+
+struct Devices {
+    drivers::Display& display;
+    drivers::TriggerOutput& trigger;
+    drivers::ButtonInput& button;
+    drivers::StatusLed& led;
+    drivers::Camera& camera;
+    drivers::Clock& clock;
+};
+
+enum class ScanMode { scan, capture }; // capture also writes the raw capture set
+
+// A scan stopped by a stop request (SIGTERM).
+class ScanAborted : public std::runtime_error {
+public:
+    ScanAborted() : std::runtime_error("scan aborted") {}
+};
+
+// The frame did not show the pattern it was triggered for.
+class PatternMismatch : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct ScanTimings {
+    double capture_ms = 0;             // first show() to last frame received (scan clock)
+    double push_mean_ms = 0;           // streaming decoder work per frame (wall clock)
+    double push_max_ms = 0;
+    double finish_ms = 0;              // last decode step
+    double apply_ms = 0;               // table kernel
+    double write_ms = 0;               // outputs on disk (fsynced)
+    double last_frame_to_written_ms = 0;
+};
+
+struct ScanOutcome {
+    std::filesystem::path folder;
+    std::size_t points = 0;
+    int frames = 0;
+    int attempts = 1;
+    ScanTimings timings;
+};
+
+class Scanner {
+public:
+    // Loads and checks the table (InputError naming the file: missing,
+    // corrupt, or for another camera or projector), renders the patterns and
+    // gives them to the display. The devices must outlive the scanner.
+    Scanner(const BoardConfig& board, Devices devices, const Logger& log);
+
+    // One scan. `stop`, when given and set, aborts between frames
+    // (ScanAborted). A camera fault (DeviceError from the camera) fails the
+    // attempt and the scan is tried once more. On failure the LED shows
+    // error, nothing is left in the store, and the exception propagates.
+    ScanOutcome scan(ScanMode mode, const std::atomic<bool>* stop = nullptr);
+
+    // Idle loop: LED ready, a button press starts a scan; presses during a
+    // scan are discarded and logged. Returns when `stop` is set. Scan
+    // failures are logged and the loop goes back to idle.
+    void run(ScanMode mode, const std::atomic<bool>& stop);
+
+    int frames_per_scan() const { return static_cast<int>(patterns_); }
+    const Sequence& sequence() const { return sequence_; }
+    bool has_table() const { return !table_.empty(); }
+    int scans_completed() const { return scans_completed_; }
+
+private:
+    struct Captured;
+    ScanOutcome attempt(ScanMode mode, const std::atomic<bool>* stop);
+    void write_outputs(const std::filesystem::path& temp, ScanMode mode, Captured& captured,
+                       const DecodeResult& decoded, ScanOutcome& outcome);
+
+    const BoardConfig& board_;
+    Devices dev_;
+    const Logger& log_;
+    Sequence sequence_;
+    std::size_t patterns_ = 0;
+    CoefficientTable table_;
+    std::uint64_t table_file_hash_ = 0;
+    DecodeResult recycled_; // image memory reused scan after scan
+    std::atomic<int> scans_completed_{0};
+};
+
+} // namespace fpp::scanner

@@ -1,0 +1,123 @@
+// fpp-scanner: the scanner head's firmware. Waits for the button, scans,
+// writes the point cloud into the scan store; --once scans once and exits.
+#include "fpp/drivers/device_error.hpp"
+#include "fpp/error.hpp"
+#include "fpp/scanner/board_config.hpp"
+#include "fpp/scanner/log.hpp"
+#include "fpp/scanner/scanner.hpp"
+#include "fpp/scanner/sim_board.hpp"
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_stop_signal(int) { g_stop.store(true); }
+
+void usage(std::FILE* out) {
+    std::fputs("usage: fpp-scanner --board FILE [--once] [--mode scan|capture] [--store DIR] [--table FILE]\n"
+               "  --board FILE   board configuration (fpp-scanner-board/1, e.g. board/sim.yaml)\n"
+               "  --once         scan once as if the button had been pressed, print the output\n"
+               "                 folder and exit (0 only when the outputs are written)\n"
+               "  --mode M       scan: point cloud (needs the board's table); capture: also the\n"
+               "                 raw capture set (calibration sessions)\n"
+               "  --store DIR    scan store directory (overrides the board's)\n"
+               "  --table FILE   coefficient table (overrides the board's)\n",
+               out);
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    using namespace fpp::scanner;
+    std::string board_path;
+    std::string store;
+    std::string table;
+    bool once = false;
+    ScanMode mode = ScanMode::scan;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        const bool has_value = i + 1 < argc;
+        if (a == "--board" && has_value) board_path = argv[++i];
+        else if (a == "--store" && has_value) store = argv[++i];
+        else if (a == "--table" && has_value) table = argv[++i];
+        else if (a == "--once") once = true;
+        else if (a == "--mode" && has_value) {
+            const std::string m = argv[++i];
+            if (m == "scan") mode = ScanMode::scan;
+            else if (m == "capture") mode = ScanMode::capture;
+            else {
+                std::fprintf(stderr, "error: --mode must be scan or capture, not '%s'\n", m.c_str());
+                return 2;
+            }
+        } else if (a == "--help" || a == "-h") {
+            usage(stdout);
+            return 0;
+        } else {
+            std::fprintf(stderr, "error: unknown or incomplete argument '%s'\n", a.c_str());
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (board_path.empty()) {
+        usage(stderr);
+        return 2;
+    }
+
+    struct sigaction action {};
+    action.sa_handler = on_stop_signal;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGTERM, &action, nullptr);
+    sigaction(SIGINT, &action, nullptr);
+
+    const Logger log;
+    try {
+        BoardConfig board = read_board_config(board_path);
+        if (!store.empty()) board.store.directory = store;
+        if (!table.empty()) board.table = table;
+        if (board.camera.driver != CameraDriver::sim) {
+            log.error("board " + board.name +
+                      ": camera.driver aravis needs the hardware drivers, not built into this "
+                      "binary");
+            return 1;
+        }
+        SimBoard sim(board);
+        Devices devices = sim.devices();
+        // Lines and display are released by the destructors, on every path.
+        try {
+            Scanner scanner(board, devices, log);
+            if (once) {
+                const ScanOutcome outcome = scanner.scan(mode, &g_stop);
+                std::printf("%s\n", outcome.folder.string().c_str());
+                devices.display.restore();
+                return 0;
+            }
+            scanner.run(mode, g_stop);
+            devices.display.restore();
+            log.info("stopped");
+            return 0;
+        } catch (const ScanAborted&) {
+            devices.display.restore(); // logged by the scanner; LED already off
+            return 1;
+        } catch (...) {
+            devices.led.set(fpp::drivers::LedState::error);
+            devices.display.restore();
+            throw;
+        }
+    } catch (const fpp::InputError& e) {
+        log.error(e.what());
+    } catch (const fpp::IoError& e) {
+        log.error(e.what());
+    } catch (const fpp::drivers::DeviceError& e) {
+        log.error(e.what());
+    } catch (const std::exception& e) {
+        log.error(e.what());
+    }
+    return 1;
+}

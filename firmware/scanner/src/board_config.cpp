@@ -1,0 +1,208 @@
+#include "fpp/scanner/board_config.hpp"
+
+#include "fpp/capture_set.hpp"
+#include "fpp/error.hpp"
+#include "fpp/sequences.hpp"
+#include "fpp/yaml_fields.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <stdexcept>
+
+namespace fpp::scanner {
+
+namespace {
+
+using yaml_fields::child;
+using yaml_fields::Reader;
+
+// "auto" or WIDTHxHEIGHT, each 1 to 5 digits without a leading zero.
+bool valid_mode(const std::string& mode) {
+    if (mode == "auto") return true;
+    const auto x = mode.find('x');
+    if (x == std::string::npos) return false;
+    auto number = [](const std::string& s) {
+        return !s.empty() && s.size() <= 5 && s[0] != '0' &&
+               std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+    };
+    return number(mode.substr(0, x)) && number(mode.substr(x + 1));
+}
+
+class BoardParser {
+public:
+    explicit BoardParser(const std::filesystem::path& origin) : r_(origin) {}
+
+    int int_in(const YAML::Node& map, const std::string& parent, std::string_view key, int lo,
+               int hi) const {
+        const std::string field = child(parent, key);
+        const int v = r_.int_value(r_.require(map, parent, key), field);
+        if (v < lo || v > hi)
+            r_.fail(map[std::string(key)], field,
+                    "must be in " + std::to_string(lo) + ".." + std::to_string(hi));
+        return v;
+    }
+    std::string text(const YAML::Node& map, const std::string& parent, std::string_view key) const {
+        return r_.string_value(r_.require(map, parent, key), child(parent, key));
+    }
+    std::string non_empty(const YAML::Node& map, const std::string& parent,
+                          std::string_view key) const {
+        std::string s = text(map, parent, key);
+        if (s.empty()) r_.fail(map[std::string(key)], child(parent, key), "must not be empty");
+        return s;
+    }
+    bool flag(const YAML::Node& map, const std::string& parent, std::string_view key) const {
+        return r_.bool_value(r_.require(map, parent, key), child(parent, key));
+    }
+    std::filesystem::path path(const YAML::Node& map, const std::string& parent,
+                               std::string_view key) const {
+        std::filesystem::path p = non_empty(map, parent, key);
+        return p.is_absolute() ? p : r_.origin().parent_path() / p;
+    }
+
+    BoardConfig parse(const std::string& yaml_text) const {
+        const YAML::Node root = r_.load(yaml_text);
+        r_.expect_map(root, "",
+                      {"format", "name", "display", "gpio", "camera", "sequence", "table",
+                       "store", "timing", "sim"});
+        BoardConfig c;
+        c.file = r_.origin();
+        if (text(root, "", "format") != kBoardConfigFormat)
+            r_.fail(root["format"], "format", std::string("must be ") + kBoardConfigFormat);
+        c.name = non_empty(root, "", "name");
+        parse_display(r_.require(root, "", "display"), c.display);
+        parse_gpio(r_.require(root, "", "gpio"), c.gpio);
+        parse_camera(r_.require(root, "", "camera"), c.camera);
+        parse_sequence_field(r_.require(root, "", "sequence"), c);
+        if (root["table"] && !root["table"].IsNull()) c.table = path(root, "", "table");
+        parse_store(r_.require(root, "", "store"), c.store);
+        parse_timing(r_.require(root, "", "timing"), c.timing);
+        const bool sim = c.camera.driver == CameraDriver::sim;
+        if (sim != static_cast<bool>(root["sim"]))
+            r_.fail("sim", sim ? "missing field (camera.driver is sim)"
+                               : "only allowed with camera.driver sim");
+        if (sim) c.sim = parse_sim(root["sim"]);
+        return c;
+    }
+
+private:
+    void parse_display(const YAML::Node& n, DisplayConfig& d) const {
+        r_.expect_map(n, "display", {"card", "connector", "mode"});
+        d.card = non_empty(n, "display", "card");
+        d.connector = non_empty(n, "display", "connector");
+        d.mode = non_empty(n, "display", "mode");
+        if (!valid_mode(d.mode))
+            r_.fail(n["mode"], "display.mode", "must be auto or WIDTHxHEIGHT (e.g. 1280x800)");
+    }
+    void parse_gpio(const YAML::Node& n, GpioConfig& g) const {
+        r_.expect_map(n, "gpio",
+                      {"chip", "trigger_line", "button_line", "led_line", "trigger_active_low",
+                       "button_active_low", "led_active_low", "debounce_ms"});
+        g.chip = non_empty(n, "gpio", "chip");
+        g.trigger_line = int_in(n, "gpio", "trigger_line", 0, 4095);
+        g.button_line = int_in(n, "gpio", "button_line", 0, 4095);
+        g.led_line = int_in(n, "gpio", "led_line", 0, 4095);
+        if (g.trigger_line == g.button_line || g.trigger_line == g.led_line ||
+            g.button_line == g.led_line)
+            r_.fail(n, "gpio", "trigger_line, button_line and led_line must differ");
+        g.trigger_active_low = flag(n, "gpio", "trigger_active_low");
+        g.button_active_low = flag(n, "gpio", "button_active_low");
+        g.led_active_low = flag(n, "gpio", "led_active_low");
+        g.debounce = std::chrono::milliseconds(int_in(n, "gpio", "debounce_ms", 0, 1000));
+    }
+    void parse_camera(const YAML::Node& n, CameraConfig& c) const {
+        r_.expect_map(n, "camera",
+                      {"driver", "device", "pixel_format", "exposure_us", "trigger",
+                       "trigger_source", "packet_size", "buffer_count", "frame_timeout_ms"});
+        const std::string driver = text(n, "camera", "driver");
+        if (driver == "sim") c.driver = CameraDriver::sim;
+        else if (driver == "aravis") c.driver = CameraDriver::aravis;
+        else r_.fail(n["driver"], "camera.driver", "must be sim or aravis");
+        c.device = text(n, "camera", "device");
+        auto& s = c.settings;
+        s.pixel_format = text(n, "camera", "pixel_format");
+        if (s.pixel_format != "Mono8" && s.pixel_format != "Mono10" &&
+            s.pixel_format != "Mono12" && s.pixel_format != "Mono16")
+            r_.fail(n["pixel_format"], "camera.pixel_format",
+                    "must be Mono8, Mono10, Mono12 or Mono16");
+        s.exposure_us = r_.real_value(r_.require(n, "camera", "exposure_us"), "camera.exposure_us");
+        if (!(s.exposure_us >= 1.0 && s.exposure_us <= 1e6))
+            r_.fail(n["exposure_us"], "camera.exposure_us", "must be in 1..1000000");
+        const std::string trigger = text(n, "camera", "trigger");
+        if (trigger == "line") s.trigger = drivers::TriggerMode::line;
+        else if (trigger == "software") s.trigger = drivers::TriggerMode::software;
+        else r_.fail(n["trigger"], "camera.trigger", "must be line or software");
+        s.trigger_source = non_empty(n, "camera", "trigger_source");
+        s.packet_size = int_in(n, "camera", "packet_size", 0, 16384);
+        s.buffer_count = int_in(n, "camera", "buffer_count", 2, 64);
+        s.frame_timeout = std::chrono::milliseconds(int_in(n, "camera", "frame_timeout_ms", 1, 60000));
+    }
+    void parse_sequence_field(const YAML::Node& n, BoardConfig& c) const {
+        if (n.IsScalar()) {
+            c.sequence_name = r_.string_value(n, "sequence");
+            const auto names = standard_sequence_names();
+            if (std::find(names.begin(), names.end(), c.sequence_name) == names.end())
+                r_.fail(n, "sequence", "unknown sequence name '" + c.sequence_name + "'");
+            return;
+        }
+        r_.expect_list(n, "sequence");
+        // The blocks are the capture-set spec's: let its reader check them
+        // (field names stay "sequence[i].<key>").
+        YAML::Emitter out;
+        out << YAML::BeginMap << YAML::Key << "sequence" << YAML::Value << n << YAML::EndMap;
+        c.sequence_blocks = parse_sequence(out.c_str(), r_.origin());
+        if (c.sequence_blocks.empty()) r_.fail(n, "sequence", "must not be empty");
+    }
+    void parse_store(const YAML::Node& n, StoreConfig& s) const {
+        r_.expect_map(n, "store", {"directory", "max_mb"});
+        s.directory = path(n, "store", "directory");
+        s.max_bytes = static_cast<std::uint64_t>(int_in(n, "store", "max_mb", 1, 1 << 30)) << 20;
+    }
+    void parse_timing(const YAML::Node& n, TimingConfig& t) const {
+        r_.expect_map(n, "timing", {"settle_us", "trigger_pulse_us", "flip_timeout_ms"});
+        t.settle = std::chrono::microseconds(int_in(n, "timing", "settle_us", 0, 1'000'000));
+        t.trigger_pulse =
+            std::chrono::microseconds(int_in(n, "timing", "trigger_pulse_us", 1, 100'000));
+        t.flip_timeout = std::chrono::milliseconds(int_in(n, "timing", "flip_timeout_ms", 1, 10'000));
+    }
+    SimConfig parse_sim(const YAML::Node& n) const {
+        r_.expect_map(n, "sim", {"rig", "scene", "binning", "flip_latency_us", "clock", "seed"});
+        SimConfig s;
+        s.rig = path(n, "sim", "rig");
+        s.scene = non_empty(n, "sim", "scene");
+        if (s.scene.ends_with(".yaml")) s.scene = path(n, "sim", "scene").string();
+        s.binning = int_in(n, "sim", "binning", 1, 8);
+        s.flip_latency = std::chrono::microseconds(int_in(n, "sim", "flip_latency_us", 0, 1'000'000));
+        const std::string clock = text(n, "sim", "clock");
+        if (clock == "virtual") s.virtual_clock = true;
+        else if (clock == "steady") s.virtual_clock = false;
+        else r_.fail(n["clock"], "sim.clock", "must be virtual or steady");
+        s.seed = static_cast<std::uint64_t>(int_in(n, "sim", "seed", 0, 1 << 30));
+        return s;
+    }
+
+    Reader r_;
+};
+
+} // namespace
+
+Sequence BoardConfig::sequence(Size projector) const {
+    if (!sequence_name.empty()) {
+        try {
+            return standard_sequence(sequence_name, projector);
+        } catch (const std::invalid_argument& e) {
+            throw InputError(file, "sequence", e.what());
+        }
+    }
+    validate_sequence(sequence_blocks, projector, file);
+    return sequence_blocks;
+}
+
+BoardConfig parse_board_config(const std::string& yaml_text, const std::filesystem::path& origin) {
+    return BoardParser(origin).parse(yaml_text);
+}
+
+BoardConfig read_board_config(const std::filesystem::path& path) {
+    return parse_board_config(yaml_fields::read_text_file(path), path);
+}
+
+} // namespace fpp::scanner

@@ -1,0 +1,77 @@
+#include "fpp/scanner/scan_store.hpp"
+
+#include "fpp/atomic_file.hpp"
+#include "fpp/error.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <system_error>
+#include <unistd.h>
+
+namespace fpp::scanner {
+
+namespace fs = std::filesystem;
+
+void prepare_store(const fs::path& directory) {
+    std::error_code ec;
+    fs::create_directories(directory, ec);
+    if (ec) throw IoError(directory, "cannot create the scan store: " + ec.message());
+    if (::access(directory.c_str(), W_OK | X_OK) != 0)
+        throw IoError(directory, describe_errno("scan store not writable", errno));
+}
+
+fs::path new_scan_folder(const fs::path& directory) {
+    const auto now = std::chrono::system_clock::now();
+    const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
+    const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+    std::tm utc{};
+    gmtime_r(&seconds, &utc);
+    char name[64];
+    std::snprintf(name, sizeof name, "scan-%04d%02d%02d-%02d%02d%02d-%03d", utc.tm_year + 1900,
+                  utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec,
+                  static_cast<int>(ms));
+    fs::path folder = directory / name;
+    for (int n = 2; fs::exists(folder); ++n) folder = directory / (std::string(name) + "-" + std::to_string(n));
+    return folder;
+}
+
+std::vector<fs::path> list_scans(const fs::path& directory) {
+    std::vector<fs::path> scans;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(directory, ec))
+        if (entry.is_directory() && entry.path().filename().string().starts_with("scan-"))
+            scans.push_back(entry.path());
+    std::sort(scans.begin(), scans.end());
+    return scans;
+}
+
+std::uint64_t folder_bytes(const fs::path& folder) {
+    std::uint64_t total = 0;
+    std::error_code ec;
+    for (const auto& entry : fs::recursive_directory_iterator(folder, ec))
+        if (entry.is_regular_file()) total += entry.file_size();
+    return total;
+}
+
+std::vector<fs::path> prune_store(const fs::path& directory, std::uint64_t max_bytes,
+                                  const fs::path& keep) {
+    const auto scans = list_scans(directory);
+    std::vector<std::uint64_t> sizes;
+    std::uint64_t total = 0;
+    for (const auto& s : scans) total += sizes.emplace_back(folder_bytes(s));
+    std::vector<fs::path> removed;
+    for (std::size_t i = 0; i < scans.size() && total > max_bytes; ++i) {
+        if (scans[i] == keep) continue;
+        std::error_code ec;
+        fs::remove_all(scans[i], ec);
+        if (ec) throw IoError(scans[i], "cannot prune: " + ec.message());
+        total -= sizes[i];
+        removed.push_back(scans[i]);
+    }
+    return removed;
+}
+
+} // namespace fpp::scanner

@@ -1,0 +1,336 @@
+#include "fpp/scanner/scanner.hpp"
+
+#include "fpp/atomic_file.hpp"
+#include "fpp/capture_set.hpp"
+#include "fpp/drivers/device_error.hpp"
+#include "fpp/error.hpp"
+#include "fpp/patterns.hpp"
+#include "fpp/point_cloud.hpp"
+#include "fpp/scanner/scan_store.hpp"
+#include "fpp/table_kernel.hpp"
+#include "fpp/yaml_fields.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cinttypes>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+namespace fpp::scanner {
+
+namespace fs = std::filesystem;
+using drivers::LedState;
+
+namespace {
+
+double wall_ms() {
+    return std::chrono::duration<double, std::milli>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
+std::string json_string(const std::string& s) {
+    std::string out = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        if (static_cast<unsigned char>(c) < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+            out += buf;
+        } else {
+            out += c;
+        }
+    }
+    return out + "\"";
+}
+
+std::string hex64(std::uint64_t v) {
+    char buf[24];
+    std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
+    return buf;
+}
+
+std::uint64_t hash_file(const fs::path& path) {
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
+                                                         &std::fclose);
+    if (!file) throw IoError(path, "cannot open for hashing");
+    std::string bytes(static_cast<std::size_t>(fs::file_size(path)), '\0');
+    if (std::fread(bytes.data(), 1, bytes.size(), file.get()) != bytes.size())
+        throw IoError(path, "short read while hashing");
+    return fnv1a64(bytes.data(), bytes.size());
+}
+
+std::string utc_now() {
+    const std::time_t t = std::time(nullptr);
+    std::tm utc{};
+    gmtime_r(&t, &utc);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &utc);
+    return buf;
+}
+
+} // namespace
+
+// One flip and its frame, for the metadata.
+struct FrameRecord {
+    drivers::FlipEvent flip;
+    std::uint64_t frame_id = 0;
+    std::int64_t frame_timestamp_ns = 0;
+};
+
+struct Scanner::Captured {
+    std::vector<FrameRecord> records;
+    std::vector<Frame> frames; // capture mode only
+    std::string started_utc;
+};
+
+Scanner::Scanner(const BoardConfig& board, Devices devices, const Logger& log)
+    : board_(board), dev_(devices), log_(log) {
+    const Size projector = dev_.display.size();
+    sequence_ = board_.sequence(projector);
+    if (board_.table) {
+        const Size camera = dev_.camera.size();
+        table_ = load_table(*board_.table, &camera);
+        if (table_.info().projector != projector)
+            throw InputError(*board_.table, "projector_size",
+                             "table made for a " + std::to_string(table_.info().projector.width) +
+                                 "x" + std::to_string(table_.info().projector.height) +
+                                 " projector, the display is " + std::to_string(projector.width) +
+                                 "x" + std::to_string(projector.height));
+        table_file_hash_ = hash_file(*board_.table);
+        log_.info("table " + board_.table->string() + " loaded (" +
+                  to_string(table_.info().model) + ", hash " + hex64(table_file_hash_) + ")");
+    }
+    const auto patterns = render_sequence(sequence_, projector);
+    patterns_ = patterns.size();
+    // Checked now so that a scan never starts on a sequence the decoder rejects.
+    StreamingDecoder probe(sequence_, dev_.camera.size(), projector);
+    (void)probe;
+    dev_.display.prepare(patterns);
+    log_.info("board " + board_.name + ": " + std::to_string(patterns_) + " patterns at " +
+              std::to_string(projector.width) + "x" + std::to_string(projector.height) +
+              ", camera " + std::to_string(dev_.camera.size().width) + "x" +
+              std::to_string(dev_.camera.size().height));
+}
+
+ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop) {
+    dev_.led.set(LedState::scanning);
+    log_.info(std::string("scan started (") + (mode == ScanMode::scan ? "scan" : "capture") +
+              " mode)");
+    for (int attempt_no = 1;; ++attempt_no) {
+        try {
+            ScanOutcome outcome = attempt(mode, stop);
+            outcome.attempts = attempt_no;
+            ++scans_completed_;
+            dev_.led.set(LedState::ready);
+            return outcome;
+        } catch (const drivers::DeviceError& e) {
+            dev_.camera.stop();
+            if (attempt_no == 1 && e.device().find("camera") != std::string::npos) {
+                log_.warning(std::string("scan attempt failed: ") + e.what() + "; retrying once");
+                continue;
+            }
+            log_.error(std::string("scan failed: ") + e.what());
+            dev_.led.set(LedState::error);
+            throw;
+        } catch (const ScanAborted&) {
+            dev_.camera.stop();
+            log_.warning("scan aborted by a stop request; nothing written");
+            dev_.led.set(LedState::off);
+            throw;
+        } catch (const std::exception& e) {
+            dev_.camera.stop();
+            log_.error(std::string("scan failed: ") + e.what());
+            dev_.led.set(LedState::error);
+            throw;
+        }
+    }
+}
+
+ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
+    if (mode == ScanMode::scan && table_.empty())
+        throw InputError(board_.file, "table", "scan mode needs a table (or use capture mode)");
+    prepare_store(board_.store.directory);
+
+    auto& clock = dev_.clock;
+    const Size camera = dev_.camera.size();
+    const std::int64_t settle_ns =
+        std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count();
+    const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
+
+    ScanOutcome outcome;
+    Captured captured;
+    captured.started_utc = utc_now();
+    StreamingDecoder decoder(sequence_, camera, dev_.display.size(), DecodeOptions{},
+                             std::move(recycled_));
+    double push_total = 0;
+
+    dev_.camera.start();
+    const std::int64_t capture_start = clock.now_ns();
+    dev_.display.show(0);
+    std::uint64_t previous_id = 0;
+    for (std::size_t i = 0; i < patterns_; ++i) {
+        const drivers::FlipEvent flip = dev_.display.wait_flip(board_.timing.flip_timeout);
+        if (flip.index != i)
+            throw PatternMismatch("flip event for pattern " + std::to_string(flip.index) +
+                                  ", expected " + std::to_string(i));
+        clock.sleep_until_ns(flip.timestamp_ns + settle_ns);
+        if (software) dev_.camera.software_trigger();
+        else dev_.trigger.pulse(board_.timing.trigger_pulse);
+        drivers::CapturedFrame frame = dev_.camera.next_frame(board_.camera.settings.frame_timeout);
+        if (i > 0 && frame.frame_id != previous_id + 1)
+            throw drivers::DeviceError("camera", "frame id " + std::to_string(frame.frame_id) +
+                                                     " after " + std::to_string(previous_id) +
+                                                     ": a frame was dropped");
+        previous_id = frame.frame_id;
+        // The exposure must start after the pattern is on screen (both on the
+        // scan clock; a camera that cannot tell reports 0).
+        if (frame.timestamp_ns != 0 && frame.timestamp_ns < flip.timestamp_ns)
+            throw PatternMismatch("frame " + std::to_string(frame.frame_id) +
+                                  " exposed before pattern " + std::to_string(i) +
+                                  " was on screen");
+        if (frame.frame.size() != camera)
+            throw drivers::DeviceError("camera", "frame of the wrong size");
+        captured.records.push_back({flip, frame.frame_id, frame.timestamp_ns});
+        // The next pattern flips while this frame is decoded.
+        if (i + 1 < patterns_) dev_.display.show(i + 1);
+        const double t0 = wall_ms();
+        decoder.push(frame.frame);
+        const double dt = wall_ms() - t0;
+        push_total += dt;
+        outcome.timings.push_max_ms = std::max(outcome.timings.push_max_ms, dt);
+        if (mode == ScanMode::capture) captured.frames.push_back(std::move(frame.frame));
+        if (stop && stop->load()) throw ScanAborted();
+    }
+    dev_.camera.stop();
+    const double last_frame = wall_ms();
+    outcome.timings.capture_ms = static_cast<double>(clock.now_ns() - capture_start) / 1e6;
+    outcome.timings.push_mean_ms = push_total / static_cast<double>(patterns_);
+    outcome.frames = static_cast<int>(patterns_);
+
+    double t = wall_ms();
+    DecodeResult decoded = decoder.finish();
+    outcome.timings.finish_ms = wall_ms() - t;
+
+    const fs::path folder = new_scan_folder(board_.store.directory);
+    t = wall_ms();
+    write_folder_atomically(folder, [&](const fs::path& temp) {
+        write_outputs(temp, mode, captured, decoded, outcome);
+    });
+    const double written = wall_ms();
+    outcome.timings.write_ms = written - t - outcome.timings.apply_ms;
+    outcome.timings.last_frame_to_written_ms = written - last_frame;
+    outcome.folder = folder;
+    recycled_ = std::move(decoded);
+
+    const auto removed = prune_store(board_.store.directory, board_.store.max_bytes, folder);
+    for (const auto& r : removed) log_.info("store full: removed " + r.filename().string());
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "scan written: %zu points, %d frames, streaming %.2f ms/frame (max %.2f), "
+                  "last frame to disk %.1f ms",
+                  outcome.points, outcome.frames, outcome.timings.push_mean_ms,
+                  outcome.timings.push_max_ms, outcome.timings.last_frame_to_written_ms);
+    log_.info(std::string(line) + " -> " + folder.string());
+    return outcome;
+}
+
+void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captured,
+                            const DecodeResult& decoded, ScanOutcome& outcome) {
+    const Size camera = dev_.camera.size();
+    const Size projector = dev_.display.size();
+    if (!table_.empty()) {
+        const double t = wall_ms();
+        const Image<float>& phase =
+            table_.info().phase_axis == Axis::x ? decoded.proj_x : decoded.proj_y;
+        if (phase.empty())
+            throw InputError(*board_.table, "phase_axis",
+                             std::string("the sequence codes no ") +
+                                 to_string(table_.info().phase_axis) + " phase");
+        PointCloud cloud;
+        const TableApplyStats stats = apply_table(table_, phase, cloud);
+        outcome.points = stats.points;
+        outcome.timings.apply_ms = wall_ms() - t;
+        cloud.quality = decoded.modulation;
+        cloud.intensity = decoded.mean;
+        write_ply(temp / "cloud.ply", cloud,
+                  {"fpp-scanner board " + board_.name, "scan " + captured.started_utc});
+    }
+    if (mode == ScanMode::capture) {
+        CaptureManifest manifest;
+        manifest.camera = camera;
+        manifest.projector = projector;
+        for (std::size_t i = 0; i < captured.frames.size(); ++i) {
+            char name[32];
+            std::snprintf(name, sizeof name, "%03zu.png", i);
+            manifest.frames.emplace_back(name);
+        }
+        manifest.sequence = sequence_;
+        manifest.metadata_yaml = "board: " + yaml_fields::format_string(board_.name) +
+                                 "\nscanned_utc: " + captured.started_utc;
+        write_capture_set(temp / "capture", manifest, captured.frames);
+    }
+
+    const auto& s = board_.camera.settings;
+    std::ostringstream j;
+    j << "{\n  \"format\": \"fpp-scan/1\",\n"
+      << "  \"board\": " << json_string(board_.name) << ",\n"
+      << "  \"mode\": \"" << (mode == ScanMode::scan ? "scan" : "capture") << "\",\n"
+      << "  \"started_utc\": \"" << captured.started_utc << "\",\n"
+      << "  \"camera\": {\"width\": " << camera.width << ", \"height\": " << camera.height
+      << ", \"bit_depth\": " << dev_.camera.bit_depth()
+      << ", \"pixel_format\": " << json_string(s.pixel_format)
+      << ", \"exposure_us\": " << s.exposure_us << ", \"trigger\": \""
+      << (s.trigger == drivers::TriggerMode::line ? "line" : "software") << "\"},\n"
+      << "  \"projector\": {\"width\": " << projector.width << ", \"height\": " << projector.height
+      << "},\n"
+      << "  \"sequence\": " << json_string(board_.sequence_name.empty() ? "blocks" : board_.sequence_name)
+      << ",\n  \"frames\": " << outcome.frames << ",\n"
+      << "  \"timing_settings_us\": {\"settle\": " << board_.timing.settle.count()
+      << ", \"trigger_pulse\": " << board_.timing.trigger_pulse.count() << "},\n";
+    if (!table_.empty())
+        j << "  \"table\": {\"path\": " << json_string(board_.table->string())
+          << ", \"model\": \"" << to_string(table_.info().model) << "\", \"file_fnv1a64\": \""
+          << hex64(table_file_hash_) << "\", \"calibration_fnv1a64\": \""
+          << hex64(table_.info().calibration_hash) << "\"},\n";
+    j << "  \"decode\": {\"method_x\": " << json_string(decoded.method_x)
+      << ", \"method_y\": " << json_string(decoded.method_y) << "},\n"
+      << "  \"points\": " << outcome.points << ",\n"
+      << "  \"timings_ms\": {\"capture\": " << outcome.timings.capture_ms
+      << ", \"push_mean\": " << outcome.timings.push_mean_ms
+      << ", \"push_max\": " << outcome.timings.push_max_ms
+      << ", \"finish\": " << outcome.timings.finish_ms
+      << ", \"apply\": " << outcome.timings.apply_ms << "},\n"
+      << "  \"flips\": [";
+    for (std::size_t i = 0; i < captured.records.size(); ++i) {
+        const auto& r = captured.records[i];
+        j << (i ? ",\n    " : "\n    ") << "{\"pattern\": " << r.flip.index
+          << ", \"sequence\": " << r.flip.sequence << ", \"flip_ns\": " << r.flip.timestamp_ns
+          << ", \"frame_id\": " << r.frame_id << ", \"frame_ns\": " << r.frame_timestamp_ns << "}";
+    }
+    j << "\n  ]\n}\n";
+    write_file_synced(temp / "scan.json", j.str());
+}
+
+void Scanner::run(ScanMode mode, const std::atomic<bool>& stop) {
+    dev_.led.set(LedState::ready);
+    log_.info("idle: waiting for the button");
+    while (!stop.load()) {
+        if (!dev_.button.wait_press(std::chrono::milliseconds(100))) continue;
+        try {
+            scan(mode, &stop);
+        } catch (const ScanAborted&) {
+            break;
+        } catch (const std::exception&) {
+            // Logged by scan(); the LED stays in its error state until the
+            // next successful scan.
+        }
+        if (const int ignored = dev_.button.drain(); ignored > 0)
+            log_.warning("button pressed " + std::to_string(ignored) +
+                         " time(s) during the scan: ignored");
+        log_.info("idle: waiting for the button");
+    }
+}
+
+} // namespace fpp::scanner

@@ -1,0 +1,406 @@
+// The scanner firmware end to end on the virtual scanner: the scan loop over
+// the sim display, trigger line and camera, the table, the scan store, the
+// board file, faults, and the fpp-scanner binary.
+#include <gtest/gtest.h>
+
+#include "fpp/coefficient_table.hpp"
+#include "fpp/drivers/device_error.hpp"
+#include "fpp/error.hpp"
+#include "fpp/patterns.hpp"
+#include "fpp/point_cloud.hpp"
+#include "fpp/scanner/board_config.hpp"
+#include "fpp/scanner/scan_store.hpp"
+#include "fpp/scanner/scanner.hpp"
+#include "fpp/scanner/sim_board.hpp"
+#include "fpp/sim/sim_clock.hpp"
+#include "test_support.hpp"
+
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <mutex>
+#include <thread>
+
+namespace fs = std::filesystem;
+using namespace fpp;
+using namespace fpp::scanner;
+using drivers::LedState;
+
+namespace {
+
+// A rational-model table computed from the rig's true geometry (camera ray
+// depth against the projector column, with the projector's unmodelled
+// distortion): the scan is then judged independently of calibration error.
+CoefficientTable truth_table(const sim::Rig& rig) {
+    TableInfo info;
+    info.camera = rig.camera_size;
+    info.projector = rig.projector_size;
+    info.model = TableModel::rational;
+    info.phase_axis = Axis::x;
+    CoefficientTable table(info);
+    constexpr int kSamples = 24;
+    for (int y = 0; y < info.camera.height; ++y) {
+        for (int x = 0; x < info.camera.width; ++x) {
+            Vec2 n;
+            if (!rig.camera.pixel_to_normalised({double(x), double(y)}, n)) continue;
+            std::array<double, kSamples> z{}, p{};
+            double pmin = 1e300, pmax = -1e300;
+            for (int k = 0; k < kSamples; ++k) {
+                z[k] = 350.0 + 300.0 * k / (kSamples - 1);
+                const Vec3 pc = mul(rig.R, Vec3{n[0] * z[k], n[1] * z[k], z[k]});
+                const Vec2 uv = rig.projector.project({pc[0] + rig.t[0], pc[1] + rig.t[1], pc[2] + rig.t[2]});
+                p[k] = uv[0];
+                pmin = std::min(pmin, p[k]);
+                pmax = std::max(pmax, p[k]);
+            }
+            const double centre = 0.5 * (pmin + pmax), inv_half = 2.0 / (pmax - pmin);
+            // Z = a0 + a1 t + a2 t^2 + a3 t^3 - d t Z, least squares (5 x 5 normal equations).
+            double m[5][6] = {};
+            for (int k = 0; k < kSamples; ++k) {
+                const double t = (p[k] - centre) * inv_half;
+                const double row[5] = {1, t, t * t, t * t * t, -t * z[k]};
+                for (int i = 0; i < 5; ++i) {
+                    for (int j = 0; j < 5; ++j) m[i][j] += row[i] * row[j];
+                    m[i][5] += row[i] * z[k];
+                }
+            }
+            for (int c = 0; c < 5; ++c) {
+                int best = c;
+                for (int r = c + 1; r < 5; ++r)
+                    if (std::abs(m[r][c]) > std::abs(m[best][c])) best = r;
+                std::swap(m[c], m[best]);
+                for (int r = 0; r < 5; ++r) {
+                    if (r == c) continue;
+                    const double f = m[r][c] / m[c][c];
+                    for (int j = c; j < 6; ++j) m[r][j] -= f * m[c][j];
+                }
+            }
+            table.set(table_plane::centre, x, y, float(centre));
+            table.set(table_plane::inv_half_range, x, y, float(inv_half));
+            for (int i = 0; i < 4; ++i)
+                table.set(table_plane::rational_z + i, x, y, float(m[i][5] / m[i][i]));
+            table.set(table_plane::rational_d, x, y, float(m[4][5] / m[4][4]));
+            table.set(table_plane::rational_xn, x, y, float(n[0]));
+            table.set(table_plane::rational_yn, x, y, float(n[1]));
+        }
+    }
+    return table;
+}
+
+std::string board_yaml(const fs::path& store, const std::string& table_line,
+                       const std::string& extra_sim = "") {
+    const fs::path rig = fpp::test::source_dir() / "board/sim/paper-rig-effects.yaml";
+    return "format: fpp-scanner-board/1\n"
+           "name: test-sim\n"
+           "display: {card: auto, connector: auto, mode: auto}\n"
+           "gpio: {chip: gpiochip0, trigger_line: 17, button_line: 27, led_line: 22,\n"
+           "       trigger_active_low: false, button_active_low: true, led_active_low: false,\n"
+           "       debounce_ms: 30}\n"
+           "camera: {driver: sim, device: \"\", pixel_format: Mono8, exposure_us: 8000,\n"
+           "         trigger: line, trigger_source: Line0, packet_size: 0, buffer_count: 4,\n"
+           "         frame_timeout_ms: 200}\n"
+           "sequence: gray-x\n" +
+           table_line +
+           "store: {directory: " + store.string() + ", max_mb: 64}\n"
+           "timing: {settle_us: 2000, trigger_pulse_us: 100, flip_timeout_ms: 100}\n"
+           "sim: {rig: " + rig.string() + ", scene: composite, binning: 4,\n"
+           "      flip_latency_us: 16667, clock: virtual, seed: 3" + extra_sim + "}\n";
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+    std::ofstream(path) << text;
+}
+
+// A sim board in a temporary folder, its table made from the rig's truth.
+struct Fixture {
+    fpp::test::TempDir dir;
+    fs::path board_file = dir / "board.yaml";
+    fs::path store = dir / "scans";
+    fs::path table_file = dir / "table.fpt";
+    BoardConfig board;
+    std::vector<std::string> lines;
+    std::mutex lines_mutex;
+    Logger log{[this](LogLevel level, const std::string& m) {
+        std::lock_guard lock(lines_mutex);
+        lines.push_back(std::to_string(int(level)) + " " + m);
+    }};
+
+    explicit Fixture(bool with_table = true) {
+        write_text(board_file, board_yaml(store, with_table ? "table: table.fpt\n" : ""));
+        board = read_board_config(board_file);
+    }
+    void make_table(const sim::Rig& rig) { write_table(table_file, truth_table(rig)); }
+    bool logged(const std::string& part) {
+        std::lock_guard lock(lines_mutex);
+        for (const auto& l : lines)
+            if (l.find(part) != std::string::npos) return true;
+        return false;
+    }
+};
+
+double rms_against_truth(const fs::path& ply, const Image<float>& truth, std::size_t& compared) {
+    const PlyPoints pts = read_ply(ply);
+    double sum = 0;
+    compared = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        const int px = int(pts.pixel[i] % std::uint32_t(truth.width()));
+        const int py = int(pts.pixel[i] / std::uint32_t(truth.width()));
+        const float* t = &truth.at(px, py, 0);
+        if (!std::isfinite(t[2])) continue;
+        const double dx = pts.x[i] - t[0], dy = pts.y[i] - t[1], dz = pts.z[i] - t[2];
+        sum += dx * dx + dy * dy + dz * dz;
+        ++compared;
+    }
+    return std::sqrt(sum / double(compared));
+}
+
+} // namespace
+
+TEST(ScannerSim, ScanWritesCloudCloseToTruth) {
+    Fixture f;
+    SimBoard sim(f.board);
+    f.make_table(sim.rig());
+    Scanner scanner(f.board, sim.devices(), f.log);
+    const ScanOutcome out = scanner.scan(ScanMode::scan);
+
+    ASSERT_TRUE(fs::exists(out.folder / "cloud.ply"));
+    ASSERT_TRUE(fs::exists(out.folder / "scan.json"));
+    EXPECT_EQ(out.attempts, 1);
+    EXPECT_EQ(out.frames, scanner.frames_per_scan());
+    // The composite scene fills most of the 400 x 300 binned image.
+    EXPECT_GT(out.points, 60000u);
+    std::size_t compared = 0;
+    const double rms = rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
+    std::printf("scan: %zu points, RMS %.4f mm against truth over %zu; streaming %.3f ms/frame, "
+                "last frame to disk %.1f ms\n",
+                out.points, rms, compared, out.timings.push_mean_ms,
+                out.timings.last_frame_to_written_ms);
+    EXPECT_GT(compared, out.points * 9 / 10);
+    EXPECT_LT(rms, 0.1);
+
+    // Every frame shows the pattern it was triggered for, over the whole exposure.
+    const auto& exposures = sim.camera().exposures();
+    ASSERT_EQ(exposures.size(), std::size_t(out.frames));
+    for (std::size_t i = 0; i < exposures.size(); ++i) {
+        EXPECT_EQ(exposures[i].pattern, int(i));
+        EXPECT_EQ(exposures[i].pattern_at_end, int(i));
+    }
+    EXPECT_EQ(sim.led().state(), LedState::ready);
+    const auto history = sim.led().history();
+    EXPECT_NE(std::find(history.begin(), history.end(), LedState::scanning), history.end());
+    EXPECT_FALSE(sim.camera().streaming());
+}
+
+TEST(ScannerSim, TriggerBeforeFlipCompletesCapturesWrongPattern) {
+    Fixture f(false);
+    SimBoard sim(f.board);
+    const auto patterns = render_sequence(f.board.sequence(sim.display().size()), sim.display().size());
+    sim.display().prepare(patterns);
+    sim.camera().start();
+    sim.display().show(0);
+    sim.display().wait_flip(std::chrono::milliseconds(100));
+    sim.trigger().pulse(std::chrono::microseconds(100));
+    sim.camera().next_frame(std::chrono::milliseconds(100));
+    // Pattern 1 queued but not yet on screen: the exposure sees pattern 0.
+    sim.display().show(1);
+    sim.trigger().pulse(std::chrono::microseconds(100));
+    const drivers::CapturedFrame early = sim.camera().next_frame(std::chrono::milliseconds(100));
+    ASSERT_EQ(sim.camera().exposures().size(), 2u);
+    EXPECT_EQ(sim.camera().exposures()[1].pattern, 0) << "a trigger before the flip saw pattern 1";
+    // A second flip while one is pending is refused.
+    EXPECT_THROW(sim.display().show(2), drivers::DeviceError);
+    const drivers::FlipEvent flip = sim.display().wait_flip(std::chrono::milliseconds(100));
+    EXPECT_EQ(flip.index, 1u);
+    EXPECT_LT(early.timestamp_ns, flip.timestamp_ns);
+}
+
+TEST(ScannerSim, EarlyFlipEventsAreCaughtAsPatternMismatch) {
+    // A display whose events arrive 5 ms before the pattern is on screen, with
+    // 2 ms of settle: frames show the previous pattern.
+    Fixture f;
+    SimBoard sim(f.board);
+    f.make_table(sim.rig());
+    sim.display().set_event_lead(std::chrono::milliseconds(5));
+    Scanner scanner(f.board, sim.devices(), f.log);
+    scanner.scan(ScanMode::scan);
+    int mismatched = 0;
+    const auto& exposures = sim.camera().exposures();
+    for (std::size_t i = 0; i < exposures.size(); ++i) mismatched += exposures[i].pattern != int(i);
+    EXPECT_EQ(mismatched, int(exposures.size()));
+}
+
+TEST(ScannerSim, CaptureModeWritesCaptureSetWithoutTable) {
+    Fixture f(false);
+    SimBoard sim(f.board);
+    Scanner scanner(f.board, sim.devices(), f.log);
+    EXPECT_THROW(scanner.scan(ScanMode::scan), InputError); // no table
+    EXPECT_TRUE(list_scans(f.store).empty());
+    const ScanOutcome out = scanner.scan(ScanMode::capture);
+    const CaptureSet set = read_capture_set(out.folder / "capture");
+    EXPECT_EQ(int(set.frames.size()), scanner.frames_per_scan());
+    EXPECT_EQ(set.manifest.camera, sim.rig().camera_size);
+    EXPECT_FALSE(fs::exists(out.folder / "cloud.ply"));
+}
+
+TEST(ScannerSim, CameraGoneMidScanFailsWithoutOutput) {
+    Fixture f;
+    SimBoard sim(f.board);
+    f.make_table(sim.rig());
+    Scanner scanner(f.board, sim.devices(), f.log);
+    sim.camera().inject_fault(sim::CameraFault::gone, 5);
+    EXPECT_THROW(scanner.scan(ScanMode::scan), drivers::DeviceError);
+    EXPECT_EQ(sim.led().state(), LedState::error);
+    EXPECT_TRUE(f.logged("scan failed: sim camera: camera gone"));
+    EXPECT_TRUE(list_scans(f.store).empty());
+    EXPECT_TRUE(fs::is_empty(f.store)); // no temporary leftovers either
+}
+
+TEST(ScannerSim, FrameTimeoutAndDroppedFrameAreRetriedOnce) {
+    for (auto fault : {sim::CameraFault::timeout, sim::CameraFault::dropped,
+                       sim::CameraFault::incomplete}) {
+        Fixture f;
+        SimBoard sim(f.board);
+        f.make_table(sim.rig());
+        Scanner scanner(f.board, sim.devices(), f.log);
+        sim.camera().inject_fault(fault, 7);
+        const ScanOutcome out = scanner.scan(ScanMode::scan);
+        EXPECT_EQ(out.attempts, 2);
+        EXPECT_TRUE(f.logged("retrying once"));
+        EXPECT_EQ(list_scans(f.store).size(), 1u);
+        EXPECT_EQ(sim.led().state(), LedState::ready);
+    }
+    {
+        Fixture f;
+        SimBoard sim(f.board);
+        f.make_table(sim.rig());
+        Scanner scanner(f.board, sim.devices(), f.log);
+        sim.camera().inject_fault(sim::CameraFault::dropped, 3);
+        const ScanOutcome out = scanner.scan(ScanMode::scan);
+        EXPECT_TRUE(f.logged("a frame was dropped"));
+        EXPECT_EQ(out.attempts, 2);
+    }
+}
+
+TEST(ScannerSim, FlipFailureAndStopRequestLeaveNothing) {
+    Fixture f;
+    SimBoard sim(f.board);
+    f.make_table(sim.rig());
+    Scanner scanner(f.board, sim.devices(), f.log);
+    sim.display().fail_next_flip();
+    EXPECT_THROW(scanner.scan(ScanMode::scan), drivers::DeviceError);
+    EXPECT_EQ(sim.led().state(), LedState::error);
+    EXPECT_TRUE(f.logged("page flip failed"));
+
+    std::atomic<bool> stop{false};
+    sim.display().on_flip([&](const drivers::FlipEvent& e) {
+        if (e.index == 4) stop = true;
+    });
+    EXPECT_THROW(scanner.scan(ScanMode::scan, &stop), ScanAborted);
+    EXPECT_TRUE(list_scans(f.store).empty());
+    EXPECT_FALSE(sim.camera().streaming());
+}
+
+TEST(ScannerSim, BadTablesAreRejectedNamingTheFile) {
+    Fixture f;
+    SimBoard sim(f.board);
+    // Missing.
+    try {
+        Scanner scanner(f.board, sim.devices(), f.log);
+        FAIL() << "missing table accepted";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("table.fpt"), std::string::npos) << e.what();
+    }
+    // Corrupt: a valid table with one byte flipped in a tile.
+    f.make_table(sim.rig());
+    {
+        std::fstream io(f.table_file, std::ios::in | std::ios::out | std::ios::binary);
+        io.seekp(std::streamoff(fs::file_size(f.table_file) / 2));
+        io.put('\x5a');
+    }
+    EXPECT_THROW(Scanner(f.board, sim.devices(), f.log), InputError);
+    // For another camera resolution.
+    write_table(f.table_file, truth_table(sim.rig().binned_camera(2)));
+    EXPECT_THROW(Scanner(f.board, sim.devices(), f.log), InputError);
+}
+
+TEST(ScannerSim, ButtonDuringScanIsIgnoredAndLogged) {
+    Fixture f;
+    SimBoard sim(f.board);
+    f.make_table(sim.rig());
+    Scanner scanner(f.board, sim.devices(), f.log);
+    sim.display().on_flip([&](const drivers::FlipEvent& e) {
+        if (e.index == 3) sim.button().press(2); // one press, two bounces
+    });
+    std::atomic<bool> stop{false};
+    sim.button().press();
+    std::thread loop([&] { scanner.run(ScanMode::scan, stop); });
+    for (int i = 0; i < 600 && !f.logged("during the scan: ignored"); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    stop = true;
+    loop.join();
+    EXPECT_TRUE(f.logged("button pressed 1 time(s) during the scan: ignored"));
+    EXPECT_EQ(scanner.scans_completed(), 1);
+    EXPECT_EQ(list_scans(f.store).size(), 1u);
+}
+
+TEST(ScannerSim, StorePrunedToItsLimit) {
+    fpp::test::TempDir dir;
+    for (const char* name : {"scan-20200101-000000-000", "scan-20200102-000000-000", "scan-20200103-000000-000"}) {
+        fs::create_directories(dir / name);
+        write_text(dir / name / "cloud.ply", std::string(1000, 'x'));
+    }
+    const auto removed = prune_store(dir.path(), 2000, dir / "scan-20200101-000000-000");
+    ASSERT_EQ(removed.size(), 1u);
+    EXPECT_EQ(removed[0].filename(), "scan-20200102-000000-000");
+}
+
+TEST(ScannerBoardConfig, RejectsBadFieldsNamingThem) {
+    fpp::test::TempDir dir;
+    const std::string good = board_yaml(dir / "scans", "table: t.fpt\n");
+    EXPECT_NO_THROW(parse_board_config(good, dir / "b.yaml"));
+    auto expect_field = [&](const std::string& from, const std::string& to, const std::string& field) {
+        std::string text = good;
+        const auto at = text.find(from);
+        ASSERT_NE(at, std::string::npos) << from;
+        text.replace(at, from.size(), to);
+        try {
+            parse_board_config(text, dir / "b.yaml");
+            ADD_FAILURE() << "accepted " << to;
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.field(), field) << e.what();
+            EXPECT_EQ(e.file(), dir / "b.yaml");
+        }
+    };
+    expect_field("trigger_line: 17", "trigger_line: -1", "gpio.trigger_line");
+    expect_field("button_line: 27", "button_line: 17", "gpio");
+    expect_field("driver: sim", "driver: v4l2", "camera.driver");
+    expect_field("pixel_format: Mono8", "pixel_format: RGB8", "camera.pixel_format");
+    expect_field("sequence: gray-x", "sequence: nope", "sequence");
+    expect_field("mode: auto", "mode: big", "display.mode");
+    expect_field("settle_us: 2000", "settle_us: \"2000\"", "timing.settle_us");
+    expect_field("clock: virtual", "clock: wall", "sim.clock");
+    expect_field("max_mb: 64", "max_mb: 64, extra: 1", "store.extra");
+}
+
+#ifdef FPP_SCANNER_EXE
+TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
+    Fixture f;
+    {
+        SimBoard sim(f.board);
+        f.make_table(sim.rig());
+    }
+    fpp::test::TempDir scratch;
+    const auto ok = fpp::test::run_tool(FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once", scratch.path());
+    ASSERT_EQ(ok.exit_code, 0) << ok.output;
+    const auto scans = list_scans(f.store);
+    ASSERT_EQ(scans.size(), 1u);
+    EXPECT_NE(ok.output.find(scans[0].string()), std::string::npos) << ok.output;
+    EXPECT_TRUE(fs::exists(scans[0] / "cloud.ply"));
+
+    fs::remove(f.table_file);
+    const auto bad = fpp::test::run_tool(FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once", scratch.path());
+    EXPECT_EQ(bad.exit_code, 1) << bad.output;
+    EXPECT_NE(bad.output.find("error: " + f.table_file.string()), std::string::npos) << bad.output;
+    EXPECT_EQ(list_scans(f.store).size(), 1u);
+}
+#endif
