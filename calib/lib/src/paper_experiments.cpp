@@ -352,7 +352,7 @@ class Run {
     }
 
   private:
-    // ---- helpers
+    // ---- small utilities
     void say(const std::string& line) const {
         if (options_.progress)
             options_.progress(line);
@@ -998,8 +998,8 @@ class Run {
                                     (plane ? "<= 0.5 x SV's" : "<= SV's") + " (" + noise_text +
                                     ")";
                     t.met = hy <= bound;
-                    t.detail = fixed_text(hy, 4) + " mm vs " + (plane ? "0.5 x " : "") +
-                               fixed_text(sv, 4) + " mm";
+                    t.detail = fixed_text(hy, 5) + " mm vs " + (plane ? "0.5 x " : "") +
+                               fixed_text(sv, 5) + " mm";
                     targets_.push_back(t);
                 }
             }
@@ -1100,7 +1100,7 @@ class Run {
         const ScanSummary* relief = scan("relief");
         row({"relief points", "-", std::to_string(static_cast<long>(kPaperReliefPoints)),
              relief ? std::to_string(relief->points[0]) : "-", "-", "-"});
-        md << "\nThe paper's times are of its own implementation (MATLAB-era PC); ours are of "
+        md << "\nThe paper's times are of its own implementation on its authors' PC; ours are of "
               "this build on this machine. The SV figure above uses our Newton solver; the "
               "paper's plane iteration took "
            << seconds_text(relief_.seconds_sv_plane_iteration) << ".\n\n";
