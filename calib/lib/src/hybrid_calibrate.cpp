@@ -37,34 +37,27 @@ std::string size_text(Size s) {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-// Least-squares plane of the points flagged in `use` (orthogonal distances):
-// the centroid and the covariance's eigenvector of least eigenvalue.
-bool least_squares_plane(const Image<float>& xyz, const std::vector<char>& use, BoardPlane& plane) {
-    const std::size_t n = xyz.pixel_count();
-    const float* p = xyz.data();
+// Least-squares plane of the listed points (orthogonal distances): the
+// centroid and the covariance's eigenvector of least eigenvalue.
+bool least_squares_plane(const float* p, const std::vector<std::size_t>& points,
+                         BoardPlane& plane) {
+    if (points.size() < 3)
+        return false;
     // Shifted by the first point for conditioning (coordinates ~500 mm).
-    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-    bool have_origin = false;
+    const std::size_t first = points.front();
+    const Eigen::Vector3d origin{double(p[3 * first]), double(p[3 * first + 1]),
+                                 double(p[3 * first + 2])};
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
-    std::size_t count = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (!use[i])
-            continue;
-        const Eigen::Vector3d q(double(p[3 * i]), double(p[3 * i + 1]), double(p[3 * i + 2]));
-        if (!have_origin) {
-            origin = q;
-            have_origin = true;
-        }
-        const Eigen::Vector3d r = q - origin;
+    for (const std::size_t i : points) {
+        const Eigen::Vector3d r =
+            Eigen::Vector3d{double(p[3 * i]), double(p[3 * i + 1]), double(p[3 * i + 2])} - origin;
         sum += r;
         outer += r * r.transpose();
-        ++count;
     }
-    if (count < 3)
-        return false;
-    const Eigen::Vector3d mean = sum / double(count);
-    const Eigen::Matrix3d cov = outer / double(count) - mean * mean.transpose();
+    const auto count = double(points.size());
+    const Eigen::Vector3d mean = sum / count;
+    const Eigen::Matrix3d cov = outer / count - mean * mean.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     if (eig.info() != Eigen::Success)
         return false;
@@ -234,82 +227,78 @@ bool fit_board_plane(Image<float>& xyz, const HybridOptions& options, BoardPlane
                      PlaneFitStats& stats, bool drop_outliers) {
     const std::size_t n = xyz.pixel_count();
     float* p = xyz.data();
-    std::vector<char> use(n, 0);
-    std::size_t points = 0;
+    std::vector<std::size_t> valid;
+    valid.reserve(n);
     for (std::size_t i = 0; i < n; ++i)
-        if (std::isfinite(p[3 * i]) && std::isfinite(p[3 * i + 1]) && std::isfinite(p[3 * i + 2])) {
-            use[i] = 1;
-            ++points;
-        }
-    const std::vector<char> valid = use;
+        if (std::isfinite(p[3 * i]) && std::isfinite(p[3 * i + 1]) && std::isfinite(p[3 * i + 2]))
+            valid.push_back(i);
+    // The robust search runs on a spread-out sample of at most ~100k points
+    // (as good as all of them for a plane and its thresholds, and 20 times
+    // cheaper at full size); every point is then classified once.
+    const std::size_t stride = std::max<std::size_t>(1, valid.size() / 100000);
+    std::vector<std::size_t> sample;
+    for (std::size_t k = 0; k < valid.size(); k += stride)
+        sample.push_back(valid[k]);
     BoardPlane fitted;
-    if (!least_squares_plane(xyz, use, fitted))
+    if (!least_squares_plane(p, sample, fitted))
         return false;
-    std::vector<float> abs_dist;
-    abs_dist.reserve(std::min<std::size_t>(points, 200000));
-    // Quantiles of |distance| from a spread-out sample of at most ~100k
-    // points: as good as all of them for a threshold, and much cheaper.
-    const std::size_t stride = std::max<std::size_t>(1, points / 100000);
-    auto distances = [&] {
-        abs_dist.clear();
-        std::size_t k = 0;
-        for (std::size_t i = 0; i < n; ++i)
-            if (valid[i] && k++ % stride == 0)
-                abs_dist.push_back(static_cast<float>(std::fabs(signed_distance(fitted, p + 3 * i))));
+    std::vector<float> abs_dist(sample.size());
+    std::vector<std::size_t> kept, previous;
+    // Keeps the sample points within `limit` of the plane (all of them when
+    // `limit` is negative: the median is taken first) and refits.
+    auto refit = [&](double sigmas, double floor_mm) {
+        for (std::size_t k = 0; k < sample.size(); ++k)
+            abs_dist[k] = static_cast<float>(std::fabs(signed_distance(fitted, p + 3 * sample[k])));
+        const double median = double(percentile(abs_dist, 0.5));
+        const double limit = sigmas > 0 ? std::max(sigmas * 1.4826 * median, floor_mm) : median;
+        previous.swap(kept);
+        kept.clear();
+        for (std::size_t k = 0; k < sample.size(); ++k)
+            if (double(abs_dist[k]) <= limit)
+                kept.push_back(sample[k]);
+        return least_squares_plane(p, kept, fitted);
     };
     // Least trimmed squares first (concentration steps on the better half):
     // a plain least-squares start lies between the board and whatever stands
     // on it (a box covering a quarter of the image), and a threshold from
     // its residuals would keep both.
     for (int round = 0; round < 10; ++round) {
-        distances();
-        const float half = percentile(abs_dist, 0.5);
-        bool changed = false;
-        for (std::size_t i = 0; i < n; ++i) {
-            if (!valid[i])
-                continue;
-            const char in = std::fabs(signed_distance(fitted, p + 3 * i)) <= double(half) ? 1 : 0;
-            changed |= in != use[i];
-            use[i] = in;
-        }
-        if (!least_squares_plane(xyz, use, fitted))
+        if (!refit(0, 0))
             return false;
-        if (!changed)
+        if (kept == previous)
             break;
     }
     // Then every point within max(k sigma, floor) of the plane, refitted until
     // the inlier set settles.
     for (int round = 0; round < 8; ++round) {
-        distances();
-        const double sigma = 1.4826 * double(percentile(abs_dist, 0.5));
-        const double limit = std::max(options.outlier_sigmas * sigma, options.outlier_floor_mm);
-        bool changed = false;
-        for (std::size_t i = 0; i < n; ++i) {
-            if (!valid[i])
-                continue;
-            const char in = std::fabs(signed_distance(fitted, p + 3 * i)) <= limit ? 1 : 0;
-            changed |= in != use[i];
-            use[i] = in;
-        }
-        if (!changed)
-            break;
-        if (!least_squares_plane(xyz, use, fitted))
+        if (!refit(options.outlier_sigmas, options.outlier_floor_mm))
             return false;
+        if (kept == previous)
+            break;
     }
+    // All points: the same threshold, one least-squares fit of the inliers.
+    for (std::size_t k = 0; k < sample.size(); ++k)
+        abs_dist[k] = static_cast<float>(std::fabs(signed_distance(fitted, p + 3 * sample[k])));
+    const double limit = std::max(options.outlier_sigmas * 1.4826 * double(percentile(abs_dist, 0.5)),
+                                  options.outlier_floor_mm);
+    kept.clear();
+    for (const std::size_t i : valid)
+        if (std::fabs(signed_distance(fitted, p + 3 * i)) <= limit)
+            kept.push_back(i);
+    if (!least_squares_plane(p, kept, fitted))
+        return false;
     stats = {};
-    stats.points = points;
+    stats.points = valid.size();
     double sum2 = 0;
     std::size_t inliers = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (!valid[i])
-            continue;
-        if (!use[i]) {
+    for (const std::size_t i : valid) {
+        const double dist = signed_distance(fitted, p + 3 * i);
+        if (std::fabs(dist) > limit) {
             ++stats.outliers;
             if (drop_outliers)
                 p[3 * i] = p[3 * i + 1] = p[3 * i + 2] = kNaN;
             continue;
         }
-        const double dist = signed_distance(fitted, p + 3 * i);
         sum2 += dist * dist;
         stats.max_mm = std::max(stats.max_mm, std::fabs(dist));
         ++inliers;
