@@ -81,6 +81,9 @@ int main(int argc, char** argv) {
         BoardConfig board = read_board_config(board_path);
         if (!store.empty()) board.store.directory = store;
         if (!table.empty()) board.table = table;
+        // Capture mode records calibration sessions, made before any table
+        // exists: it neither needs nor loads one.
+        if (mode == ScanMode::capture) board.table.reset();
         if (board.camera.driver != CameraDriver::sim) {
             log.error("board " + board.name +
                       ": camera.driver aravis needs the hardware drivers, not built into this "
