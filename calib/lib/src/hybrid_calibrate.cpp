@@ -128,10 +128,12 @@ void smooth_phase(Image<float>& phase, int r, ThreadPool& pool) {
     });
 }
 
-// Solves the symmetric positive definite system a x = b (n <= 5) by LDL^T
-// in place. Returns false when a pivot is below 1/max_condition of the
-// largest (samples bunched at one phase).
-bool solve_normal_equations(int n, double a[5][5], double b[5], double max_condition) {
+// Solves the symmetric positive definite system a x = b_j (n <= 5) for
+// `count` right-hand sides by one LDL^T factorisation, in place. Returns
+// false when a pivot is below 1/max_condition of the largest (samples
+// bunched at one phase).
+bool solve_normal_equations(int n, double a[5][5], int count, double b[3][5],
+                            double max_condition) {
     double dmax = 0;
     for (int j = 0; j < n; ++j) {
         double d = a[j][j];
@@ -148,29 +150,38 @@ bool solve_normal_equations(int n, double a[5][5], double b[5], double max_condi
             a[i][j] = v / d;
         }
     }
-    for (int i = 0; i < n; ++i)
-        for (int k = 0; k < i; ++k)
-            b[i] -= a[i][k] * b[k];
-    for (int i = 0; i < n; ++i)
-        b[i] /= a[i][i];
-    for (int i = n - 1; i >= 0; --i)
-        for (int k = i + 1; k < n; ++k)
-            b[i] -= a[k][i] * b[k];
+    for (int c = 0; c < count; ++c) {
+        double* x = b[c];
+        for (int i = 0; i < n; ++i)
+            for (int k = 0; k < i; ++k)
+                x[i] -= a[i][k] * x[k];
+        for (int i = 0; i < n; ++i)
+            x[i] /= a[i][i];
+        for (int i = n - 1; i >= 0; --i)
+            for (int k = i + 1; k < n; ++k)
+                x[i] -= a[k][i] * x[k];
+    }
     return true;
 }
 
-// Least squares of value = sum_j c_j basis_j over samples; basis rows given by
-// `row(k, out)`, weights w_k. n unknowns (n <= 5).
+// Least squares of value_c[k] = sum_i coeffs[c][i] basis_i(k) over the
+// samples k, for `count` (<= 3) value arrays sharing one design: basis rows
+// from `row(k, out)`, weights w_k (null: 1). n unknowns (n <= 5).
 template <class Row>
-bool least_squares(int n, std::size_t samples, const Row& row, const double* value,
-                   const double* weight, double max_condition, double c[5]) {
-    double a[5][5] = {}, b[5] = {};
+bool least_squares(int n, std::size_t samples, const Row& row, int count,
+                   const double* const* value, const double* weight, double max_condition,
+                   double coeffs[3][5]) {
+    double a[5][5] = {};
     double r[5];
+    for (int c = 0; c < count; ++c)
+        for (int i = 0; i < n; ++i)
+            coeffs[c][i] = 0;
     for (std::size_t k = 0; k < samples; ++k) {
         row(k, r);
         const double w = weight ? weight[k] : 1.0;
         for (int i = 0; i < n; ++i) {
-            b[i] += w * r[i] * value[k];
+            for (int c = 0; c < count; ++c)
+                coeffs[c][i] += w * r[i] * value[c][k];
             for (int j = 0; j <= i; ++j)
                 a[i][j] += w * r[i] * r[j];
         }
@@ -178,11 +189,7 @@ bool least_squares(int n, std::size_t samples, const Row& row, const double* val
     for (int i = 0; i < n; ++i)
         for (int j = i + 1; j < n; ++j)
             a[i][j] = a[j][i];
-    if (!solve_normal_equations(n, a, b, max_condition))
-        return false;
-    for (int i = 0; i < n; ++i)
-        c[i] = b[i];
-    return true;
+    return solve_normal_equations(n, a, count, coeffs, max_condition);
 }
 
 double cubic(const double c[4], double t) {
@@ -279,8 +286,9 @@ bool fit_board_plane(Image<float>& xyz, const HybridOptions& options, BoardPlane
     // All points: the same threshold, one least-squares fit of the inliers.
     for (std::size_t k = 0; k < sample.size(); ++k)
         abs_dist[k] = static_cast<float>(std::fabs(signed_distance(fitted, p + 3 * sample[k])));
-    const double limit = std::max(options.outlier_sigmas * 1.4826 * double(percentile(abs_dist, 0.5)),
-                                  options.outlier_floor_mm);
+    const double limit =
+        std::max(options.outlier_sigmas * 1.4826 * double(percentile(abs_dist, 0.5)),
+                 options.outlier_floor_mm);
     kept.clear();
     for (const std::size_t i : valid)
         if (std::fabs(signed_distance(fitted, p + 3 * i)) <= limit)
@@ -327,10 +335,9 @@ std::string HybridResult::summary() const {
             s << "rejected: " << p.skip_reason << "\n";
     }
     const std::size_t total = pose_count.pixel_count();
-    s << "pixels modelled: " << pixels_modelled << " of " << total << " ("
-      << std::setprecision(2) << (total ? 100.0 * double(pixels_modelled) / double(total) : 0.0)
-      << " %); too few poses " << pixels_too_few_poses << ", ill-conditioned "
-      << pixels_ill_conditioned << "\n";
+    s << "pixels modelled: " << pixels_modelled << " of " << total << " (" << std::setprecision(2)
+      << (total ? 100.0 * double(pixels_modelled) / double(total) : 0.0) << " %); too few poses "
+      << pixels_too_few_poses << ", ill-conditioned " << pixels_ill_conditioned << "\n";
     s.precision(4);
     auto line = [&](const char* name, const Image<float>& rms) {
         std::vector<float> v;
@@ -351,7 +358,18 @@ std::string HybridResult::summary() const {
 
 HybridResult calibrate_hybrid(const fs::path& session, const StereoCalibration& calibration,
                               std::uint64_t calibration_hash, const HybridOptions& options) {
+    return std::move(
+        calibrate_hybrid(session, calibration, calibration_hash, options, {options.model}).front());
+}
+
+std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
+                                           const StereoCalibration& calibration,
+                                           std::uint64_t calibration_hash,
+                                           const HybridOptions& options,
+                                           const std::vector<TableModel>& models) {
     options.validate();
+    if (models.empty())
+        throw std::invalid_argument("hybrid calibration: no table model asked for");
     const auto t_start = std::chrono::steady_clock::now();
     const auto say = [&](const std::string& s) {
         if (options.progress)
@@ -373,12 +391,11 @@ HybridResult calibrate_hybrid(const fs::path& session, const StereoCalibration& 
     const SvReconstructor sv(calib, options.sv);
     const Size camera = folder.camera_size;
 
-    HybridResult result;
+    HybridResult common; // the poses, shared by every model's result
     std::vector<PoseSamples> samples;
     // Reading the next pose's PNG frames overlaps decoding and SV of this one.
     auto read_pose = [](const fs::path& f) { return read_capture_set(f); };
-    std::future<CaptureSet> next =
-        std::async(std::launch::async, read_pose, folder.poses.front());
+    std::future<CaptureSet> next = std::async(std::launch::async, read_pose, folder.poses.front());
     PointCloud cloud;
     for (std::size_t k = 0; k < folder.poses.size(); ++k) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -425,11 +442,12 @@ HybridResult calibrate_hybrid(const fs::path& session, const StereoCalibration& 
             pose.plane_rms_mm = stats.rms_mm;
             pose.plane_max_mm = stats.max_mm;
             pose.distance_mm = plane.d / plane.normal[2];
-            pose.tilt_deg = std::acos(std::clamp(plane.normal[2], -1.0, 1.0)) * 180.0 /
-                            std::numbers::pi;
+            pose.tilt_deg =
+                std::acos(std::clamp(plane.normal[2], -1.0, 1.0)) * 180.0 / std::numbers::pi;
             PoseSamples s;
             s.phase = std::move(decoded.proj_x);
-            smooth_phase(s.phase, options.phase_smoothing_radius, ThreadPool::shared(options.threads));
+            smooth_phase(s.phase, options.phase_smoothing_radius,
+                         ThreadPool::shared(options.threads));
             s.depth = Image<float>(camera);
             const float* xyz = cloud.xyz.data();
             for (std::size_t i = 0; i < camera.area(); ++i)
@@ -438,187 +456,201 @@ HybridResult calibrate_hybrid(const fs::path& session, const StereoCalibration& 
             samples.push_back(std::move(s));
         }
         pose.seconds = since(t0);
-        result.poses.push_back(std::move(pose));
+        common.poses.push_back(std::move(pose));
     }
-    result.usable_poses = static_cast<int>(samples.size());
-    result.seconds_poses = since(t_start);
-    if (result.usable_poses < options.min_usable_poses)
+    common.usable_poses = static_cast<int>(samples.size());
+    common.seconds_poses = since(t_start);
+    if (common.usable_poses < options.min_usable_poses)
         throw InputError(session, "",
-                         std::to_string(result.usable_poses) + " usable plane poses of " +
-                             std::to_string(result.poses.size()) + "; at least " +
+                         std::to_string(common.usable_poses) + " usable plane poses of " +
+                             std::to_string(common.poses.size()) + "; at least " +
                              std::to_string(options.min_usable_poses) + " are needed");
 
-    say("fitting per-pixel cubics (" + std::to_string(result.usable_poses) + " poses)");
-    const auto t_fit = std::chrono::steady_clock::now();
-    TableInfo info;
-    info.camera = camera;
-    info.tile_width = options.tile_width;
-    info.tile_height = options.tile_height;
-    info.model = options.model;
-    info.phase_axis = Axis::x;
-    info.projector = folder.projector_size;
-    info.calibration_hash = calibration_hash;
-    info.created_unix_s = static_cast<std::int64_t>(
-        std::chrono::duration_cast<std::chrono::seconds>(
-            std::chrono::system_clock::now().time_since_epoch())
-            .count());
-    result.table = CoefficientTable(info);
-    result.rms_x = Image<float>(camera, 1, kNaN);
-    result.rms_y = Image<float>(camera, 1, kNaN);
-    result.rms_z = Image<float>(camera, 1, kNaN);
-    result.pose_count = Image<std::uint16_t>(camera);
+    // Every model is fitted from the same decoded, reconstructed poses.
+    std::vector<HybridResult> results;
+    for (const TableModel model : models) {
+        say(std::string("fitting the ") + to_string(model) + " model per pixel (" +
+            std::to_string(common.usable_poses) + " poses)");
+        const auto t_fit = std::chrono::steady_clock::now();
+        HybridResult result;
+        result.poses = common.poses;
+        result.usable_poses = common.usable_poses;
+        result.seconds_poses = common.seconds_poses;
+        TableInfo info;
+        info.camera = camera;
+        info.tile_width = options.tile_width;
+        info.tile_height = options.tile_height;
+        info.model = model;
+        info.phase_axis = Axis::x;
+        info.projector = folder.projector_size;
+        info.calibration_hash = calibration_hash;
+        info.created_unix_s =
+            static_cast<std::int64_t>(std::chrono::duration_cast<std::chrono::seconds>(
+                                          std::chrono::system_clock::now().time_since_epoch())
+                                          .count());
+        result.table = CoefficientTable(info);
+        result.rms_x = Image<float>(camera, 1, kNaN);
+        result.rms_y = Image<float>(camera, 1, kNaN);
+        result.rms_z = Image<float>(camera, 1, kNaN);
+        result.pose_count = Image<std::uint16_t>(camera);
 
-    const Image<float>& rays = sv.camera_rays();
-    const TableModel model = options.model;
-    const bool along_ray = model != TableModel::polynomial;
-    const std::size_t poses = samples.size();
-    ThreadPool& pool = ThreadPool::shared(options.threads);
-    const auto workers = static_cast<std::size_t>(pool.size());
-    std::vector<std::size_t> too_few(workers, 0), ill(workers, 0), modelled(workers, 0);
-    CoefficientTable& table = result.table;
-    pool.parallel_for(camera.height, 4, [&](int row_begin, int row_end, int worker) {
-        // Per pixel and pose: normalised phase t and corrected X, Y, Z
-        // (scratch allocated once per chunk of rows).
-        std::vector<double> phase(poses), t(poses), X(poses), Y(poses), Z(poses), w(poses);
-        const auto wk = static_cast<std::size_t>(worker);
-        const auto cubic_row = [&](std::size_t k, double* r) {
-            r[0] = 1;
-            r[1] = t[k];
-            r[2] = t[k] * t[k];
-            r[3] = r[2] * t[k];
-        };
-        const auto rational_row = [&](std::size_t k, double* r) {
-            cubic_row(k, r);
-            r[4] = -t[k] * Z[k];
-        };
-        for (int v = row_begin; v < row_end; ++v)
-            for (int u = 0; u < camera.width; ++u) {
-                const std::size_t i = std::size_t(v) * std::size_t(camera.width) + std::size_t(u);
-                const double xn = double(rays.data()[2 * i]), yn = double(rays.data()[2 * i + 1]);
-                std::size_t n = 0;
-                double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-                for (const PoseSamples& s : samples) {
-                    const double p = double(s.phase.data()[i]), z = double(s.depth.data()[i]);
-                    if (!std::isfinite(p) || !std::isfinite(z) || !std::isfinite(xn))
-                        continue;
-                    const Vec3& nrm = s.plane.normal;
-                    if (along_ray) {
-                        // The pixel's line of sight meets the plane.
-                        Z[n] = s.plane.d / (nrm[0] * xn + nrm[1] * yn + nrm[2]);
-                        X[n] = xn * Z[n];
-                        Y[n] = yn * Z[n];
-                    } else {
-                        // The paper's correction: foot of the perpendicular.
-                        const double x = xn * z, y = yn * z;
-                        const double dist = nrm[0] * x + nrm[1] * y + nrm[2] * z - s.plane.d;
-                        X[n] = x - dist * nrm[0];
-                        Y[n] = y - dist * nrm[1];
-                        Z[n] = z - dist * nrm[2];
-                    }
-                    phase[n] = p;
-                    lo = std::min(lo, p);
-                    hi = std::max(hi, p);
-                    ++n;
-                }
-                result.pose_count.data()[i] = static_cast<std::uint16_t>(n);
-                if (n < static_cast<std::size_t>(options.min_poses)) {
-                    ++too_few[wk];
-                    continue;
-                }
-                const double centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
-                if (!(half > 0)) {
-                    ++ill[wk];
-                    continue;
-                }
-                for (std::size_t k = 0; k < n; ++k)
-                    t[k] = (phase[k] - centre) / half;
-                double cx[5] = {}, cy[5] = {}, cz[5] = {};
-                bool ok = true;
-                if (model == TableModel::polynomial) {
-                    ok = least_squares(4, n, cubic_row, X.data(), nullptr, options.max_condition,
-                                       cx) &&
-                         least_squares(4, n, cubic_row, Y.data(), nullptr, options.max_condition,
-                                       cy) &&
-                         least_squares(4, n, cubic_row, Z.data(), nullptr, options.max_condition,
-                                       cz);
-                } else if (model == TableModel::ray) {
-                    ok = least_squares(4, n, cubic_row, Z.data(), nullptr, options.max_condition,
-                                       cz);
-                } else {
-                    // Z (1 + d t) = cubic(t) is linear in the unknowns; a second
-                    // solve weighted by 1 / (1 + d t)^2 turns its residuals
-                    // into depth residuals (Sanathanan-Koerner).
-                    ok = least_squares(5, n, rational_row, Z.data(), nullptr,
-                                       options.max_condition, cz);
-                    if (ok) {
-                        for (std::size_t k = 0; k < n; ++k) {
-                            const double den = 1 + cz[4] * t[k];
-                            w[k] = 1 / (den * den);
+        const Image<float>& rays = sv.camera_rays();
+        const bool along_ray = model != TableModel::polynomial;
+        const std::size_t poses = samples.size();
+        ThreadPool& pool = ThreadPool::shared(options.threads);
+        const auto workers = static_cast<std::size_t>(pool.size());
+        std::vector<std::size_t> too_few(workers, 0), ill(workers, 0), modelled(workers, 0);
+        CoefficientTable& table = result.table;
+        pool.parallel_for(camera.height, 4, [&](int row_begin, int row_end, int worker) {
+            // Per pixel and pose: normalised phase t and corrected X, Y, Z
+            // (scratch allocated once per chunk of rows).
+            std::vector<double> phase(poses), t(poses), X(poses), Y(poses), Z(poses), w(poses);
+            const auto wk = static_cast<std::size_t>(worker);
+            const auto cubic_row = [&](std::size_t k, double* r) {
+                r[0] = 1;
+                r[1] = t[k];
+                r[2] = t[k] * t[k];
+                r[3] = r[2] * t[k];
+            };
+            const auto rational_row = [&](std::size_t k, double* r) {
+                cubic_row(k, r);
+                r[4] = -t[k] * Z[k];
+            };
+            for (int v = row_begin; v < row_end; ++v)
+                for (int u = 0; u < camera.width; ++u) {
+                    const std::size_t i =
+                        std::size_t(v) * std::size_t(camera.width) + std::size_t(u);
+                    const double xn = double(rays.data()[2 * i]),
+                                 yn = double(rays.data()[2 * i + 1]);
+                    std::size_t n = 0;
+                    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+                    for (const PoseSamples& s : samples) {
+                        const double p = double(s.phase.data()[i]), z = double(s.depth.data()[i]);
+                        if (!std::isfinite(p) || !std::isfinite(z) || !std::isfinite(xn))
+                            continue;
+                        const Vec3& nrm = s.plane.normal;
+                        if (along_ray) {
+                            // The pixel's line of sight meets the plane.
+                            Z[n] = s.plane.d / (nrm[0] * xn + nrm[1] * yn + nrm[2]);
+                            X[n] = xn * Z[n];
+                            Y[n] = yn * Z[n];
+                        } else {
+                            // The paper's correction: foot of the perpendicular.
+                            const double x = xn * z, y = yn * z;
+                            const double dist = nrm[0] * x + nrm[1] * y + nrm[2] * z - s.plane.d;
+                            X[n] = x - dist * nrm[0];
+                            Y[n] = y - dist * nrm[1];
+                            Z[n] = z - dist * nrm[2];
                         }
-                        ok = least_squares(5, n, rational_row, Z.data(), w.data(),
-                                           options.max_condition, cz);
+                        phase[n] = p;
+                        lo = std::min(lo, p);
+                        hi = std::max(hi, p);
+                        ++n;
                     }
-                    // The pole must stay outside the calibrated range.
-                    ok = ok && std::fabs(cz[4]) < 0.9;
-                }
-                if (!ok) {
-                    ++ill[wk];
-                    continue;
-                }
-                const auto z_model = [&](double tk) {
-                    const double num = cubic(cz, tk);
-                    return model == TableModel::rational ? num / (1 + cz[4] * tk) : num;
-                };
-                double sum2[3] = {0, 0, 0};
-                for (std::size_t k = 0; k < n; ++k) {
-                    const double dz = z_model(t[k]) - Z[k];
-                    if (along_ray) {
-                        sum2[0] += dz * dz * xn * xn;
-                        sum2[1] += dz * dz * yn * yn;
+                    result.pose_count.data()[i] = static_cast<std::uint16_t>(n);
+                    if (n < static_cast<std::size_t>(options.min_poses)) {
+                        ++too_few[wk];
+                        continue;
+                    }
+                    const double centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+                    if (!(half > 0)) {
+                        ++ill[wk];
+                        continue;
+                    }
+                    for (std::size_t k = 0; k < n; ++k)
+                        t[k] = (phase[k] - centre) / half;
+                    // Coefficients of X, Y, Z (polynomial) or of Z alone (in cz).
+                    double coeffs[3][5] = {};
+                    double* cx = coeffs[0];
+                    double* cy = coeffs[1];
+                    double* cz = coeffs[model == TableModel::polynomial ? 2 : 0];
+                    bool ok = true;
+                    if (model == TableModel::polynomial) {
+                        const double* values[3] = {X.data(), Y.data(), Z.data()};
+                        ok = least_squares(4, n, cubic_row, 3, values, nullptr,
+                                           options.max_condition, coeffs);
+                    } else if (model == TableModel::ray) {
+                        const double* values[1] = {Z.data()};
+                        ok = least_squares(4, n, cubic_row, 1, values, nullptr,
+                                           options.max_condition, coeffs);
                     } else {
-                        const double dx = cubic(cx, t[k]) - X[k], dy = cubic(cy, t[k]) - Y[k];
-                        sum2[0] += dx * dx;
-                        sum2[1] += dy * dy;
+                        // Z (1 + d t) = cubic(t) is linear in the unknowns; a second
+                        // solve weighted by 1 / (1 + d t)^2 turns its residuals
+                        // into depth residuals (Sanathanan-Koerner).
+                        const double* values[1] = {Z.data()};
+                        ok = least_squares(5, n, rational_row, 1, values, nullptr,
+                                           options.max_condition, coeffs);
+                        if (ok) {
+                            for (std::size_t k = 0; k < n; ++k) {
+                                const double den = 1 + cz[4] * t[k];
+                                w[k] = 1 / (den * den);
+                            }
+                            ok = least_squares(5, n, rational_row, 1, values, w.data(),
+                                               options.max_condition, coeffs);
+                        }
+                        // The pole must stay outside the calibrated range.
+                        ok = ok && std::fabs(cz[4]) < 0.9;
                     }
-                    sum2[2] += dz * dz;
-                }
-                result.rms_x.data()[i] = static_cast<float>(std::sqrt(sum2[0] / double(n)));
-                result.rms_y.data()[i] = static_cast<float>(std::sqrt(sum2[1] / double(n)));
-                result.rms_z.data()[i] = static_cast<float>(std::sqrt(sum2[2] / double(n)));
-                const auto put = [&](int plane, double value) {
-                    table.set(plane, u, v, static_cast<float>(value));
-                };
-                put(table_plane::centre, centre);
-                put(table_plane::inv_half_range, 1.0 / half);
-                if (model == TableModel::polynomial) {
-                    for (int k = 0; k < 4; ++k) {
-                        put(table_plane::poly_x + k, cx[k]);
-                        put(table_plane::poly_y + k, cy[k]);
-                        put(table_plane::poly_z + k, cz[k]);
+                    if (!ok) {
+                        ++ill[wk];
+                        continue;
                     }
-                } else if (model == TableModel::ray) {
-                    for (int k = 0; k < 4; ++k)
-                        put(table_plane::ray_z + k, cz[k]);
-                    put(table_plane::ray_xn, xn);
-                    put(table_plane::ray_yn, yn);
-                } else {
-                    for (int k = 0; k < 4; ++k)
-                        put(table_plane::rational_z + k, cz[k]);
-                    put(table_plane::rational_d, cz[4]);
-                    put(table_plane::rational_xn, xn);
-                    put(table_plane::rational_yn, yn);
+                    const auto z_model = [&](double tk) {
+                        const double num = cubic(cz, tk);
+                        return model == TableModel::rational ? num / (1 + cz[4] * tk) : num;
+                    };
+                    double sum2[3] = {0, 0, 0};
+                    for (std::size_t k = 0; k < n; ++k) {
+                        const double dz = z_model(t[k]) - Z[k];
+                        if (along_ray) {
+                            sum2[0] += dz * dz * xn * xn;
+                            sum2[1] += dz * dz * yn * yn;
+                        } else {
+                            const double dx = cubic(cx, t[k]) - X[k], dy = cubic(cy, t[k]) - Y[k];
+                            sum2[0] += dx * dx;
+                            sum2[1] += dy * dy;
+                        }
+                        sum2[2] += dz * dz;
+                    }
+                    result.rms_x.data()[i] = static_cast<float>(std::sqrt(sum2[0] / double(n)));
+                    result.rms_y.data()[i] = static_cast<float>(std::sqrt(sum2[1] / double(n)));
+                    result.rms_z.data()[i] = static_cast<float>(std::sqrt(sum2[2] / double(n)));
+                    const auto put = [&](int plane, double value) {
+                        table.set(plane, u, v, static_cast<float>(value));
+                    };
+                    put(table_plane::centre, centre);
+                    put(table_plane::inv_half_range, 1.0 / half);
+                    if (model == TableModel::polynomial) {
+                        for (int k = 0; k < 4; ++k) {
+                            put(table_plane::poly_x + k, cx[k]);
+                            put(table_plane::poly_y + k, cy[k]);
+                            put(table_plane::poly_z + k, cz[k]);
+                        }
+                    } else if (model == TableModel::ray) {
+                        for (int k = 0; k < 4; ++k)
+                            put(table_plane::ray_z + k, cz[k]);
+                        put(table_plane::ray_xn, xn);
+                        put(table_plane::ray_yn, yn);
+                    } else {
+                        for (int k = 0; k < 4; ++k)
+                            put(table_plane::rational_z + k, cz[k]);
+                        put(table_plane::rational_d, cz[4]);
+                        put(table_plane::rational_xn, xn);
+                        put(table_plane::rational_yn, yn);
+                    }
+                    ++modelled[wk];
                 }
-                ++modelled[wk];
-            }
-    });
-    for (std::size_t w = 0; w < too_few.size(); ++w) {
-        result.pixels_too_few_poses += too_few[w];
-        result.pixels_ill_conditioned += ill[w];
-        result.pixels_modelled += modelled[w];
+        });
+        for (std::size_t w = 0; w < too_few.size(); ++w) {
+            result.pixels_too_few_poses += too_few[w];
+            result.pixels_ill_conditioned += ill[w];
+            result.pixels_modelled += modelled[w];
+        }
+        result.seconds_fit = since(t_fit);
+        result.seconds_total = result.seconds_poses + result.seconds_fit;
+        results.push_back(std::move(result));
     }
-    result.seconds_fit = since(t_fit);
-    result.seconds_total = since(t_start);
-    return result;
+    return results;
 }
 
 } // namespace fpp::calib

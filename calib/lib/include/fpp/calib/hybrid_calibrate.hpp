@@ -136,6 +136,16 @@ HybridResult calibrate_hybrid(const std::filesystem::path& session,
                               const StereoCalibration& calibration,
                               std::uint64_t calibration_hash, const HybridOptions& options = {});
 
+// The same for several models at once (options.model is ignored): the poses
+// are read, decoded and reconstructed once, and each model is fitted to
+// them; one result per model, in order. Throws std::invalid_argument for an
+// empty list.
+std::vector<HybridResult> calibrate_hybrid(const std::filesystem::path& session,
+                                           const StereoCalibration& calibration,
+                                           std::uint64_t calibration_hash,
+                                           const HybridOptions& options,
+                                           const std::vector<TableModel>& models);
+
 // The robust plane of a pose's points (3-channel image, NaN = no point):
 // points off the plane get NaN in `xyz` when `drop_outliers`. Returns false
 // (plane untouched) with fewer than 3 points or a degenerate layout.

@@ -113,7 +113,7 @@ struct PaperExperimentResult {
 PaperExperimentResult run_paper_experiments(const std::filesystem::path& out,
                                             const PaperExperimentOptions& options);
 
-// The table models this build knows, the paper's (polynomial) first.
+// Every table model, the paper's (polynomial) first.
 std::vector<TableModel> available_table_models();
 
 // The calibration of the camera window [x0, x0 + size.width) x [y0, y0 +
