@@ -132,79 +132,46 @@ inline float cubic(const float* c, int stride, int i, float t) {
 // overlap checks than it is willing to emit. `ahead` is the next tile (or
 // this one when there is none), prefetched `ahead_part` bytes per block.
 
-// X, Y, Z of one tile of the polynomial model.
-[[gnu::noinline]] TileCounts evaluate_polynomial(const float* __restrict tile, int tp,
-                                                 const float* __restrict phase,
-                                                 float* __restrict xs, float* __restrict ys,
-                                                 float* __restrict zs, const char* ahead,
-                                                 std::size_t ahead_part) {
-    const float* centre = tile + table_plane::centre * tp;
-    const float* ihr = tile + table_plane::inv_half_range * tp;
-    const float* cx = tile + table_plane::poly_x * tp;
-    const float* cy = tile + table_plane::poly_y * tp;
-    const float* cz = tile + table_plane::poly_z * tp;
+// X, Y, Z of one tile of model M:
+//   polynomial  X, Y and Z cubics in t
+//   ray         Z cubic, X = xn Z, Y = yn Z
+//   rational    Z = cubic / (1 + d t) (the fit and the loader keep |d| < 1,
+//               so the denominator stays positive for |t| <= 1), X = xn Z,
+//               Y = yn Z
+// The model is a template argument so that each loop is compiled without a
+// per-pixel branch on it.
+template <TableModel M>
+[[gnu::noinline]] TileCounts evaluate(const float* __restrict tile, int tp,
+                                      const float* __restrict phase, float* __restrict xs,
+                                      float* __restrict ys, float* __restrict zs,
+                                      const char* ahead, std::size_t ahead_part) {
+    namespace tpl = table_plane;
+    constexpr bool poly = M == TableModel::polynomial;
+    const float* centre = tile + tpl::centre * tp;
+    const float* ihr = tile + tpl::inv_half_range * tp;
+    static_assert(tpl::ray_z == tpl::rational_z);
+    const float* cz = tile + (poly ? tpl::poly_z : tpl::ray_z) * tp;
+    const float* cx = tile + tpl::poly_x * tp;                        // polynomial only
+    const float* cy = tile + tpl::poly_y * tp;
+    const float* d = tile + tpl::rational_d * tp; // rational only
+    const float* xn = tile + (M == TableModel::rational ? tpl::rational_xn : tpl::ray_xn) * tp;
+    const float* yn = tile + (M == TableModel::rational ? tpl::rational_yn : tpl::ray_yn) * tp;
     TileCounts n;
     for (int b = 0; b < tp; b += kBlock) {
         prefetch(ahead + static_cast<std::size_t>(b / kBlock) * ahead_part, ahead_part);
         for (int i = b; i < b + kBlock; ++i) {
             const Normalised v = normalise(phase[i], centre[i], ihr[i], n);
-            const float x = cubic(cx, tp, i, v.t);
-            const float y = cubic(cy, tp, i, v.t);
-            const float z = cubic(cz, tp, i, v.t);
-            xs[i] = x + v.nan_if_invalid;
-            ys[i] = y + v.nan_if_invalid;
-            zs[i] = z + v.nan_if_invalid;
-        }
-    }
-    return n;
-}
-
-// X, Y, Z of one tile of the ray model: Z cubic, X = xn Z, Y = yn Z.
-[[gnu::noinline]] TileCounts evaluate_ray(const float* __restrict tile, int tp,
-                                          const float* __restrict phase, float* __restrict xs,
-                                          float* __restrict ys, float* __restrict zs,
-                                          const char* ahead, std::size_t ahead_part) {
-    const float* centre = tile + table_plane::centre * tp;
-    const float* ihr = tile + table_plane::inv_half_range * tp;
-    const float* cz = tile + table_plane::ray_z * tp;
-    const float* xn = tile + table_plane::ray_xn * tp;
-    const float* yn = tile + table_plane::ray_yn * tp;
-    TileCounts n;
-    for (int b = 0; b < tp; b += kBlock) {
-        prefetch(ahead + static_cast<std::size_t>(b / kBlock) * ahead_part, ahead_part);
-        for (int i = b; i < b + kBlock; ++i) {
-            const Normalised v = normalise(phase[i], centre[i], ihr[i], n);
-            const float z = cubic(cz, tp, i, v.t) + v.nan_if_invalid;
-            xs[i] = xn[i] * z; // NaN stays NaN
-            ys[i] = yn[i] * z;
-            zs[i] = z;
-        }
-    }
-    return n;
-}
-
-// X, Y, Z of one tile of the rational model: Z = cubic / (1 + d t) (the
-// fit keeps |d| < 0.9, so the denominator stays above 0.1 for |t| <= 1),
-// X = xn Z, Y = yn Z.
-[[gnu::noinline]] TileCounts evaluate_rational(const float* __restrict tile, int tp,
-                                               const float* __restrict phase,
-                                               float* __restrict xs, float* __restrict ys,
-                                               float* __restrict zs, const char* ahead,
-                                               std::size_t ahead_part) {
-    const float* centre = tile + table_plane::centre * tp;
-    const float* ihr = tile + table_plane::inv_half_range * tp;
-    const float* cz = tile + table_plane::rational_z * tp;
-    const float* d = tile + table_plane::rational_d * tp;
-    const float* xn = tile + table_plane::rational_xn * tp;
-    const float* yn = tile + table_plane::rational_yn * tp;
-    TileCounts n;
-    for (int b = 0; b < tp; b += kBlock) {
-        prefetch(ahead + static_cast<std::size_t>(b / kBlock) * ahead_part, ahead_part);
-        for (int i = b; i < b + kBlock; ++i) {
-            const Normalised v = normalise(phase[i], centre[i], ihr[i], n);
-            const float z = cubic(cz, tp, i, v.t) / (1.0f + d[i] * v.t) + v.nan_if_invalid;
-            xs[i] = xn[i] * z;
-            ys[i] = yn[i] * z;
+            float z = cubic(cz, tp, i, v.t);
+            if constexpr (M == TableModel::rational)
+                z /= 1.0f + d[i] * v.t;
+            z += v.nan_if_invalid;
+            if constexpr (poly) {
+                xs[i] = cubic(cx, tp, i, v.t) + v.nan_if_invalid;
+                ys[i] = cubic(cy, tp, i, v.t) + v.nan_if_invalid;
+            } else {
+                xs[i] = xn[i] * z; // NaN stays NaN
+                ys[i] = yn[i] * z;
+            }
             zs[i] = z;
         }
     }
@@ -275,7 +242,10 @@ TableApplyStats apply_table(const CoefficientTable& table, const Image<float>& p
     const int tp = info.tile_pixels();
     const int tiles_x = info.tiles_x();
     const int tiles_y = info.tiles_y();
-    const TableModel model = info.model;
+    const auto evaluate_tile = info.model == TableModel::ray ? evaluate<TableModel::ray>
+                               : info.model == TableModel::rational
+                                   ? evaluate<TableModel::rational>
+                                   : evaluate<TableModel::polynomial>;
     const auto tile_floats = static_cast<std::size_t>(tp);
     const std::size_t tile_bytes =
         static_cast<std::size_t>(table.planes()) * tile_floats * sizeof(float);
@@ -305,11 +275,8 @@ TableApplyStats apply_table(const CoefficientTable& table, const Image<float>& p
                 const float* tile = table.tile(tx, ty);
                 const char* ahead = static_cast<const char*>(static_cast<const void*>(tile)) +
                                     (last ? 0 : tile_bytes);
-                const auto evaluate = model == TableModel::ray        ? evaluate_ray
-                                      : model == TableModel::rational ? evaluate_rational
-                                                                      : evaluate_polynomial;
                 const TileCounts n =
-                    evaluate(tile, tp, s.phase, s.x, s.y, s.z, ahead, ahead_part);
+                    evaluate_tile(tile, tp, s.phase, s.x, s.y, s.z, ahead, ahead_part);
                 scatter(s, x0, y0, tw, th, cloud.xyz);
                 c.phase_valid += n.phase_valid;
                 c.modelled += n.modelled;
