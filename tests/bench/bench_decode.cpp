@@ -12,6 +12,8 @@
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
 
+#include "best_time_reporter.hpp"
+
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 #include <opencv2/structured_light.hpp>
@@ -193,46 +195,23 @@ BENCHMARK(BM_StreamingFinish)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Fpp3StepWrappedPhase)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OpenCV3StepPSP)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Keeps each benchmark's best real time per iteration over the repetitions
-// (--benchmark_repetitions) for the ratio summary: on a shared machine the
-// best run is the one least disturbed by other work.
-class RatioReporter : public benchmark::ConsoleReporter {
-public:
-    void ReportRuns(const std::vector<Run>& runs) override {
-        for (const auto& run : runs) {
-            if (run.run_type != Run::RT_Iteration || run.iterations <= 0) continue;
-            const double t = run.real_accumulated_time / double(run.iterations);
-            auto [it, fresh] = seconds_.emplace(run.run_name.function_name, t);
-            if (!fresh && t < it->second) it->second = t;
-        }
-        ConsoleReporter::ReportRuns(runs);
-    }
-    double get(const std::string& name) const {
-        auto it = seconds_.find(name);
-        return it == seconds_.end() ? 0.0 : it->second;
-    }
-
-private:
-    std::map<std::string, double> seconds_;
-};
-
 } // namespace
 
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-    RatioReporter reporter;
+    fpp::bench::BestTimeReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
 
-    const double copy = reporter.get("BM_CopyInput");
-    const double batch = reporter.get("BM_DecodeBatch");
-    const double one = reporter.get("BM_DecodeBatchOneThread");
-    const double reuse = reporter.get("BM_DecodeBatchReuse");
-    const double pushes = reporter.get("BM_StreamingPushPerFrame");
-    const double finish = reporter.get("BM_StreamingFinish");
-    const double fpp3 = reporter.get("BM_Fpp3StepWrappedPhase");
-    const double cv3 = reporter.get("BM_OpenCV3StepPSP");
+    const double copy = reporter.seconds("BM_CopyInput");
+    const double batch = reporter.seconds("BM_DecodeBatch");
+    const double one = reporter.seconds("BM_DecodeBatchOneThread");
+    const double reuse = reporter.seconds("BM_DecodeBatchReuse");
+    const double pushes = reporter.seconds("BM_StreamingPushPerFrame");
+    const double finish = reporter.seconds("BM_StreamingFinish");
+    const double fpp3 = reporter.seconds("BM_Fpp3StepWrappedPhase");
+    const double cv3 = reporter.seconds("BM_OpenCV3StepPSP");
     const int frames = int(Fixture::get().full.frames.size());
     std::printf("\nsummary (1600x1200, 8-step phase + complementary Gray, %d frames, 8-bit;"
                 " best of the repetitions)\n",

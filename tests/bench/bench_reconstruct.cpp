@@ -16,6 +16,8 @@
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
 
+#include "best_time_reporter.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -150,40 +152,18 @@ BENCHMARK(BM_SvXY)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime()
 BENCHMARK(BM_CameraRays)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_EncodePly)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Keeps each run's real time per iteration for the summary (the median
-// when repetitions are aggregated).
-class SummaryReporter : public benchmark::ConsoleReporter {
-  public:
-    void ReportRuns(const std::vector<Run>& runs) override {
-        for (const auto& run : runs) {
-            const bool single = run.run_type == Run::RT_Iteration;
-            const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
-            if ((single || median) && run.iterations > 0)
-                seconds_[run.run_name.str()] = run.real_accumulated_time / double(run.iterations);
-        }
-        ConsoleReporter::ReportRuns(runs);
-    }
-    double get(const std::string& name) const {
-        auto it = seconds_.find(name);
-        return it == seconds_.end() ? 0.0 : it->second;
-    }
-
-  private:
-    std::map<std::string, double> seconds_;
-};
-
 } // namespace
 
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv))
         return 1;
-    SummaryReporter reporter;
+    fpp::bench::BestTimeReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
 
     const auto& fx = Fixture::get();
-    const double copy = reporter.get("BM_MemcpyOutput/real_time");
+    const double copy = reporter.seconds("BM_MemcpyOutput/real_time");
     std::printf("\nSV reconstruction of a 1600x1200 frame (%zu points x only, %zu x+y):\n",
                 fx.points_x, fx.points_xy);
     const struct {
@@ -198,7 +178,7 @@ int main(int argc, char** argv) {
         {"BM_SvXY/1/real_time", "x+y, ray midpoint, 1 thread", fx.points_xy},
         {"BM_SvXY/0/real_time", "x+y, ray midpoint, all cores", fx.points_xy}};
     for (const auto& r : rows) {
-        const double s = reporter.get(r.name);
+        const double s = reporter.seconds(r.name);
         if (s <= 0)
             continue;
         std::printf("  %-36s %8.2f ms  %7.1f Mpoints/s  %6.1f ns/point  %5.1fx the output memcpy\n",

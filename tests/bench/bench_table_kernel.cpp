@@ -10,6 +10,8 @@
 #include "fpp/parallel.hpp"
 #include "fpp/table_kernel.hpp"
 
+#include "best_time_reporter.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -163,30 +165,6 @@ void load(benchmark::State& state, fpp::TableModel model, bool map) {
                             static_cast<std::int64_t>(fs::file_size(path)));
 }
 
-// Keeps each benchmark's best real time per iteration over the repetitions:
-// on a shared machine the best run is the one least disturbed.
-class BestTimeReporter : public benchmark::ConsoleReporter {
-  public:
-    void ReportRuns(const std::vector<Run>& runs) override {
-        for (const Run& run : runs) {
-            if (run.run_type != Run::RT_Iteration || run.iterations <= 0)
-                continue;
-            const double t = run.real_accumulated_time / static_cast<double>(run.iterations);
-            auto [it, fresh] = best_.emplace(run.run_name.function_name, t);
-            if (!fresh && t < it->second)
-                it->second = t;
-        }
-        ConsoleReporter::ReportRuns(runs);
-    }
-    double ms(const std::string& name) const {
-        auto it = best_.find(name);
-        return it == best_.end() ? 0.0 : it->second * 1e3;
-    }
-
-  private:
-    std::map<std::string, double> best_; // seconds
-};
-
 } // namespace
 
 int main(int argc, char** argv) {
@@ -214,7 +192,7 @@ int main(int argc, char** argv) {
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
     }
-    BestTimeReporter reporter;
+    fpp::bench::BestTimeReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
 
@@ -223,17 +201,17 @@ int main(int argc, char** argv) {
     for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray,
                                      fpp::TableModel::rational}) {
         const std::string m = fpp::to_string(model);
-        const double copy = reporter.ms("copy_input/" + m);
-        const double one = reporter.ms("apply_table/" + m + "/1_thread");
-        const double many = reporter.ms("apply_table/" + m + "/all_threads");
+        const double copy = 1e3 * reporter.seconds("copy_input/" + m);
+        const double one = 1e3 * reporter.seconds("apply_table/" + m + "/1_thread");
+        const double many = 1e3 * reporter.seconds("apply_table/" + m + "/all_threads");
         if (copy <= 0 || one <= 0)
             continue;
         const double mb = static_cast<double>(Fixture::get().input_bytes(model)) / 1e6;
         std::printf("  %-10s reads %5.1f MB: 1 thread %6.2f ms (target <= 10, %.2fx the copy),"
                     " all threads %6.2f ms (%.2fx); copy %6.2f ms\n",
                     m.c_str(), mb, one, one / copy, many, many > 0 ? many / copy : 0.0, copy);
-        const double mapped = reporter.ms("load_table/" + m + "/mapped");
-        const double read = reporter.ms("load_table/" + m + "/read");
+        const double mapped = 1e3 * reporter.seconds("load_table/" + m + "/mapped");
+        const double read = 1e3 * reporter.seconds("load_table/" + m + "/read");
         if (mapped > 0 && read > 0)
             std::printf(
                 "  %-10s load (all CRCs and values checked): mapped %.1f ms, read %.1f ms\n", "",

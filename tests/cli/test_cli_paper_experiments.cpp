@@ -14,7 +14,6 @@
 
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
@@ -39,29 +38,14 @@ constexpr const char* kRunArguments =
     "--binning 4 --checkerboard-poses 8 --plane-poses 20 --timing-runs 2 --seed 2";
 constexpr double kCameraPixels = 400.0 * 300.0;
 
-struct ToolRun {
-    int exit_code = -1;
-    std::string output; // stdout and stderr
-};
+using fpp::test::ToolRun;
 
 std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s)
-        q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
+    return fpp::test::shell_quote(s);
 }
 
-ToolRun run_calib(const std::string& args, const fs::path& log) {
-    const std::string cmd =
-        quote(FPP_CALIB_EXE) + " " + args + " > " + quote(log.string()) + " 2>&1";
-    const int status = std::system(cmd.c_str());
-    ToolRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(log);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    run.output = ss.str();
-    return run;
+ToolRun run_calib(const std::string& args, const fs::path& scratch) {
+    return fpp::test::run_tool(FPP_CALIB_EXE, args, scratch);
 }
 
 std::string read_text(const fs::path& path) {
@@ -97,7 +81,7 @@ Shared& shared() {
         r->out = r->dir / "paper";
         r->run = run_calib("paper-experiments --out " + quote(r->out.string()) + " " +
                                kRunArguments,
-                           r->dir / "run.log");
+                           r->dir.path());
         std::ifstream in(r->out / "report" / "figures.csv");
         std::string line;
         std::getline(in, line); // header
@@ -235,8 +219,8 @@ TEST(CliPaperExperiments, RunsWritesItsOutputsAndKeepsTheAccuracyRelations) {
         EXPECT_GT(info.size.width, 300) << png;
     }
     EXPECT_TRUE(fs::exists(s.out / "report" / ("plane-fit-map-" + m + ".png")));
-    // Nothing but the output folder and the log beside it (no temporary left).
-    EXPECT_EQ(listing(s.dir.path()).size(), listing(s.out).size() + 2);
+    // Nothing but the output folder (no temporary left).
+    EXPECT_EQ(listing(s.dir.path()).size(), listing(s.out).size() + 1);
 }
 
 TEST(CliPaperExperiments, ExistingOutputFolderIsRefusedAndLeftAlone) {
@@ -246,7 +230,7 @@ TEST(CliPaperExperiments, ExistingOutputFolderIsRefusedAndLeftAlone) {
     std::ofstream(out / "keep.txt") << "mine\n";
     const std::vector<std::string> before = listing(dir.path());
     const ToolRun run = run_calib("paper-experiments --binning 4 --out " + quote(out.string()),
-                                  logs / "run.log");
+                                  logs.path());
     EXPECT_EQ(run.exit_code, 2) << run.output;
     EXPECT_TRUE(contains(run.output, "already exists")) << run.output;
     EXPECT_EQ(listing(dir.path()), before);
@@ -255,7 +239,7 @@ TEST(CliPaperExperiments, ExistingOutputFolderIsRefusedAndLeftAlone) {
 
 TEST(CliPaperExperiments, BadArgumentsExitNonZeroAndWriteNothing) {
     TempDir logs, dir;
-    const fs::path log = logs / "run.log";
+    const fs::path log = logs.path();
     // Missing parent folder.
     ToolRun run = run_calib("paper-experiments --binning 4 --out " +
                                 quote((dir / "no" / "such" / "out").string()),

@@ -3,6 +3,8 @@
 
 #include "fpp/calib/hybrid_report.hpp"
 
+#include "fpp/calib/plots.hpp"
+
 #include "fpp/atomic_file.hpp"
 #include "fpp/false_colour.hpp"
 
@@ -19,14 +21,6 @@ namespace fpp::calib {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string fmt(double v, int digits) {
-    if (!std::isfinite(v))
-        return "-";
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-    return buf;
-}
 
 float quantile(const Image<float>& image, double q) {
     std::vector<float> v;
@@ -61,7 +55,7 @@ cv::Mat map_figure(const Image<float>& values, float lo, float hi, const std::st
     for (int t = 0; t <= 4; ++t) {
         const int y = top + (h - 1) * (4 - t) / 4;
         const double v = double(lo) + double(hi - lo) * t / 4;
-        cv::putText(out, fmt(v, 4), {w + 14 + bar, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
+        cv::putText(out, fixed_text(v, 4), {w + 14 + bar, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
                     {0, 0, 0}, 1, cv::LINE_AA);
     }
     cv::putText(out, title, {4, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
@@ -92,7 +86,7 @@ cv::Mat plane_residual_figure(const HybridResult& r) {
     cv::line(out, {left, top}, {left, height - bottom}, {0, 0, 0}, 1);
     for (int t = 0; t <= 4; ++t) {
         const double v = vmax * t / 4;
-        cv::putText(out, fmt(v, 3), {2, y_of(v) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35, {0, 0, 0},
+        cv::putText(out, fixed_text(v, 3), {2, y_of(v) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35, {0, 0, 0},
                     1, cv::LINE_AA);
     }
     for (int i = 0; i < n; ++i) {
@@ -122,8 +116,8 @@ std::string poses_csv(const HybridResult& r) {
         std::string reason = p.skip_reason;
         std::replace(reason.begin(), reason.end(), ',', ';');
         s << p.name << "," << (p.usable ? 1 : 0) << "," << p.points << "," << p.outliers << ","
-          << fmt(p.distance_mm, 3) << "," << fmt(p.tilt_deg, 3) << "," << fmt(p.plane_rms_mm, 5)
-          << "," << fmt(p.plane_max_mm, 5) << "," << reason << "\n";
+          << fixed_text(p.distance_mm, 3) << "," << fixed_text(p.tilt_deg, 3) << "," << fixed_text(p.plane_rms_mm, 5)
+          << "," << fixed_text(p.plane_max_mm, 5) << "," << reason << "\n";
     }
     return s.str();
 }
@@ -137,8 +131,8 @@ std::string hybrid_summary_markdown(const HybridResult& r) {
     for (const auto& [name, image] :
          {std::pair<const char*, const Image<float>*>{"X", &r.rms_x}, {"Y", &r.rms_y},
           {"Z", &r.rms_z}})
-        s << "| " << name << " | " << fmt(quantile(*image, 0.5), 4) << " | "
-          << fmt(quantile(*image, 0.99), 4) << " | " << fmt(quantile(*image, 1.0), 4) << " |\n";
+        s << "| " << name << " | " << fixed_text(quantile(*image, 0.5), 4) << " | "
+          << fixed_text(quantile(*image, 0.99), 4) << " | " << fixed_text(quantile(*image, 1.0), 4) << " |\n";
     s << "\nFigures: fit-rms-x.png, fit-rms-y.png, fit-rms-z.png (per-pixel fit RMS), "
          "pose-count.png, plane-residuals.png; poses.csv.\n";
     return s.str();
