@@ -20,11 +20,11 @@
 
 #include "commands.hpp"
 
+#include "fpp/atomic_file.hpp"
 #include "fpp/calib/evaluation.hpp"
 #include "fpp/calib/plots.hpp"
 #include "fpp/calib/report_folder.hpp"
 #include "fpp/calib/shape_fit.hpp"
-#include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
@@ -190,9 +190,9 @@ void fit_subject(Subject& s, const std::string& shape, const EvaluateArgs& args)
                      mm("sphere.form_trimmed", "P_F, 0.3 % of points excluded (refitted)",
                         f.form_trimmed.range)};
             if (f.size_error)
-                items.push_back(
-                    mm("sphere.size_error", "probing error size P_S (fitted - nominal diameter)",
-                       *f.size_error));
+                items.push_back(mm("sphere.size_error",
+                                   "probing error size P_S (fitted - nominal diameter)",
+                                   *f.size_error));
             items.push_back(mm("sphere.centre_x", "centre x", f.fit.centre[0], 3));
             items.push_back(mm("sphere.centre_y", "centre y", f.fit.centre[1], 3));
             items.push_back(mm("sphere.centre_z", "centre z", f.fit.centre[2], 3));
@@ -231,17 +231,17 @@ void fit_subject(Subject& s, const std::string& shape, const EvaluateArgs& args)
                 items.push_back(mm("ballbar.spacing_error",
                                    "sphere spacing error SD (measured - nominal)",
                                    *f.spacing_error));
-            items.push_back(mm("ballbar.diameter_1", "diameter, first sphere",
-                               2 * f.fit.first.radius));
-            items.push_back(mm("ballbar.diameter_2", "diameter, second sphere",
-                               2 * f.fit.second.radius));
+            items.push_back(
+                mm("ballbar.diameter_1", "diameter, first sphere", 2 * f.fit.first.radius));
+            items.push_back(
+                mm("ballbar.diameter_2", "diameter, second sphere", 2 * f.fit.second.radius));
             items.push_back(mm("ballbar.form_1", "form P_F, first sphere", f.form_first));
             items.push_back(mm("ballbar.form_2", "form P_F, second sphere", f.form_second));
             if (f.size_error_first) {
-                items.push_back(mm("ballbar.size_error_1", "size P_S, first sphere",
-                                   *f.size_error_first));
-                items.push_back(mm("ballbar.size_error_2", "size P_S, second sphere",
-                                   *f.size_error_second));
+                items.push_back(
+                    mm("ballbar.size_error_1", "size P_S, first sphere", *f.size_error_first));
+                items.push_back(
+                    mm("ballbar.size_error_2", "size P_S, second sphere", *f.size_error_second));
             }
             items.push_back(count("ballbar.points_1", "points, first sphere",
                                   f.fit.first.fit.residuals.size()));
@@ -277,11 +277,12 @@ Truth load_truth(const fs::path& folder) {
     t.file = folder / manifest.truth->xyz;
     t.xyz = read_tiff_float(t.file);
     if (t.xyz.channels() != 3)
-        throw InputError(t.file, "", "expected 3 channels (X, Y, Z), found " +
-                                         std::to_string(t.xyz.channels()));
+        throw InputError(
+            t.file, "", "expected 3 channels (X, Y, Z), found " + std::to_string(t.xyz.channels()));
     if (t.xyz.size() != manifest.camera)
-        throw InputError(t.file, "", "is " + size_text(t.xyz.size()) + ", but the camera is " +
-                                         size_text(manifest.camera));
+        throw InputError(t.file, "",
+                         "is " + size_text(t.xyz.size()) + ", but the camera is " +
+                             size_text(manifest.camera));
     return t;
 }
 
@@ -294,17 +295,18 @@ void compare_subject_with_truth(Subject& s, const Truth& truth) {
                              size_text(truth.xyz.size()));
     s.truth = compare_with_truth(s.cloud, truth.xyz);
     const TruthComparison& t = *s.truth;
-    s.truth_items = {count("truth.compared", "pixels compared", t.compared),
-                     {"truth.coverage", "coverage of the true surface", 100 * t.coverage, "%", 2},
-                     count("truth.no_surface", "points where the truth has no surface",
-                           t.no_surface),
-                     mm("truth.dz_mean", "Z error, mean (point - truth)", t.dz.mean),
-                     mm("truth.dz_rms", "Z error, RMS", t.dz.rms),
-                     mm("truth.dz_stddev", "Z error, standard deviation", t.dz.stddev),
-                     mm("truth.dz_max_abs", "Z error, largest magnitude", t.dz.max_abs),
-                     mm("truth.distance_rms", "3D distance, RMS", t.distance.rms),
-                     mm("truth.distance_mean", "3D distance, mean", t.distance.mean),
-                     mm("truth.distance_max", "3D distance, largest", t.distance.max)};
+    s.truth_items = {
+        count("truth.compared", "pixels compared", t.compared),
+        {"truth.coverage", "coverage of the true surface", 100 * t.coverage, "%", 2},
+        count("truth.no_surface", "points where the truth has no surface", t.no_surface),
+        mm("truth.dz_mean", "Z error, mean (point - truth)", t.dz.mean),
+        mm("truth.dz_rms", "Z error, RMS", t.dz.rms),
+        mm("truth.dz_stddev", "Z error, standard deviation", t.dz.stddev),
+        mm("truth.dz_max_abs", "Z error, largest magnitude", t.dz.max_abs),
+        mm("truth.dz_shape_rms", "Z error less its offset and tilt, RMS", t.dz_shape.rms),
+        mm("truth.distance_rms", "3D distance, RMS", t.distance.rms),
+        mm("truth.distance_mean", "3D distance, mean", t.distance.mean),
+        mm("truth.distance_max", "3D distance, largest", t.distance.max)};
 }
 
 // ---------------------------------------------------------------- report
@@ -404,8 +406,8 @@ int run_evaluate(const EvaluateArgs& args) {
     subjects.push_back(load_subject(cloud_path, label, "cloud"));
     if (!args.compare.empty()) {
         const fs::path other_path = args.compare;
-        std::string other = args.other_label.empty() ? other_path.stem().string()
-                                                     : args.other_label;
+        std::string other =
+            args.other_label.empty() ? other_path.stem().string() : args.other_label;
         if (other == subjects[0].label) {
             subjects[0].label += " (" + cloud_path.string() + ")";
             other += " (" + other_path.string() + ")";
@@ -462,19 +464,17 @@ int run_evaluate(const EvaluateArgs& args) {
         const CloudDistance& d = *distance;
         compare_items.push_back(count("matched", "points matched", d.matched));
         compare_items.push_back(count("only_cloud",
-                                      d.per_pixel ? "pixels with a point of " + all[0]->label +
-                                                        " only"
-                                                  : "points of " + all[0]->label +
-                                                        " without a match",
+                                      d.per_pixel
+                                          ? "pixels with a point of " + all[0]->label + " only"
+                                          : "points of " + all[0]->label + " without a match",
                                       d.only_first));
         if (d.per_pixel) {
-            compare_items.push_back(
-                count("only_other", "pixels with a point of " + all[1]->label + " only",
-                      d.only_second));
+            compare_items.push_back(count(
+                "only_other", "pixels with a point of " + all[1]->label + " only", d.only_second));
             compare_items.push_back(mm("dz_mean", "Z difference, mean", d.dz.mean));
             compare_items.push_back(mm("dz_rms", "Z difference, RMS", d.dz.rms));
-            compare_items.push_back(mm("dz_stddev", "Z difference, standard deviation",
-                                       d.dz.stddev));
+            compare_items.push_back(
+                mm("dz_stddev", "Z difference, standard deviation", d.dz.stddev));
         }
         compare_items.push_back(mm("distance_rms", "3D distance, RMS", d.distance.rms));
         compare_items.push_back(mm("distance_mean", "3D distance, mean", d.distance.mean));
@@ -495,9 +495,8 @@ int run_evaluate(const EvaluateArgs& args) {
         return symmetric_limit(values, 0.995);
     };
     if (!args.fit.empty()) {
-        const double limit = shared_limit([](const Subject& s) -> const std::vector<double>& {
-            return s.used_residuals;
-        });
+        const double limit = shared_limit(
+            [](const Subject& s) -> const std::vector<double>& { return s.used_residuals; });
         std::vector<HistogramSeries> series;
         for (const Subject& s : subjects)
             series.push_back({s.label, s.used_residuals});
@@ -505,36 +504,32 @@ int run_evaluate(const EvaluateArgs& args) {
                                      ? "signed distance to the plane, + towards the camera (mm)"
                                      : "radial residual, + outside (mm)";
         pngs.push_back({"fit-histogram.png",
-                        histogram_figure(series, -limit, limit, sign,
-                                         args.fit + " fit residuals"),
+                        histogram_figure(series, -limit, limit, sign, args.fit + " fit residuals"),
                         "histogram of the " + args.fit + " fit residuals (used points)"});
         for (const Subject& s : subjects) {
             const std::string name =
                 s.prefix == "cloud" ? "fit-map.png" : "fit-map-" + s.prefix + ".png";
             if (!s.cloud.is_organised()) {
-                notes += "- no `" + name + "`: " + s.path.string() +
-                         " has no camera pixel indices\n";
+                notes +=
+                    "- no `" + name + "`: " + s.path.string() + " has no camera pixel indices\n";
                 continue;
             }
-            pngs.push_back({name,
-                            signed_map_figure(values_image(s.cloud, s.residuals), limit,
-                                              s.label + ": " + args.fit + " fit residual, RMS " +
-                                                  fixed_text(error_stats(s.used_residuals).rms,
-                                                             4) +
-                                                  " mm"),
-                            s.label + ": " + args.fit + " fit residual per camera pixel"});
+            pngs.push_back(
+                {name,
+                 signed_map_figure(values_image(s.cloud, s.residuals), limit,
+                                   s.label + ": " + args.fit + " fit residual, RMS " +
+                                       fixed_text(error_stats(s.used_residuals).rms, 4) + " mm"),
+                 s.label + ": " + args.fit + " fit residual per camera pixel"});
         }
     }
     if (truth) {
-        const double limit = shared_limit([](const Subject& s) -> const std::vector<double>& {
-            return s.truth->dz_values;
-        });
+        const double limit = shared_limit(
+            [](const Subject& s) -> const std::vector<double>& { return s.truth->dz_values; });
         std::vector<HistogramSeries> series;
         for (const Subject& s : subjects)
             series.push_back({s.label, s.truth->dz_values});
         pngs.push_back({"truth-histogram.png",
-                        histogram_figure(series, -limit, limit,
-                                         "Z error, point - truth (mm)",
+                        histogram_figure(series, -limit, limit, "Z error, point - truth (mm)",
                                          "error against the ground truth"),
                         "histogram of the Z error against the ground truth"});
         for (const Subject& s : subjects) {
@@ -542,8 +537,9 @@ int run_evaluate(const EvaluateArgs& args) {
                 s.prefix == "cloud" ? "truth-map.png" : "truth-map-" + s.prefix + ".png";
             pngs.push_back({name,
                             signed_map_figure(s.truth->dz_map, limit,
-                                              s.label + ": Z error against the ground truth, "
-                                                        "RMS " +
+                                              s.label +
+                                                  ": Z error against the ground truth, "
+                                                  "RMS " +
                                                   fixed_text(s.truth->dz.rms, 4) + " mm"),
                             s.label + ": Z error against the ground truth per camera pixel"});
         }
@@ -595,10 +591,9 @@ int run_evaluate(const EvaluateArgs& args) {
     }
     if (distance) {
         md << "\n## Cloud to cloud: " << all[0]->label << " - " << all[1]->label << "\n\n"
-           << (distance->per_pixel
-                   ? "Per camera pixel where both clouds have a point.\n\n"
-                   : "From each point of " + all[0]->label + " to the nearest point of " +
-                         all[1]->label + ".\n\n")
+           << (distance->per_pixel ? "Per camera pixel where both clouds have a point.\n\n"
+                                   : "From each point of " + all[0]->label +
+                                         " to the nearest point of " + all[1]->label + ".\n\n")
            << "| figure | value | unit |\n|---|---:|---|\n";
         for (const Item& item : compare_items)
             md << "| " << item.title << " | " << value_text(item) << " | " << item.unit << " |\n";
@@ -657,8 +652,8 @@ Action add_evaluate_command(CLI::App& app) {
                              ->check(CLI::IsMember({"pixel", "nearest"}))
                              ->capture_default_str();
     cmd->add_option("--label", args->label, "name of CLOUD in the report (default: file name)");
-    args->other_label_option = cmd->add_option(
-        "--other-label", args->other_label, "name of --compare's cloud in the report");
+    args->other_label_option = cmd->add_option("--other-label", args->other_label,
+                                               "name of --compare's cloud in the report");
     cmd->add_option("--out", args->out,
                     "report folder to write (must not exist, be empty, or hold an earlier "
                     "report, which is replaced)")

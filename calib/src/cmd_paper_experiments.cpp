@@ -33,13 +33,11 @@ int run_paper(PaperArgs& args) {
     const PaperExperimentResult result = run_paper_experiments(args.out, args.options);
     int met = 0;
     for (const PaperTarget& t : result.targets) {
-        std::cout << (t.met ? "met     " : "NOT met ") << t.description << ": " << t.detail
-                  << "\n";
+        std::cout << (t.met ? "met     " : "NOT met ") << t.description << ": " << t.detail << "\n";
         met += t.met ? 1 : 0;
     }
-    std::cout << met << " of " << result.targets.size() << " targets met; report in "
-              << args.out << "/report/summary.md (" << static_cast<int>(result.seconds)
-              << " s)\n";
+    std::cout << met << " of " << result.targets.size() << " targets met; report in " << args.out
+              << "/report/summary.md (" << static_cast<int>(result.seconds) << " s)\n";
     return 0;
 }
 } // namespace
@@ -65,8 +63,7 @@ Action add_paper_experiments_command(CLI::App& app) {
                     "camera pixel binning (1 = the paper's 1600 x 1200)")
         ->capture_default_str()
         ->check(CLI::Range(1, 8));
-    cmd->add_option("--seed", args->options.seed, "seed of poses and noise")
-        ->capture_default_str();
+    cmd->add_option("--seed", args->options.seed, "seed of poses and noise")->capture_default_str();
     cmd->add_option("--checkerboard-poses", args->options.checkerboard_poses,
                     "checkerboard poses of the stereo calibration (the paper's 15)")
         ->capture_default_str()
@@ -84,7 +81,8 @@ Action add_paper_experiments_command(CLI::App& app) {
                     "0 = all cores")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--rig", args->rig, "rig YAML file (default: the paper rig with effects)")
+    cmd->add_option("--rig", args->rig,
+                    "rig YAML file (default: board/sim/paper-rig-lens-defects.yaml)")
         ->check(CLI::ExistingFile);
     cmd->add_flag("--keep-sessions", args->options.keep_sessions,
                   "keep the calibration sessions in DIR/sessions (large at full size)");

@@ -9,8 +9,10 @@
 #include "fpp/error.hpp"
 #include "fpp/point_cloud.hpp"
 
+#include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -84,9 +86,44 @@ TEST(Evaluation, TruthComparisonRecoversKnownOffset) {
     EXPECT_LT(t.dz.stddev, 1e-3);
     ASSERT_EQ(t.dz_values.size(), expected_compared);
     ASSERT_EQ(t.dz_map.size(), (Size{40, 30}));
-    EXPECT_TRUE(std::isnan(t.dz_map.at(10, 0)));  // pixel 10: no point
-    EXPECT_TRUE(std::isnan(t.dz_map.at(1, 0)));   // no surface
+    EXPECT_TRUE(std::isnan(t.dz_map.at(10, 0))); // pixel 10: no point
+    EXPECT_TRUE(std::isnan(t.dz_map.at(1, 0)));  // no surface
     EXPECT_NEAR(t.dz_map.at(11, 0), t.dz_values[7], 1e-6);
+}
+
+TEST(Evaluation, TruthShapeErrorLeavesOutOffsetAndTilt) {
+    // Z error = 0.4 mm + a tilt (0.002 X - 0.003 Y) + a bump of known RMS:
+    // the shape error is the bump alone, its mean and tilt removed.
+    const Image<float> truth = truth_image();
+    CloudPoints cloud;
+    cloud.organised = {40, 30};
+    std::vector<double> bump;
+    std::vector<std::array<double, 2>> xy;
+    for (int y = 0; y < 30; ++y)
+        for (int x = 3; x < 40; ++x) {
+            const double X = truth.at(x, y, 0), Y = truth.at(x, y, 1), Z = truth.at(x, y, 2);
+            const double b = 0.05 * std::cos(0.4 * x) * std::sin(0.3 * y);
+            cloud.points.push_back({X, Y, Z + 0.4 + 0.002 * X - 0.003 * Y + b});
+            cloud.pixels.push_back(static_cast<std::uint32_t>(y * 40 + x));
+            bump.push_back(b);
+            xy.push_back({X, Y});
+        }
+    // The bump's own least-squares plane in X, Y, by brute force in double.
+    Eigen::MatrixXd a(static_cast<Eigen::Index>(bump.size()), 3);
+    Eigen::VectorXd v(static_cast<Eigen::Index>(bump.size()));
+    for (std::size_t i = 0; i < bump.size(); ++i) {
+        a.row(static_cast<Eigen::Index>(i)) << 1.0, xy[i][0], xy[i][1];
+        v[static_cast<Eigen::Index>(i)] = bump[i];
+    }
+    const Eigen::VectorXd residual = v - a * a.colPivHouseholderQr().solve(v);
+    const double want = std::sqrt(residual.squaredNorm() / double(bump.size()));
+    EXPECT_GT(want, 0.02);
+
+    const auto t = fpp::calib::compare_with_truth(cloud, truth);
+    EXPECT_GT(t.dz.rms, 0.39); // offset and tilt included
+    EXPECT_NEAR(t.dz_shape.rms, want, 1e-5);
+    EXPECT_NEAR(t.dz_shape.mean, 0.0, 1e-6);
+    EXPECT_EQ(t.dz_shape.count, bump.size());
 }
 
 TEST(Evaluation, TruthComparisonRejectsMismatches) {
@@ -108,8 +145,8 @@ CloudPoints surface_cloud(const Vec3& shift = {0, 0, 0}, int skip_every = 0) {
             const auto pixel = static_cast<std::uint32_t>(y * 60 + x);
             if (skip_every && pixel % static_cast<std::uint32_t>(skip_every) == 0)
                 continue;
-            c.points.push_back({x + shift[0], y + shift[1],
-                                500 + 0.002 * (x - 30) * (x - 30) + shift[2]});
+            c.points.push_back(
+                {x + shift[0], y + shift[1], 500 + 0.002 * (x - 30) * (x - 30) + shift[2]});
             c.pixels.push_back(pixel);
         }
     return c;
@@ -223,8 +260,8 @@ TEST(Evaluation, ErrorStatsAndCsv) {
     EXPECT_EQ(s.max, 3.0);
     EXPECT_EQ(s.max_abs, 3.0);
     EXPECT_EQ(fpp::calib::error_stats({}).count, 0u);
-    EXPECT_EQ(fpp::calib::figures_csv({{"cloud.fit.rms", 0.0501234567891, "mm"},
-                                       {"cloud.points", 12, ""}}),
+    EXPECT_EQ(fpp::calib::figures_csv(
+                  {{"cloud.fit.rms", 0.0501234567891, "mm"}, {"cloud.points", 12, ""}}),
               "name,value,unit\ncloud.fit.rms,0.0501234568,mm\ncloud.points,12,\n");
 }
 
@@ -307,8 +344,8 @@ TEST(Plots, NumbersAndColours) {
     EXPECT_GT(white[0], 240);
     EXPECT_GT(white[2], 240);
     const cv::Vec3b red = fpp::calib::diverging_colour(1), blue = fpp::calib::diverging_colour(-1);
-    EXPECT_GT(red[2], red[0]);   // BGR: more red than blue
-    EXPECT_GT(blue[0], blue[2]); // more blue than red
+    EXPECT_GT(red[2], red[0]);                       // BGR: more red than blue
+    EXPECT_GT(blue[0], blue[2]);                     // more blue than red
     EXPECT_EQ(fpp::calib::diverging_colour(5), red); // clamped
 }
 

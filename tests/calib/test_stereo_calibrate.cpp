@@ -20,8 +20,8 @@ using calib::PoseObservations;
 // The paper rig without the terms outside the calibrated model.
 sim::Rig model_rig() {
     sim::Rig rig = sim::Rig::paper();
-    for (LensModel* l : {&rig.camera, &rig.projector})
-        l->k4 = l->s1 = l->s2 = l->s3 = l->s4 = 0;
+    rig.camera.drop_unmodelled_terms();
+    rig.projector.drop_unmodelled_terms();
     return rig;
 }
 

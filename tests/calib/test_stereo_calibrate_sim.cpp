@@ -167,8 +167,8 @@ inline calib::StereoCalibration rig_five_coefficient_model(const sim::Rig& rig) 
     c.projector_size = rig.projector_size;
     c.camera = rig.camera;
     c.projector = rig.projector;
-    for (LensModel* l : {&c.camera, &c.projector})
-        l->k4 = l->s1 = l->s2 = l->s3 = l->s4 = 0;
+    c.camera.drop_unmodelled_terms();
+    c.projector.drop_unmodelled_terms();
     c.R = rig.R;
     c.T = rig.t;
     return c;

@@ -81,8 +81,8 @@ void expect_png(const fs::path& file) {
 constexpr int kW = 80, kH = 60;
 
 struct Scene {
-    Image<float> truth;  // noise-free
-    fpp::PointCloud noisy;  // truth + N(0, 0.05 mm) along the plane normal
+    Image<float> truth;      // noise-free
+    fpp::PointCloud noisy;   // truth + N(0, 0.05 mm) along the plane normal
     fpp::PointCloud shifted; // noisy + 0.1 mm in Z
 };
 
@@ -164,9 +164,8 @@ TEST_F(CliEvaluate, Help) {
 
 TEST_F(CliEvaluate, PlaneFit) {
     TempDir out;
-    const auto run =
-        run_calib("evaluate " + q(*dir_ / "sv.ply") + " --fit plane --out " + q(out / "r"),
-                  out.path());
+    const auto run = run_calib(
+        "evaluate " + q(*dir_ / "sv.ply") + " --fit plane --out " + q(out / "r"), out.path());
     ASSERT_EQ(run.exit_code, 0) << run.output;
     const auto f = read_figures(out / "r" / "figures.csv");
     EXPECT_EQ(figure(f, "cloud.points"), 78.0 * 60);
@@ -187,10 +186,9 @@ TEST_F(CliEvaluate, PlaneFit) {
     EXPECT_NE(run.output.find("flatness"), std::string::npos);
 
     // Running again replaces the earlier report.
-    const auto again =
-        run_calib("evaluate " + q(*dir_ / "sv.ply") + " --fit plane --reject-sigma 3 --out " +
-                      q(out / "r"),
-                  out.path());
+    const auto again = run_calib("evaluate " + q(*dir_ / "sv.ply") +
+                                     " --fit plane --reject-sigma 3 --out " + q(out / "r"),
+                                 out.path());
     ASSERT_EQ(again.exit_code, 0) << again.output;
     const auto g = read_figures(out / "r" / "figures.csv");
     EXPECT_GT(figure(g, "cloud.fit.points_rejected"), 0.0);
@@ -199,11 +197,11 @@ TEST_F(CliEvaluate, PlaneFit) {
 
 TEST_F(CliEvaluate, CompareWithTruthAndLabels) {
     TempDir out;
-    const auto run = run_calib("evaluate " + q(*dir_ / "sv.ply") + " --compare " +
-                                   q(*dir_ / "hybrid.ply") + " --fit plane --truth " +
-                                   q(*dir_ / "capture") +
-                                   " --label SV --other-label hybrid --out " + q(out / "r"),
-                               out.path());
+    const auto run =
+        run_calib("evaluate " + q(*dir_ / "sv.ply") + " --compare " + q(*dir_ / "hybrid.ply") +
+                      " --fit plane --truth " + q(*dir_ / "capture") +
+                      " --label SV --other-label hybrid --out " + q(out / "r"),
+                  out.path());
     ASSERT_EQ(run.exit_code, 0) << run.output;
     const fs::path r = out / "r";
     const auto f = read_figures(r / "figures.csv");
@@ -217,10 +215,13 @@ TEST_F(CliEvaluate, CompareWithTruthAndLabels) {
     EXPECT_EQ(figure(f, "cloud.truth.compared"), 78.0 * 60);
     EXPECT_NEAR(figure(f, "cloud.truth.distance_rms"), 0.05, 0.005);
     EXPECT_NEAR(figure(f, "other.truth.dz_mean") - figure(f, "cloud.truth.dz_mean"), 0.1, 1e-4);
+    // The 0.1 mm offset is not shape: both copies have the same shape error.
+    EXPECT_NEAR(figure(f, "other.truth.dz_shape_rms"), figure(f, "cloud.truth.dz_shape_rms"), 1e-4);
+    EXPECT_LT(figure(f, "other.truth.dz_shape_rms"), figure(f, "other.truth.dz_rms") - 0.05);
     EXPECT_NEAR(figure(f, "other.fit.rms"), figure(f, "cloud.fit.rms"), 1e-4);
-    for (const char* png : {"fit-histogram.png", "fit-map.png", "fit-map-other.png",
-                            "truth-histogram.png", "truth-map.png", "truth-map-other.png",
-                            "difference-histogram.png", "difference-map.png"})
+    for (const char* png :
+         {"fit-histogram.png", "fit-map.png", "fit-map-other.png", "truth-histogram.png",
+          "truth-map.png", "truth-map-other.png", "difference-histogram.png", "difference-map.png"})
         expect_png(r / png);
     std::ifstream in(r / "summary.md");
     std::stringstream summary;
@@ -229,10 +230,10 @@ TEST_F(CliEvaluate, CompareWithTruthAndLabels) {
     EXPECT_NE(summary.str().find("SV - hybrid"), std::string::npos);
 
     // Unorganised pairing works on the same files.
-    const auto nearest = run_calib("evaluate " + q(*dir_ / "sv.ply") + " --compare " +
-                                       q(*dir_ / "hybrid.ply") + " --match nearest --out " +
-                                       q(out / "n"),
-                                   out.path());
+    const auto nearest =
+        run_calib("evaluate " + q(*dir_ / "sv.ply") + " --compare " + q(*dir_ / "hybrid.ply") +
+                      " --match nearest --out " + q(out / "n"),
+                  out.path());
     ASSERT_EQ(nearest.exit_code, 0) << nearest.output;
     const auto g = read_figures(out / "n" / "figures.csv");
     // Nearest points lie at most 0.1 mm away (the own copy is a candidate).
@@ -315,8 +316,7 @@ void expect_rejected(const ToolRun& run, const fs::path& out,
                      std::initializer_list<std::string> phrases) {
     EXPECT_EQ(run.exit_code, 2) << run.output;
     for (const std::string& p : phrases)
-        EXPECT_NE(run.output.find(p), std::string::npos) << "'" << p << "' not in:\n"
-                                                         << run.output;
+        EXPECT_NE(run.output.find(p), std::string::npos) << "'" << p << "' not in:\n" << run.output;
     EXPECT_FALSE(fs::exists(out)) << "output left behind";
 }
 
@@ -325,14 +325,13 @@ TEST_F(CliEvaluate, BadInputsLeaveNoOutput) {
     const fs::path r = out / "r";
     const std::string sv = q(*dir_ / "sv.ply");
 
-    expect_rejected(run_calib("evaluate " + q(out / "missing.ply") + " --fit plane --out " + q(r),
-                              out.path()),
-                    r, {"missing.ply", "no such file"});
+    expect_rejected(
+        run_calib("evaluate " + q(out / "missing.ply") + " --fit plane --out " + q(r), out.path()),
+        r, {"missing.ply", "no such file"});
     expect_rejected(run_calib("evaluate " + sv + " --out " + q(r), out.path()), r,
                     {"nothing to evaluate"});
     expect_rejected(
-        run_calib("evaluate " + sv + " --fit plane --nominal-length 300 --out " + q(r),
-                  out.path()),
+        run_calib("evaluate " + sv + " --fit plane --nominal-length 300 --out " + q(r), out.path()),
         r, {"--nominal-length", "ball-bar"});
 
     // No pixel indices, but the ground truth needs them.
@@ -341,19 +340,19 @@ TEST_F(CliEvaluate, BadInputsLeaveNoOutput) {
                                   q(*dir_ / "capture") + " --out " + q(r),
                               out.path()),
                     r, {"plain.ply", "pixel indices"});
-    expect_rejected(run_calib("evaluate " + sv + " --compare " + q(out / "plain.ply") +
-                                  " --out " + q(r),
-                              out.path()),
-                    r, {"plain.ply", "--match nearest"});
+    expect_rejected(
+        run_calib("evaluate " + sv + " --compare " + q(out / "plain.ply") + " --out " + q(r),
+                  out.path()),
+        r, {"plain.ply", "--match nearest"});
 
     // Clouds of different organised sizes.
     fpp::PointCloud small;
     small.xyz = Image<float>(40, 30, 3, 500.0f);
     fpp::write_ply(out / "small.ply", small);
-    expect_rejected(run_calib("evaluate " + sv + " --compare " + q(out / "small.ply") +
-                                  " --out " + q(r),
-                              out.path()),
-                    r, {"small.ply", "40 x 30", "80 x 60"});
+    expect_rejected(
+        run_calib("evaluate " + sv + " --compare " + q(out / "small.ply") + " --out " + q(r),
+                  out.path()),
+        r, {"small.ply", "40 x 30", "80 x 60"});
     expect_rejected(run_calib("evaluate " + q(out / "small.ply") + " --truth " +
                                   q(*dir_ / "capture") + " --out " + q(r),
                               out.path()),
@@ -361,9 +360,9 @@ TEST_F(CliEvaluate, BadInputsLeaveNoOutput) {
 
     // Too few points for the fit; a fit that fails (a plane is no sphere).
     write_plain_ply(out / "three.ply", {{0, 0, 500}, {1, 0, 500}, {0, 1, 500}});
-    expect_rejected(run_calib("evaluate " + q(out / "three.ply") + " --fit sphere --out " + q(r),
-                              out.path()),
-                    r, {"three.ply", "at least 4"});
+    expect_rejected(
+        run_calib("evaluate " + q(out / "three.ply") + " --fit sphere --out " + q(r), out.path()),
+        r, {"three.ply", "at least 4"});
     expect_rejected(run_calib("evaluate " + sv + " --fit sphere --out " + q(r), out.path()), r,
                     {"sv.ply", "--fit sphere", "curvature"});
     expect_rejected(run_calib("evaluate " + sv + " --fit cylinder --out " + q(r), out.path()), r,
@@ -378,16 +377,16 @@ TEST_F(CliEvaluate, BadInputsLeaveNoOutput) {
     std::vector<fpp::Frame> frames(1);
     frames[0].u8 = Image<std::uint8_t>(kW, kH, 1, 100);
     fpp::write_capture_set(out / "plain-capture", m, frames);
-    expect_rejected(run_calib("evaluate " + sv + " --truth " + q(out / "plain-capture") +
-                                  " --out " + q(r),
-                              out.path()),
-                    r, {"capture.yaml", "truth.xyz"});
+    expect_rejected(
+        run_calib("evaluate " + sv + " --truth " + q(out / "plain-capture") + " --out " + q(r),
+                  out.path()),
+        r, {"capture.yaml", "truth.xyz"});
 
     // An output folder that is not a report is left alone.
     fs::create_directory(out / "data");
     std::ofstream(out / "data" / "keep.txt") << "x";
-    const auto run = run_calib("evaluate " + sv + " --fit plane --out " + q(out / "data"),
-                               out.path());
+    const auto run =
+        run_calib("evaluate " + sv + " --fit plane --out " + q(out / "data"), out.path());
     EXPECT_EQ(run.exit_code, 2) << run.output;
     EXPECT_NE(run.output.find("not an earlier report"), std::string::npos);
     EXPECT_TRUE(fs::exists(out / "data" / "keep.txt"));

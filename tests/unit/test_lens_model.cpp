@@ -68,6 +68,8 @@ LensModel lens_with_every_term() {
     l.s2 = -2e-4;
     l.s3 = -2.5e-4;
     l.s4 = 1e-4;
+    l.t1 = 1e-3;
+    l.t2 = 5e-4;
     return l;
 }
 
@@ -83,13 +85,18 @@ TEST(LensModel, DistortMatchesTheFormula) {
     l.s2 = -0.004;
     l.s3 = 0.005;
     l.s4 = -0.006;
+    l.t1 = 0.007;
+    l.t2 = -0.008;
     const double x = 0.3, y = -0.2, r2 = x * x + y * y;
     const double radial =
         1 + 0.1 * r2 - 0.2 * r2 * r2 + 0.3 * r2 * r2 * r2 + 0.05 * r2 * r2 * r2 * r2;
-    const double xd =
-        x * radial + 2 * 0.01 * x * y - 0.02 * (r2 + 2 * x * x) + 0.003 * r2 - 0.004 * r2 * r2;
-    const double yd =
-        y * radial + 0.01 * (r2 + 2 * y * y) + 2 * -0.02 * x * y + 0.005 * r2 - 0.006 * r2 * r2;
+    // Trefoil: Re and Im of (0.007 - 0.008 i) (x - i y)^2.
+    const double trefoil_x = 0.007 * (x * x - y * y) - 0.008 * 2 * x * y;
+    const double trefoil_y = -0.008 * (x * x - y * y) - 0.007 * 2 * x * y;
+    const double xd = x * radial + 2 * 0.01 * x * y - 0.02 * (r2 + 2 * x * x) + 0.003 * r2 -
+                      0.004 * r2 * r2 + trefoil_x;
+    const double yd = y * radial + 0.01 * (r2 + 2 * y * y) + 2 * -0.02 * x * y + 0.005 * r2 -
+                      0.006 * r2 * r2 + trefoil_y;
     const Vec2 d = l.distort({x, y});
     EXPECT_NEAR(d[0], xd, 1e-15);
     EXPECT_NEAR(d[1], yd, 1e-15);

@@ -59,6 +59,8 @@ void expect_same_lens(const fpp::LensModel& a, const fpp::LensModel& b) {
     EXPECT_EQ(a.s2, b.s2);
     EXPECT_EQ(a.s3, b.s3);
     EXPECT_EQ(a.s4, b.s4);
+    EXPECT_EQ(a.t1, b.t1);
+    EXPECT_EQ(a.t2, b.t2);
 }
 
 void expect_same_geometry(const Rig& a, const Rig& b, double rotation_tolerance) {
@@ -119,8 +121,8 @@ TEST(SimRig, PaperRigIsTable1) {
     EXPECT_EQ(r.sensor.read_noise_dn, 0);
     EXPECT_EQ(r.sensor.gain_e_per_dn, 0);
     EXPECT_EQ(r.projector_optics.gamma, 1);
-    EXPECT_EQ(r.projector.k4, 0);
-    EXPECT_EQ(r.projector.s1, 0);
+    EXPECT_FALSE(r.camera.has_unmodelled_terms());
+    EXPECT_FALSE(r.projector.has_unmodelled_terms());
 }
 
 TEST(SimRig, ProjectorCentreSitsRightOfAndBelowTheCamera) {
@@ -196,6 +198,8 @@ TEST(SimRig, YamlRoundTripWithARotationMatrix) {
     Rig r = fpp::sim::load_rig(fpp::sim::effects_rig_path());
     r.name = "round \"trip\"";
     r.sensor.bit_depth = 12;
+    r.camera.t1 = 2.5e-4;
+    r.projector.t2 = -7.5e-4;
     const auto path = dir / "rig.yaml";
     std::ofstream(path) << fpp::sim::rig_to_yaml(r);
     const Rig back = fpp::sim::load_rig(path);

@@ -393,6 +393,41 @@ TEST(TableKernel, ReusedCloudIsFullyOverwritten) {
     EXPECT_TRUE(same_bits(fresh.xyz, wrong_size.xyz));
 }
 
+TEST(TableKernel, BackgroundTilesAreWrittenAsNoPoint) {
+    // Phase only in x 40..69, y 10..19 (parts of six 32x8 tiles); every other
+    // tile is background and is skipped, yet a reused cloud must come out
+    // NaN there and the decoded part identical to a full evaluation.
+    const fpp::CoefficientTable table = build_table(fpp::TableModel::rational);
+    const fpp::Image<float> full_phase = make_phase();
+    fpp::PointCloud full;
+    fpp::apply_table(table, full_phase, full);
+    fpp::Image<float> phase(kCamera, 1, kNaN);
+    const auto inside = [](int x, int y) { return x >= 40 && x < 70 && y >= 10 && y < 20; };
+    for (int y = 0; y < kCamera.height; ++y)
+        for (int x = 0; x < kCamera.width; ++x)
+            if (inside(x, y))
+                phase.at(x, y) = full_phase.at(x, y);
+    fpp::PointCloud reused;
+    reused.xyz = fpp::Image<float>(kCamera, 3, 12345.0f);
+    const fpp::TableApplyStats stats = fpp::apply_table(table, phase, reused);
+    std::size_t points = 0;
+    for (int y = 0; y < kCamera.height; ++y)
+        for (int x = 0; x < kCamera.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const float got = reused.xyz.at(x, y, c);
+                if (!inside(x, y)) {
+                    ASSERT_TRUE(std::isnan(got)) << x << "," << y << "," << c;
+                    continue;
+                }
+                const float want = full.xyz.at(x, y, c);
+                ASSERT_TRUE(std::memcmp(&got, &want, sizeof got) == 0) << x << "," << y;
+                points += c == 2 && !std::isnan(got) ? 1 : 0;
+            }
+    EXPECT_GT(points, 200u);
+    EXPECT_EQ(stats.points, points);
+    expect_stats_eq(stats, expected_stats(table, phase));
+}
+
 TEST(TableKernel, RejectsMismatchedInput) {
     const fpp::CoefficientTable table = build_table(fpp::TableModel::ray);
     fpp::PointCloud cloud;

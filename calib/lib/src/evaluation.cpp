@@ -5,10 +5,14 @@
 
 #include "fpp/error.hpp"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <span>
 #include <stdexcept>
 
 namespace fpp::calib {
@@ -171,10 +175,9 @@ ProbingFigures probing_figures(std::span<const Vec3> points, std::optional<doubl
     f.form = f.fit.fit.max - f.fit.fit.min;
     FitOptions plain = options;
     plain.reject_sigma = 0;
-    f.form_trimmed = trimmed_range(points, f.fit.fit, excluded_fraction,
-                                   [&](std::span<const Vec3> kept) {
-                                       return fit_sphere(kept, plain).fit;
-                                   });
+    f.form_trimmed =
+        trimmed_range(points, f.fit.fit, excluded_fraction,
+                      [&](std::span<const Vec3> kept) { return fit_sphere(kept, plain).fit; });
     f.diameter = 2 * f.fit.radius;
     if (nominal)
         f.size_error = f.diameter - *nominal;
@@ -193,8 +196,7 @@ CylinderFigures cylinder_figures(std::span<const Vec3> points, std::optional<dou
 }
 
 BallBarFigures ball_bar_figures(std::span<const Vec3> points, std::optional<double> nominal_length,
-                                std::optional<double> nominal_diameter,
-                                const FitOptions& options) {
+                                std::optional<double> nominal_diameter, const FitOptions& options) {
     BallBarFigures f;
     f.fit = fit_ball_bar(points, options, &f.cluster);
     f.length = f.fit.distance;
@@ -211,6 +213,48 @@ BallBarFigures ball_bar_figures(std::span<const Vec3> points, std::optional<doub
 
 // ---------------------------------------------------------------- ground truth
 
+namespace {
+
+// values[i] less the least-squares a + b x + c y at xy[i] (x, y centred and
+// scaled to unit RMS, so the 3 x 3 normal equations are well conditioned).
+// Fewer than 3 values or a degenerate layout: the values less their mean.
+std::vector<double> without_planar_part(std::span<const double> values,
+                                        std::span<const std::array<double, 2>> xy) {
+    const std::size_t n = values.size();
+    std::vector<double> out(values.begin(), values.end());
+    if (n == 0)
+        return out;
+    double mx = 0, my = 0;
+    for (const auto& p : xy) {
+        mx += p[0];
+        my += p[1];
+    }
+    mx /= double(n);
+    my /= double(n);
+    double ss = 0;
+    for (const auto& p : xy)
+        ss += (p[0] - mx) * (p[0] - mx) + (p[1] - my) * (p[1] - my);
+    const double scale = ss > 0 ? 1.0 / std::sqrt(ss / double(n)) : 1.0;
+    Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < n; ++i) {
+        const Eigen::Vector3d r(1.0, (xy[i][0] - mx) * scale, (xy[i][1] - my) * scale);
+        a += r * r.transpose();
+        b += r * values[i];
+    }
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(a);
+    if (n >= 3 && ldlt.info() == Eigen::Success && ldlt.rcond() > 1e-12)
+        c = ldlt.solve(b);
+    else
+        c[0] = b[0] / double(n);
+    for (std::size_t i = 0; i < n; ++i)
+        out[i] -= c[0] + c[1] * (xy[i][0] - mx) * scale + c[2] * (xy[i][1] - my) * scale;
+    return out;
+}
+
+} // namespace
+
 TruthComparison compare_with_truth(const CloudPoints& cloud, const Image<float>& truth) {
     if (!cloud.is_organised())
         throw std::invalid_argument("compare_with_truth: the cloud is not organised");
@@ -225,6 +269,8 @@ TruthComparison compare_with_truth(const CloudPoints& cloud, const Image<float>&
     t.dz_values.reserve(cloud.points.size());
     std::vector<double> distances;
     distances.reserve(cloud.points.size());
+    std::vector<std::array<double, 2>> true_xy;
+    true_xy.reserve(cloud.points.size());
     for (std::size_t i = 0; i < cloud.points.size(); ++i) {
         const std::uint32_t pixel = cloud.pixels[i];
         const float* ref = xyz + 3 * std::size_t{pixel};
@@ -236,6 +282,7 @@ TruthComparison compare_with_truth(const CloudPoints& cloud, const Image<float>&
         const double dx = p[0] - double(ref[0]), dy = p[1] - double(ref[1]),
                      dz = p[2] - double(ref[2]);
         t.dz_values.push_back(dz);
+        true_xy.push_back({double(ref[0]), double(ref[1])});
         distances.push_back(std::sqrt(dx * dx + dy * dy + dz * dz));
         t.dz_map.data()[pixel] = static_cast<float>(dz);
     }
@@ -244,6 +291,7 @@ TruthComparison compare_with_truth(const CloudPoints& cloud, const Image<float>&
         t.truth_pixels ? static_cast<double>(t.compared) / static_cast<double>(t.truth_pixels) : 0;
     t.dz = error_stats(t.dz_values);
     t.distance = error_stats(distances);
+    t.dz_shape = error_stats(without_planar_part(t.dz_values, true_xy));
     return t;
 }
 

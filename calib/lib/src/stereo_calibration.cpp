@@ -400,10 +400,10 @@ void check_representable(const LensModel& lens, const char* which) {
     for (double v : {lens.fu, lens.fv, lens.cu, lens.cv, lens.skew, lens.k1, lens.k2, lens.k3,
                      lens.p1, lens.p2})
         require_finite(v, which);
-    if (lens.k4 != 0 || lens.s1 != 0 || lens.s2 != 0 || lens.s3 != 0 || lens.s4 != 0)
+    if (lens.has_unmodelled_terms())
         throw std::invalid_argument(std::string("calibration: the ") + which +
-                                    " lens has k4 or thin-prism terms, which the file's "
-                                    "5-coefficient model cannot hold");
+                                    " lens has k4, thin-prism or trefoil terms, which the "
+                                    "file's 5-coefficient model cannot hold");
 }
 
 cv::Mat camera_matrix(const LensModel& l) {

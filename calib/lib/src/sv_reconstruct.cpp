@@ -51,44 +51,40 @@ ReconstructAxes resolve_axes(const DecodeResult& decoded, ReconstructAxes reques
 
 namespace {
 
-// The lens formula of fpp::LensModel (fpp/lens_model.hpp), inlined here
-// because it runs several times per pixel: normalised undistorted (x, y) ->
-// normalised distorted (xd, yd) and its Jacobian [dxd/dx dxd/dy; dyd/dx dyd/dy].
+// The calibrated 5-coefficient part of fpp::LensModel (fpp/lens_model.hpp),
+// inlined here because it runs several times per pixel: normalised
+// undistorted (x, y) -> normalised distorted (xd, yd) and its Jacobian
+// [dxd/dx dxd/dy; dyd/dx dyd/dy]. Simulated lenses with terms outside that
+// model go through LensModel itself.
 struct Distortion {
-    double k1, k2, k3, k4, p1, p2, s1, s2, s3, s4;
-    bool extra; // k4 or thin-prism terms present (simulated lenses only)
-    explicit Distortion(const LensModel& l)
-        : k1(l.k1), k2(l.k2), k3(l.k3), k4(l.k4), p1(l.p1), p2(l.p2), s1(l.s1), s2(l.s2), s3(l.s3),
-          s4(l.s4), extra(l.k4 != 0 || l.s1 != 0 || l.s2 != 0 || l.s3 != 0 || l.s4 != 0) {}
+    LensModel lens;
+    bool extra; // terms outside the calibrated model (simulated lenses only)
+    explicit Distortion(const LensModel& l) : lens(l), extra(l.has_unmodelled_terms()) {}
 
     void apply(double x, double y, double& xd, double& yd, double* J) const {
-        if (!extra) { // the calibrated 5-coefficient model
-            const double r2 = x * x + y * y;
-            const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
-            xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
-            yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
+        if (extra) {
+            const Vec2 d = lens.distort({x, y});
+            xd = d[0];
+            yd = d[1];
             if (J) {
-                const double dradial = k1 + r2 * (2 * k2 + r2 * 3 * k3);
-                const double cross = 2 * x * y * dradial + 2 * p1 * x + 2 * p2 * y;
-                J[0] = radial + 2 * x * x * dradial + 2 * p1 * y + 6 * p2 * x;
-                J[1] = cross;
-                J[2] = cross;
-                J[3] = radial + 2 * y * y * dradial + 6 * p1 * y + 2 * p2 * x;
+                const Mat2 m = lens.distortion_jacobian({x, y});
+                for (int i = 0; i < 4; ++i)
+                    J[i] = m[std::size_t(i)];
             }
             return;
         }
+        const double k1 = lens.k1, k2 = lens.k2, k3 = lens.k3, p1 = lens.p1, p2 = lens.p2;
         const double r2 = x * x + y * y;
-        const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * (k3 + r2 * k4)));
-        xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x) + r2 * (s1 + s2 * r2);
-        yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + r2 * (s3 + s4 * r2);
+        const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
+        yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
         if (J) {
-            const double dradial = k1 + r2 * (2 * k2 + r2 * (3 * k3 + r2 * 4 * k4));
-            const double dprism_x = s1 + 2 * s2 * r2;
-            const double dprism_y = s3 + 2 * s4 * r2;
-            J[0] = radial + 2 * x * x * dradial + 2 * p1 * y + 6 * p2 * x + 2 * x * dprism_x;
-            J[1] = 2 * x * y * dradial + 2 * p1 * x + 2 * p2 * y + 2 * y * dprism_x;
-            J[2] = 2 * x * y * dradial + 2 * p1 * x + 2 * p2 * y + 2 * x * dprism_y;
-            J[3] = radial + 2 * y * y * dradial + 6 * p1 * y + 2 * p2 * x + 2 * y * dprism_y;
+            const double dradial = k1 + r2 * (2 * k2 + r2 * 3 * k3);
+            const double cross = 2 * x * y * dradial + 2 * p1 * x + 2 * p2 * y;
+            J[0] = radial + 2 * x * x * dradial + 2 * p1 * y + 6 * p2 * x;
+            J[1] = cross;
+            J[2] = cross;
+            J[3] = radial + 2 * y * y * dradial + 6 * p1 * y + 2 * p2 * x;
         }
     }
 };

@@ -48,12 +48,14 @@ void read_lens(const Reader& in, const YAML::Node& node, const std::string& fiel
     const YAML::Node u = node["unmodelled_distortion"];
     if (u.IsDefined()) {
         const std::string ufield = child(field, "unmodelled_distortion");
-        in.expect_map(u, ufield, {"k4", "s1", "s2", "s3", "s4"});
+        in.expect_map(u, ufield, {"k4", "s1", "s2", "s3", "s4", "t1", "t2"});
         lens.k4 = in.real_value_or(u, ufield, "k4", 0);
         lens.s1 = in.real_value_or(u, ufield, "s1", 0);
         lens.s2 = in.real_value_or(u, ufield, "s2", 0);
         lens.s3 = in.real_value_or(u, ufield, "s3", 0);
         lens.s4 = in.real_value_or(u, ufield, "s4", 0);
+        lens.t1 = in.real_value_or(u, ufield, "t1", 0);
+        lens.t2 = in.real_value_or(u, ufield, "t2", 0);
     }
 }
 
@@ -107,18 +109,19 @@ void write_lens(std::ostringstream& out, const char* name, Size size, const Lens
         << "  distortion: {k1: " << format_real(l.k1) << ", k2: " << format_real(l.k2)
         << ", k3: " << format_real(l.k3) << ", p1: " << format_real(l.p1)
         << ", p2: " << format_real(l.p2) << "}\n";
-    if (l.k4 != 0 || l.s1 != 0 || l.s2 != 0 || l.s3 != 0 || l.s4 != 0)
+    if (l.has_unmodelled_terms())
         out << "  unmodelled_distortion: {k4: " << format_real(l.k4)
             << ", s1: " << format_real(l.s1) << ", s2: " << format_real(l.s2)
-            << ", s3: " << format_real(l.s3) << ", s4: " << format_real(l.s4) << "}\n";
+            << ", s3: " << format_real(l.s3) << ", s4: " << format_real(l.s4)
+            << ", t1: " << format_real(l.t1) << ", t2: " << format_real(l.t2) << "}\n";
 }
 
 void check_lens(const std::filesystem::path& origin, const std::string& field, Size size,
                 const LensModel& l) {
     if (size.width < 2 || size.height < 2 || size.width > 65536 || size.height > 65536)
         throw InputError(origin, field + ".width", "image size must be 2..65536 pixels per side");
-    const double all[] = {l.fu, l.fv, l.cu, l.cv, l.skew, l.k1, l.k2, l.k3,
-                          l.p1, l.p2, l.k4, l.s1, l.s2,   l.s3, l.s4};
+    const double all[] = {l.fu, l.fv, l.cu, l.cv, l.skew, l.k1, l.k2, l.k3, l.p1,
+                          l.p2, l.k4, l.s1, l.s2, l.s3,   l.s4, l.t1, l.t2};
     for (double v : all)
         if (!std::isfinite(v))
             throw InputError(origin, field, "non-finite lens parameter");
@@ -168,8 +171,8 @@ Vec3 Rig::projector_centre_in_camera() const {
 
 Rig Rig::without_effects() const {
     Rig r = *this;
-    r.camera.k4 = r.camera.s1 = r.camera.s2 = r.camera.s3 = r.camera.s4 = 0;
-    r.projector.k4 = r.projector.s1 = r.projector.s2 = r.projector.s3 = r.projector.s4 = 0;
+    r.camera.drop_unmodelled_terms();
+    r.projector.drop_unmodelled_terms();
     r.sensor.ambient = 0;
     r.sensor.read_noise_dn = 0;
     r.sensor.gain_e_per_dn = 0;
@@ -324,6 +327,10 @@ std::filesystem::path default_rig_path() {
 
 std::filesystem::path effects_rig_path() {
     return std::filesystem::path(FPP_BOARD_DIR) / "sim" / "paper-rig-effects.yaml";
+}
+
+std::filesystem::path lens_defects_rig_path() {
+    return std::filesystem::path(FPP_BOARD_DIR) / "sim" / "paper-rig-lens-defects.yaml";
 }
 
 } // namespace fpp::sim

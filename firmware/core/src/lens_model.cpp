@@ -4,12 +4,23 @@
 
 namespace fpp {
 
+bool LensModel::has_unmodelled_terms() const {
+    return k4 != 0 || s1 != 0 || s2 != 0 || s3 != 0 || s4 != 0 || t1 != 0 || t2 != 0;
+}
+
+void LensModel::drop_unmodelled_terms() {
+    k4 = s1 = s2 = s3 = s4 = t1 = t2 = 0;
+}
+
 Vec2 LensModel::distort(Vec2 n) const {
     const double x = n[0], y = n[1];
     const double r2 = x * x + y * y;
     const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * (k3 + r2 * k4)));
-    const double xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x) + r2 * (s1 + s2 * r2);
-    const double yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + r2 * (s3 + s4 * r2);
+    const double d2 = x * x - y * y;
+    const double xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x) + r2 * (s1 + s2 * r2) +
+                      t1 * d2 + 2 * t2 * x * y;
+    const double yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + r2 * (s3 + s4 * r2) +
+                      t2 * d2 - 2 * t1 * x * y;
     return {xd, yd};
 }
 
@@ -21,10 +32,14 @@ Mat2 LensModel::distortion_jacobian(Vec2 n) const {
     const double dradial = k1 + r2 * (2 * k2 + r2 * (3 * k3 + r2 * 4 * k4));
     const double dprism_x = s1 + 2 * s2 * r2;
     const double dprism_y = s3 + 2 * s4 * r2;
-    const double dxx = radial + x * dradial * 2 * x + 2 * p1 * y + p2 * 6 * x + dprism_x * 2 * x;
-    const double dxy = x * dradial * 2 * y + 2 * p1 * x + p2 * 2 * y + dprism_x * 2 * y;
-    const double dyx = y * dradial * 2 * x + p1 * 2 * x + 2 * p2 * y + dprism_y * 2 * x;
-    const double dyy = radial + y * dradial * 2 * y + p1 * 6 * y + 2 * p2 * x + dprism_y * 2 * y;
+    // Trefoil: d/dx = 2 (t1 x + t2 y, t2 x - t1 y), d/dy = 2 (t2 x - t1 y, -t1 x - t2 y).
+    const double ta = 2 * (t1 * x + t2 * y), tb = 2 * (t2 * x - t1 * y);
+    const double dxx =
+        radial + x * dradial * 2 * x + 2 * p1 * y + p2 * 6 * x + dprism_x * 2 * x + ta;
+    const double dxy = x * dradial * 2 * y + 2 * p1 * x + p2 * 2 * y + dprism_x * 2 * y + tb;
+    const double dyx = y * dradial * 2 * x + p1 * 2 * x + 2 * p2 * y + dprism_y * 2 * x + tb;
+    const double dyy =
+        radial + y * dradial * 2 * y + p1 * 6 * y + 2 * p2 * x + dprism_y * 2 * y - ta;
     return {dxx, dxy, dyx, dyy};
 }
 

@@ -86,6 +86,15 @@ void gather(const Image<float>& phase, int x0, int y0, int tw, int th, float* ou
     }
 }
 
+// Number of finite values among the tile's `count` phases (a reduction the
+// compiler vectorises; no early exit, which would stop it).
+std::uint32_t finite_count(const float* __restrict phase, int count) {
+    std::uint32_t n = 0;
+    for (int i = 0; i < count; ++i)
+        n += std::fabs(phase[i]) <= kFloatMax ? 1u : 0u;
+    return n;
+}
+
 // The prefetch helpers are always inlined: GCC takes a function that only
 // prefetches for one without side effects and deletes the calls to it.
 
@@ -141,17 +150,16 @@ inline float cubic(const float* c, int stride, int i, float t) {
 // The model is a template argument so that each loop is compiled without a
 // per-pixel branch on it.
 template <TableModel M>
-[[gnu::noinline]] TileCounts evaluate(const float* __restrict tile, int tp,
-                                      const float* __restrict phase, float* __restrict xs,
-                                      float* __restrict ys, float* __restrict zs,
-                                      const char* ahead, std::size_t ahead_part) {
+[[gnu::noinline]] TileCounts
+evaluate(const float* __restrict tile, int tp, const float* __restrict phase, float* __restrict xs,
+         float* __restrict ys, float* __restrict zs, const char* ahead, std::size_t ahead_part) {
     namespace tpl = table_plane;
     constexpr bool poly = M == TableModel::polynomial;
     const float* centre = tile + tpl::centre * tp;
     const float* ihr = tile + tpl::inv_half_range * tp;
     static_assert(tpl::ray_z == tpl::rational_z);
     const float* cz = tile + (poly ? tpl::poly_z : tpl::ray_z) * tp;
-    const float* cx = tile + tpl::poly_x * tp;                        // polynomial only
+    const float* cx = tile + tpl::poly_x * tp; // polynomial only
     const float* cy = tile + tpl::poly_y * tp;
     const float* d = tile + tpl::rational_d * tp; // rational only
     const float* xn = tile + (M == TableModel::rational ? tpl::rational_xn : tpl::ray_xn) * tp;
@@ -197,6 +205,16 @@ void scatter(const Scratch& s, int x0, int y0, int tw, int th, Image<float>& xyz
         const std::size_t o = static_cast<std::size_t>(r) * static_cast<std::size_t>(tw);
         interleave(s.x + o, s.y + o, s.z + o, w,
                    xyz.row(y0 + r) + static_cast<std::size_t>(x0) * 3);
+    }
+}
+
+// Writes NaN (no point) over the cloud rows of the tile at (x0, y0).
+void scatter_nothing(int x0, int y0, int tw, int th, Image<float>& xyz) {
+    const int w = std::min(tw, xyz.width() - x0);
+    const int h = std::min(th, xyz.height() - y0);
+    for (int r = 0; r < h; ++r) {
+        float* row = xyz.row(y0 + r) + static_cast<std::size_t>(x0) * 3;
+        std::fill(row, row + 3 * static_cast<std::size_t>(w), kNaN);
     }
 }
 
@@ -272,6 +290,12 @@ TableApplyStats apply_table(const CoefficientTable& table, const Image<float>& p
                 prefetch_rows(phase, cloud.xyz, last_in_row ? 0 : x0 + tw,
                               last_in_row ? y0 + th : y0, tw, th);
                 gather(phase, x0, y0, tw, th, s.phase);
+                // Background (no phase decoded anywhere in the tile): its
+                // coefficients, most of the bytes read, are not needed.
+                if (finite_count(s.phase, tp) == 0) {
+                    scatter_nothing(x0, y0, tw, th, cloud.xyz);
+                    continue;
+                }
                 const float* tile = table.tile(tx, ty);
                 const char* ahead = static_cast<const char*>(static_cast<const void*>(tile)) +
                                     (last ? 0 : tile_bytes);

@@ -9,11 +9,17 @@
 //                     + s1 r2 + s2 r2^2
 //                yd = yn (1 + k1 r2 + k2 r2^2 + k3 r2^3 + k4 r2^4) + p1 (r2 + 2 yn^2) + 2 p2 xn yn
 //                     + s3 r2 + s4 r2^2
+//                plus the trefoil term (t1 + i t2) conj(xn + i yn)^2:
+//                xd += t1 (xn^2 - yn^2) + 2 t2 xn yn,  yd += t2 (xn^2 - yn^2) - 2 t1 xn yn
 //   pixel:       u = fu xd + skew yd + cu,  v = fv yd + cv   (pixel centres on integers)
 //
-// k4 (8th-order radial) and s1..s4 (thin prism) are not part of the calibrated
+// k4 (8th-order radial), s1..s4 (thin prism) and t1, t2 (three-lobed, as
+// element tilt and mounting stress leave it) are not part of the calibrated
 // model (OpenCV's 5-coefficient model); the simulator uses them to create
-// distortion that a stereo calibration cannot absorb.
+// distortion that a stereo calibration cannot represent. Of the six quadratic
+// distortion fields, the tangential and prism terms span four; the trefoil
+// term is the other two, a shape no term of OpenCV's 5- to 14-coefficient
+// models has.
 //
 // Rotations: R = Rz(c) Ry(b) Rx(a) for Euler angles (a, b, c) in degrees, i.e.
 // rotate about x first, then y, then z (fixed axes). X_p = R X_c + t.
@@ -31,7 +37,12 @@ struct LensModel {
     double fu = 1, fv = 1, cu = 0, cv = 0, skew = 0;
     double k1 = 0, k2 = 0, k3 = 0, p1 = 0, p2 = 0;
     double k4 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0; // outside the calibrated model
+    double t1 = 0, t2 = 0;                         // outside the calibrated model
 
+    // Whether any term outside the calibrated model is non-zero.
+    bool has_unmodelled_terms() const;
+    // Sets the terms outside the calibrated model to zero.
+    void drop_unmodelled_terms();
     // Normalised undistorted -> normalised distorted.
     Vec2 distort(Vec2 n) const;
     // d(distorted)/d(undistorted) at n, row-major [dxd/dxn, dxd/dyn, dyd/dxn, dyd/dyn].

@@ -10,7 +10,8 @@
 // Tiles run on the pool's threads; nothing is allocated per pixel or per
 // tile (one scratch buffer per worker, allocated once per call at most).
 //
-// A pixel gets NaN (no point) when its phase is NaN, it has no model, or
+// A tile without any finite phase (background) is written as NaN without
+// reading its coefficients. A pixel gets NaN (no point) when its phase is NaN, it has no model, or
 // |t| > 1 (phase outside the range it was calibrated for).
 
 #include "fpp/coefficient_table.hpp"

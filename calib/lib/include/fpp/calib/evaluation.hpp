@@ -85,8 +85,7 @@ struct ProbingFigures {
     double diameter = 0;              // fitted
     std::optional<double> size_error; // P_S: fitted - nominal diameter
 };
-ProbingFigures probing_figures(std::span<const Vec3> points,
-                               std::optional<double> nominal_diameter,
+ProbingFigures probing_figures(std::span<const Vec3> points, std::optional<double> nominal_diameter,
                                const FitOptions& options = {},
                                double excluded_fraction = kGuidelineExcludedFraction);
 
@@ -102,8 +101,8 @@ CylinderFigures cylinder_figures(std::span<const Vec3> points,
 
 struct BallBarFigures {
     BallBarFit fit;
-    std::vector<std::uint8_t> cluster; // sphere (0 = first, 1 = second) of every point
-    double length = 0;                 // measured centre distance
+    std::vector<std::uint8_t> cluster;   // sphere (0 = first, 1 = second) of every point
+    double length = 0;                   // measured centre distance
     std::optional<double> spacing_error; // SD: measured - nominal centre distance
     double form_first = 0, form_second = 0;
     std::optional<double> size_error_first, size_error_second; // fitted - nominal diameter
@@ -116,14 +115,18 @@ BallBarFigures ball_bar_figures(std::span<const Vec3> points, std::optional<doub
 // ---------------------------------------------------------------- ground truth
 
 struct TruthComparison {
-    ErrorStats dz;                  // Z(point) - Z(truth), mm
-    ErrorStats distance;            // |point - truth|, mm
-    std::size_t truth_pixels = 0;   // pixels with a true surface
-    std::size_t compared = 0;       // pixels with both a point and a true surface
-    std::size_t no_surface = 0;     // points at pixels where the truth has no surface
-    double coverage = 0;            // compared / truth_pixels
-    std::vector<double> dz_values;  // per compared point, in the cloud's point order
-    Image<float> dz_map;            // Z difference per pixel, NaN where not compared
+    ErrorStats dz; // Z(point) - Z(truth), mm
+    // dz less its least-squares a + b X + c Y (X, Y true, camera frame): the
+    // error's shape once a depth offset and a tilt, the pose errors a
+    // calibration leaves, are taken out. mm.
+    ErrorStats dz_shape;
+    ErrorStats distance;           // |point - truth|, mm
+    std::size_t truth_pixels = 0;  // pixels with a true surface
+    std::size_t compared = 0;      // pixels with both a point and a true surface
+    std::size_t no_surface = 0;    // points at pixels where the truth has no surface
+    double coverage = 0;           // compared / truth_pixels
+    std::vector<double> dz_values; // per compared point, in the cloud's point order
+    Image<float> dz_map;           // Z difference per pixel, NaN where not compared
 };
 // `truth_xyz`: 3-channel float image of the cloud's organised size (camera
 // frame, mm, NaN = no surface). Throws std::invalid_argument otherwise, or
@@ -134,13 +137,14 @@ TruthComparison compare_with_truth(const CloudPoints& cloud, const Image<float>&
 
 struct CloudDistance {
     bool per_pixel = false;
-    ErrorStats distance;        // 3D distance from each point of the first cloud to its match
-    ErrorStats dz;              // per pixel only: Z(first) - Z(second)
-    std::size_t matched = 0;    // points of the first cloud with a match
-    std::size_t only_first = 0; // per pixel: points of the first cloud alone; nearest: beyond max distance
+    ErrorStats distance;     // 3D distance from each point of the first cloud to its match
+    ErrorStats dz;           // per pixel only: Z(first) - Z(second)
+    std::size_t matched = 0; // points of the first cloud with a match
+    std::size_t only_first =
+        0; // per pixel: points of the first cloud alone; nearest: beyond max distance
     std::size_t only_second = 0; // per pixel: points of the second cloud alone
-    std::vector<double> values; // per match: Z difference (per pixel) or distance (nearest)
-    Image<float> dz_map;        // per pixel only: Z difference, NaN where not both
+    std::vector<double> values;  // per match: Z difference (per pixel) or distance (nearest)
+    Image<float> dz_map;         // per pixel only: Z difference, NaN where not both
 };
 // Same camera pixel in both clouds. Throws std::invalid_argument unless both
 // are organised with the same size.

@@ -1,13 +1,13 @@
 #pragma once
 // The paper's experiments reproduced on the virtual scanner, in one run.
 //
-// Setup: the paper rig with its effects on (board/sim/paper-rig-effects.yaml:
-// projector distortion outside the stereo model, gamma, defocus, noise),
-// optionally with the camera binned. A checkerboard session (gray-xy) gives
-// the stereo (SV) calibration (or, with SvCalibrationSource::rig_model, the
-// rig's own 5-coefficient model); a flat-board session (gray-x, vertical
-// fringes only, as the paper) gives one hybrid coefficient table per table
-// model.
+// Setup: by default the paper rig with effects and a projector lens defect
+// outside every stereo model (board/sim/paper-rig-lens-defects.yaml: gamma,
+// defocus, noise, prism and trefoil distortion, sized so that SV's plane-fit
+// RMS is the paper's 0.118 mm), optionally with the camera binned. A checkerboard session (gray-xy)
+// gives the stereo (SV) calibration (or, with SvCalibrationSource::rig_model, the rig's own
+// 5-coefficient model); a flat-board session (gray-x, vertical fringes only, as the paper) gives
+// one hybrid coefficient table per table model.
 //
 // Scans (gray-x, saved as capture sets with ground truth), each reconstructed
 // by SV with the projector column only (the paper's SV) and by every table:
@@ -82,7 +82,7 @@ struct PaperExperimentOptions {
     int timing_runs = 3;         // best of this many runs per timing
     int threads = 0;             // simulation, decoding, calibration (timings use 1); 0 = all
     bool keep_sessions = false;  // keep the calibration sessions in the output
-    std::filesystem::path rig;   // empty: the paper rig with effects
+    std::filesystem::path rig;   // empty: paper-rig-lens-defects.yaml
     std::function<void(const std::string&)> progress;
 
     // Throws std::invalid_argument naming the first bad field.
@@ -121,8 +121,7 @@ std::vector<TableModel> available_table_models();
 // (-x0, -y0), camera size `size`. Pixel (u, v) of the window is pixel
 // (u + x0, v + y0) of the full camera. Throws std::invalid_argument if the
 // window is not inside the camera.
-StereoCalibration crop_calibration(const StereoCalibration& calibration, int x0, int y0,
-                                   Size size);
+StereoCalibration crop_calibration(const StereoCalibration& calibration, int x0, int y0, Size size);
 // The table of the same camera window (same tiling, model, axis, projector,
 // hash); every coefficient copied with get/set. Throws std::invalid_argument
 // if the window is not inside the table's camera.

@@ -66,5 +66,7 @@ std::string rig_to_yaml(const Rig& rig);
 std::filesystem::path default_rig_path();
 // board/sim/paper-rig-effects.yaml in the source tree.
 std::filesystem::path effects_rig_path();
+// board/sim/paper-rig-lens-defects.yaml in the source tree.
+std::filesystem::path lens_defects_rig_path();
 
 } // namespace fpp::sim
