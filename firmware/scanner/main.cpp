@@ -3,6 +3,7 @@
 #include "fpp/drivers/device_error.hpp"
 #include "fpp/error.hpp"
 #include "fpp/scanner/board_config.hpp"
+#include "fpp/scanner/hardware_board.hpp"
 #include "fpp/scanner/log.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
@@ -84,14 +85,13 @@ int main(int argc, char** argv) {
         // Capture mode records calibration sessions, made before any table
         // exists: it neither needs nor loads one.
         if (mode == ScanMode::capture) board.table.reset();
-        if (board.camera.driver != CameraDriver::sim) {
-            log.error("board " + board.name +
-                      ": camera.driver aravis needs the hardware drivers, not built into this "
-                      "binary");
-            return 1;
-        }
-        SimBoard sim(board);
-        Devices devices = sim.devices();
+        // A board file with a sim section is the virtual scanner; without one
+        // the hardware. Devices that cannot be opened throw DeviceError.
+        std::unique_ptr<SimBoard> sim;
+        std::unique_ptr<HardwareBoard> hardware;
+        if (board.sim) sim = std::make_unique<SimBoard>(board);
+        else hardware = std::make_unique<HardwareBoard>(board);
+        Devices devices = sim ? sim->devices() : hardware->devices();
         // Lines and display are released by the destructors, on every path.
         try {
             Scanner scanner(board, devices, log);

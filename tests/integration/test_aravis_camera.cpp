@@ -24,10 +24,7 @@
 #include "fpp/sim/renderer.hpp"
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
-
-#include <fcntl.h>
-#include <sys/file.h>
-#include <unistd.h>
+#include "network_isolation.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -46,20 +43,8 @@ using fpp::drivers::DeviceError;
 using fpp::drivers::TriggerMode;
 using namespace std::chrono_literals;
 
-// Runs before main(), while the process has one thread.
-struct NetworkIsolation {
-    bool namespaced = fpp::drivers::enter_private_network_namespace();
-    int lock_fd = -1;
-    NetworkIsolation() {
-        if (namespaced) return;
-        lock_fd = open("/tmp/fpp-aravis-fake-camera.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-        if (lock_fd >= 0) flock(lock_fd, LOCK_EX);
-    }
-    ~NetworkIsolation() {
-        if (lock_fd >= 0) close(lock_fd);
-    }
-};
-const NetworkIsolation isolation;
+// Before main(), while the process has one thread.
+const fpp::test::NetworkIsolation isolation;
 
 constexpr const char* kAddress = "127.0.0.1";
 

@@ -13,6 +13,7 @@
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
 #include "fpp/sim/sim_clock.hpp"
+#include "rig_truth_table.hpp"
 #include "test_support.hpp"
 
 #include <array>
@@ -27,65 +28,6 @@ using namespace fpp::scanner;
 using drivers::LedState;
 
 namespace {
-
-// A rational-model table computed from the rig's true geometry (camera ray
-// depth against the projector column, with the projector's unmodelled
-// distortion): the scan is then judged independently of calibration error.
-CoefficientTable truth_table(const sim::Rig& rig) {
-    TableInfo info;
-    info.camera = rig.camera_size;
-    info.projector = rig.projector_size;
-    info.model = TableModel::rational;
-    info.phase_axis = Axis::x;
-    CoefficientTable table(info);
-    constexpr int kSamples = 24;
-    for (int y = 0; y < info.camera.height; ++y) {
-        for (int x = 0; x < info.camera.width; ++x) {
-            Vec2 n;
-            if (!rig.camera.pixel_to_normalised({double(x), double(y)}, n)) continue;
-            std::array<double, kSamples> z{}, p{};
-            double pmin = 1e300, pmax = -1e300;
-            for (int k = 0; k < kSamples; ++k) {
-                z[k] = 350.0 + 300.0 * k / (kSamples - 1);
-                const Vec3 pc = mul(rig.R, Vec3{n[0] * z[k], n[1] * z[k], z[k]});
-                const Vec2 uv = rig.projector.project({pc[0] + rig.t[0], pc[1] + rig.t[1], pc[2] + rig.t[2]});
-                p[k] = uv[0];
-                pmin = std::min(pmin, p[k]);
-                pmax = std::max(pmax, p[k]);
-            }
-            const double centre = 0.5 * (pmin + pmax), inv_half = 2.0 / (pmax - pmin);
-            // Z = a0 + a1 t + a2 t^2 + a3 t^3 - d t Z, least squares (5 x 5 normal equations).
-            double m[5][6] = {};
-            for (int k = 0; k < kSamples; ++k) {
-                const double t = (p[k] - centre) * inv_half;
-                const double row[5] = {1, t, t * t, t * t * t, -t * z[k]};
-                for (int i = 0; i < 5; ++i) {
-                    for (int j = 0; j < 5; ++j) m[i][j] += row[i] * row[j];
-                    m[i][5] += row[i] * z[k];
-                }
-            }
-            for (int c = 0; c < 5; ++c) {
-                int best = c;
-                for (int r = c + 1; r < 5; ++r)
-                    if (std::abs(m[r][c]) > std::abs(m[best][c])) best = r;
-                std::swap(m[c], m[best]);
-                for (int r = 0; r < 5; ++r) {
-                    if (r == c) continue;
-                    const double f = m[r][c] / m[c][c];
-                    for (int j = c; j < 6; ++j) m[r][j] -= f * m[c][j];
-                }
-            }
-            table.set(table_plane::centre, x, y, float(centre));
-            table.set(table_plane::inv_half_range, x, y, float(inv_half));
-            for (int i = 0; i < 4; ++i)
-                table.set(table_plane::rational_z + i, x, y, float(m[i][5] / m[i][i]));
-            table.set(table_plane::rational_d, x, y, float(m[4][5] / m[4][4]));
-            table.set(table_plane::rational_xn, x, y, float(n[0]));
-            table.set(table_plane::rational_yn, x, y, float(n[1]));
-        }
-    }
-    return table;
-}
 
 std::string board_yaml(const fs::path& store, const std::string& table_line,
                        const std::string& extra_sim = "") {
@@ -129,7 +71,7 @@ struct Fixture {
         write_text(board_file, board_yaml(store, with_table ? "table: table.fpt\n" : ""));
         board = read_board_config(board_file);
     }
-    void make_table(const sim::Rig& rig) { write_table(table_file, truth_table(rig)); }
+    void make_table(const sim::Rig& rig) { write_table(table_file, fpp::test::rig_truth_table(rig)); }
     bool logged(const std::string& part) {
         std::lock_guard lock(lines_mutex);
         for (const auto& l : lines)
@@ -319,7 +261,7 @@ TEST(ScannerSim, BadTablesAreRejectedNamingTheFile) {
     }
     EXPECT_THROW(Scanner(f.board, sim.devices(), f.log), InputError);
     // For another camera resolution.
-    write_table(f.table_file, truth_table(sim.rig().binned_camera(2)));
+    write_table(f.table_file, fpp::test::rig_truth_table(sim.rig().binned_camera(2)));
     EXPECT_THROW(Scanner(f.board, sim.devices(), f.log), InputError);
 }
 

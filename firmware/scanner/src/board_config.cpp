@@ -76,11 +76,12 @@ public:
         if (root["table"] && !root["table"].IsNull()) c.table = path(root, "", "table");
         parse_store(r_.require(root, "", "store"), c.store);
         parse_timing(r_.require(root, "", "timing"), c.timing);
-        const bool sim = c.camera.driver == CameraDriver::sim;
-        if (sim != static_cast<bool>(root["sim"]))
-            r_.fail("sim", sim ? "missing field (camera.driver is sim)"
-                               : "only allowed with camera.driver sim");
-        if (sim) c.sim = parse_sim(root["sim"]);
+        if (c.camera.driver == CameraDriver::sim && !root["sim"])
+            r_.fail("sim", "missing field (camera.driver is sim)");
+        if (root["sim"]) {
+            c.sim = parse_sim(root["sim"]);
+            if (c.camera.driver == CameraDriver::aravis) check_gige_link(root, c);
+        }
         return c;
     }
 
@@ -164,6 +165,24 @@ private:
             std::chrono::microseconds(int_in(n, "timing", "trigger_pulse_us", 1, 100'000));
         t.flip_timeout = std::chrono::milliseconds(int_in(n, "timing", "flip_timeout_ms", 1, 10'000));
     }
+    // The virtual scanner behind a real GigE Vision link: its frames go
+    // through Aravis's fake camera, which has no line trigger and stamps
+    // frames on the host's monotonic clock, to the Aravis driver by address.
+    void check_gige_link(const YAML::Node& root, const BoardConfig& c) const {
+        const YAML::Node camera = root["camera"];
+        if (c.camera.settings.trigger != drivers::TriggerMode::software)
+            r_.fail(camera["trigger"], "camera.trigger",
+                    "must be software with a sim section (the fake GigE camera has no line "
+                    "trigger)");
+        if (c.camera.device.empty())
+            r_.fail(camera["device"], "camera.device",
+                    "must be the local address the fake GigE camera listens on (e.g. "
+                    "127.0.0.1) with a sim section");
+        if (c.sim->virtual_clock)
+            r_.fail(root["sim"]["clock"], "sim.clock",
+                    "must be steady with camera.driver aravis (frames carry host time)");
+    }
+
     SimConfig parse_sim(const YAML::Node& n) const {
         r_.expect_map(n, "sim", {"rig", "scene", "binning", "flip_latency_us", "clock", "seed"});
         SimConfig s;

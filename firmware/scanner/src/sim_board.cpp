@@ -1,5 +1,7 @@
 #include "fpp/scanner/sim_board.hpp"
 
+#include "sim_gige_camera.hpp"
+
 #include "fpp/error.hpp"
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
@@ -24,8 +26,16 @@ SimBoard::SimBoard(const BoardConfig& board) {
     }
     renderer_ = std::make_unique<sim::Renderer>(rig_, scene);
     display_ = std::make_unique<sim::SimDisplay>(rig_.projector_size, *clock_, s.flip_latency);
-    camera_ = std::make_unique<sim::SimCamera>(*renderer_, *display_, *clock_,
-                                               board.camera.settings, s.seed);
+    if (board.camera.driver == CameraDriver::aravis) {
+        // The sensor is triggered by the link, from software.
+        drivers::CameraSettings sensor = board.camera.settings;
+        sensor.trigger = drivers::TriggerMode::software;
+        camera_ = std::make_unique<sim::SimCamera>(*renderer_, *display_, *clock_, sensor, s.seed);
+        gige_camera_ = make_sim_gige_camera(*camera_, board.camera.device, board.camera.settings);
+    } else {
+        camera_ = std::make_unique<sim::SimCamera>(*renderer_, *display_, *clock_,
+                                                   board.camera.settings, s.seed);
+    }
     trigger_ = std::make_unique<sim::SimTrigger>(
         *clock_, [camera = camera_.get()](std::int64_t t) { camera->line_trigger(t); });
     button_ = std::make_unique<sim::SimButton>(board.gpio.debounce);
@@ -33,7 +43,8 @@ SimBoard::SimBoard(const BoardConfig& board) {
 }
 
 Devices SimBoard::devices() {
-    return Devices{*display_, *trigger_, *button_, *led_, *camera_, *clock_};
+    drivers::Camera& camera = gige_camera_ ? *gige_camera_ : static_cast<drivers::Camera&>(*camera_);
+    return Devices{*display_, *trigger_, *button_, *led_, camera, *clock_};
 }
 
 } // namespace fpp::scanner

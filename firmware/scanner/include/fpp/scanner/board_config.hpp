@@ -19,7 +19,15 @@
 //   store: {directory: <path>, max_mb: N}   oldest scans pruned beyond N MiB
 //   timing: {settle_us: N, trigger_pulse_us: N, flip_timeout_ms: N}
 //   sim: {rig: <rig yaml>, scene: <scene name or yaml>, binning: N,
-//         flip_latency_us: N, clock: virtual | steady, seed: N}   (camera.driver sim only)
+//         flip_latency_us: N, clock: virtual | steady, seed: N}
+//
+// A sim section makes a simulated board: the virtual scanner stands in for
+// projector, lines and scene. With camera.driver sim its camera is simulated
+// too; with camera.driver aravis the rendered frames are served by Aravis's
+// fake GigE Vision camera at camera.device (a local address) and read by the
+// real Aravis driver (needs camera.trigger software and sim.clock steady).
+// Without a sim section the board is hardware: DRM display, GPIO lines and
+// an Aravis camera (camera.driver aravis).
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -89,7 +97,7 @@ struct BoardConfig {
     std::optional<std::filesystem::path> table;
     StoreConfig store;
     TimingConfig timing;
-    std::optional<SimConfig> sim; // present exactly when camera.driver is sim
+    std::optional<SimConfig> sim; // a simulated board (always with camera.driver sim)
 
     // The sequence for a projector of this size (throws InputError naming
     // field "sequence" if it does not fit that projector).

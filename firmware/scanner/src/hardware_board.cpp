@@ -1,0 +1,81 @@
+#include "fpp/scanner/hardware_board.hpp"
+
+#include "fpp/drivers/device_error.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#if FPP_HAVE_ARAVIS
+#include <fpp/drivers/aravis_camera.hpp>
+#endif
+#if FPP_HAVE_DRM
+#include <fpp/drivers/drm_display.hpp>
+#endif
+#if FPP_HAVE_GPIOD
+#include <fpp/drivers/gpiod_lines.hpp>
+#endif
+
+namespace fpp::scanner {
+
+namespace {
+
+[[noreturn, maybe_unused]] void not_built(const std::string& device, const char* library) {
+    throw drivers::DeviceError(device, std::string("support is not built into this binary (") +
+                                           library + " was not found at build time)");
+}
+
+#if FPP_HAVE_GPIOD
+drivers::GpioLineConfig line(const GpioConfig& gpio, int offset, bool active_low) {
+    drivers::GpioLineConfig c;
+    c.chip = gpio.chip;
+    c.offset = static_cast<unsigned int>(offset);
+    c.active_low = active_low;
+    return c;
+}
+#endif
+
+} // namespace
+
+HardwareBoard::HardwareBoard(const BoardConfig& board) {
+    if (board.sim)
+        throw std::logic_error("HardwareBoard on a board with a sim section");
+    const GpioConfig& gpio = board.gpio;
+#if FPP_HAVE_GPIOD
+    led_ =
+        std::make_unique<drivers::GpiodStatusLed>(line(gpio, gpio.led_line, gpio.led_active_low));
+#else
+    not_built(gpio.chip, "libgpiod");
+#endif
+#if FPP_HAVE_DRM
+    drivers::DrmDisplaySettings display;
+    display.card = board.display.card;
+    // "auto" in the board file is the driver's empty request (first
+    // connected connector, preferred mode).
+    display.output.connector = board.display.connector == "auto" ? "" : board.display.connector;
+    display.output.mode = board.display.mode == "auto" ? "" : board.display.mode;
+    display_ = std::make_unique<drivers::DrmDisplay>(display);
+#else
+    not_built("display " + board.display.card, "libdrm");
+#endif
+#if FPP_HAVE_GPIOD
+    trigger_ = std::make_unique<drivers::GpiodTriggerOutput>(
+        line(gpio, gpio.trigger_line, gpio.trigger_active_low));
+    button_ = std::make_unique<drivers::GpiodButtonInput>(
+        line(gpio, gpio.button_line, gpio.button_active_low), gpio.debounce);
+#endif
+    if (board.camera.driver != CameraDriver::aravis)
+        throw std::logic_error("HardwareBoard: camera.driver sim without a sim section");
+#if FPP_HAVE_ARAVIS
+    camera_ = std::make_unique<drivers::AravisCamera>(board.camera.device, board.camera.settings);
+#else
+    not_built("camera " + board.camera.device, "aravis-0.8");
+#endif
+}
+
+HardwareBoard::~HardwareBoard() = default;
+
+Devices HardwareBoard::devices() {
+    return Devices{*display_, *trigger_, *button_, *led_, *camera_, clock_};
+}
+
+} // namespace fpp::scanner

@@ -1,0 +1,66 @@
+#include "sim_gige_camera.hpp"
+
+#include "fpp/drivers/device_error.hpp"
+
+#if FPP_HAVE_ARAVIS
+#include <fpp/drivers/aravis_camera.hpp>
+#include <fpp/drivers/aravis_fake_camera.hpp>
+#endif
+
+namespace fpp::scanner {
+
+#if FPP_HAVE_ARAVIS
+namespace {
+
+class SimGigeCamera final : public drivers::Camera {
+  public:
+    SimGigeCamera(sim::SimCamera& sensor, const std::string& address,
+                  const drivers::CameraSettings& settings)
+        : sensor_(sensor), fake_(sensor.size(), address), driver_(address, settings),
+          timeout_(settings.frame_timeout) {}
+
+    Size size() const override { return driver_.size(); }
+    int bit_depth() const override { return driver_.bit_depth(); }
+    void start() override {
+        sensor_.start();
+        driver_.start();
+    }
+    void stop() override {
+        driver_.stop();
+        sensor_.stop();
+    }
+    void software_trigger() override {
+        // The image must be in the fake camera before its trigger arrives:
+        // it fills the frame when it sees the trigger.
+        sensor_.software_trigger();
+        fake_.set_image(sensor_.next_frame(timeout_).frame);
+        driver_.software_trigger();
+    }
+    drivers::CapturedFrame next_frame(std::chrono::milliseconds timeout) override {
+        return driver_.next_frame(timeout);
+    }
+
+  private:
+    sim::SimCamera& sensor_;
+    drivers::AravisFakeCamera fake_; // declared before the driver that connects to it
+    drivers::AravisCamera driver_;
+    std::chrono::milliseconds timeout_;
+};
+
+} // namespace
+
+std::unique_ptr<drivers::Camera> make_sim_gige_camera(sim::SimCamera& sensor,
+                                                      const std::string& address,
+                                                      const drivers::CameraSettings& settings) {
+    return std::make_unique<SimGigeCamera>(sensor, address, settings);
+}
+#else
+std::unique_ptr<drivers::Camera> make_sim_gige_camera(sim::SimCamera&, const std::string& address,
+                                                      const drivers::CameraSettings&) {
+    throw drivers::DeviceError("camera " + address,
+                               "Aravis support is not built into this binary (aravis-0.8 was "
+                               "not found at build time)");
+}
+#endif
+
+} // namespace fpp::scanner

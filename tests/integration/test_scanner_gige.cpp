@@ -1,0 +1,195 @@
+// The scanner with its camera reached over GigE Vision: the virtual scanner
+// renders each frame into Aravis's fake GigE camera on loopback and the
+// scanner's Aravis driver receives it over UDP (a sim board with
+// camera.driver aravis). Also a hardware board on a machine without the
+// hardware: a clear error naming the device, no output.
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#if __has_include(<fpp/drivers/aravis_camera.hpp>)
+
+#include "fpp/error.hpp"
+#include "fpp/point_cloud.hpp"
+#include "fpp/scanner/board_config.hpp"
+#include "fpp/scanner/scan_store.hpp"
+#include "fpp/scanner/scanner.hpp"
+#include "fpp/scanner/sim_board.hpp"
+#include "network_isolation.hpp"
+#include "rig_truth_table.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using namespace fpp;
+using namespace fpp::scanner;
+
+namespace {
+
+// Before main(), while the process has one thread.
+const fpp::test::NetworkIsolation isolation;
+
+std::string gige_board_yaml(const fs::path& store) {
+    const fs::path rig = fpp::test::source_dir() / "board/sim/paper-rig-effects.yaml";
+    return "format: fpp-scanner-board/1\n"
+           "name: test-sim-gige\n"
+           "display: {card: auto, connector: auto, mode: auto}\n"
+           "gpio: {chip: gpiochip0, trigger_line: 17, button_line: 27, led_line: 22,\n"
+           "       trigger_active_low: false, button_active_low: true, led_active_low: false,\n"
+           "       debounce_ms: 30}\n"
+           "camera: {driver: aravis, device: 127.0.0.1, pixel_format: Mono8, exposure_us: 8000,\n"
+           "         trigger: software, trigger_source: Line0, packet_size: 0, buffer_count: 4,\n"
+           "         frame_timeout_ms: 1000}\n"
+           "sequence: gray-x\n"
+           "table: table.fpt\n"
+           "store: {directory: " +
+           store.string() +
+           ", max_mb: 64}\n"
+           "timing: {settle_us: 2000, trigger_pulse_us: 100, flip_timeout_ms: 100}\n"
+           "sim: {rig: " +
+           rig.string() +
+           ", scene: composite, binning: 4,\n"
+           "      flip_latency_us: 5000, clock: steady, seed: 3}\n";
+}
+
+struct GigeFixture {
+    fpp::test::TempDir dir;
+    fs::path board_file = dir / "board.yaml";
+    fs::path store = dir / "scans";
+    BoardConfig board;
+    GigeFixture() {
+        std::ofstream(board_file) << gige_board_yaml(store);
+        board = read_board_config(board_file);
+    }
+};
+
+// RMS 3D distance (mm) of the PLY's points from the truth at their pixels.
+double rms_against_truth(const fs::path& ply, const Image<float>& truth, std::size_t& compared) {
+    const PlyPoints pts = read_ply(ply);
+    double sum = 0;
+    compared = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        const int px = static_cast<int>(pts.pixel[i] % static_cast<std::uint32_t>(truth.width()));
+        const int py = static_cast<int>(pts.pixel[i] / static_cast<std::uint32_t>(truth.width()));
+        const float* t = &truth.at(px, py, 0);
+        if (!std::isfinite(t[2]))
+            continue;
+        const double dx = pts.x[i] - t[0], dy = pts.y[i] - t[1], dz = pts.z[i] - t[2];
+        sum += dx * dx + dy * dy + dz * dz;
+        ++compared;
+    }
+    return compared ? std::sqrt(sum / static_cast<double>(compared)) : std::nan("");
+}
+
+} // namespace
+
+TEST(ScannerGige, BoardNeedsSoftwareTriggerSteadyClockAndAnAddress) {
+    GigeFixture f;
+    EXPECT_EQ(f.board.camera.driver, CameraDriver::aravis);
+    ASSERT_TRUE(f.board.sim.has_value());
+    const std::string text = gige_board_yaml(f.store);
+    auto expect_field = [&](const std::string& from, const std::string& to,
+                            const std::string& field) {
+        std::string bad = text;
+        bad.replace(bad.find(from), from.size(), to);
+        try {
+            parse_board_config(bad, f.board_file);
+            ADD_FAILURE() << "accepted: " << to;
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.field(), field) << e.what();
+        }
+    };
+    expect_field("trigger: software", "trigger: line", "camera.trigger");
+    expect_field("device: 127.0.0.1", "device: \"\"", "camera.device");
+    expect_field("clock: steady", "clock: virtual", "sim.clock");
+}
+
+TEST(ScannerGige, ScanThroughTheFakeGigeCameraIsCloseToTruth) {
+    GigeFixture f;
+    SimBoard sim(f.board);
+    write_table(f.dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
+    const Logger log{[](LogLevel, const std::string&) {}};
+    Scanner scanner(f.board, sim.devices(), log);
+    const ScanOutcome out = scanner.scan(ScanMode::scan);
+
+    EXPECT_EQ(out.attempts, 1);
+    EXPECT_EQ(out.frames, scanner.frames_per_scan());
+    EXPECT_GT(out.points, 60000u);
+    std::size_t compared = 0;
+    const double rms =
+        rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
+    std::printf("GigE scan: %zu points, RMS %.4f mm against truth over %zu; capture %.1f ms\n",
+                out.points, rms, compared, out.timings.capture_ms);
+    EXPECT_GT(compared, out.points * 9 / 10);
+    EXPECT_LT(rms, 0.1);
+    // Each frame that crossed the link was exposed under its own pattern.
+    const auto& exposures = sim.camera().exposures();
+    ASSERT_EQ(exposures.size(), static_cast<std::size_t>(out.frames));
+    for (std::size_t i = 0; i < exposures.size(); ++i) {
+        EXPECT_EQ(exposures[i].pattern, static_cast<int>(i));
+        EXPECT_EQ(exposures[i].pattern_at_end, static_cast<int>(i));
+    }
+
+    // A second scan through the same stream (buffers went back to it); the
+    // sensor noise differs, so a few edge pixels may too.
+    const ScanOutcome again = scanner.scan(ScanMode::scan);
+    EXPECT_EQ(again.attempts, 1);
+    EXPECT_NEAR(static_cast<double>(again.points), static_cast<double>(out.points),
+                0.001 * static_cast<double>(out.points));
+}
+
+#ifdef FPP_SCANNER_EXE
+TEST(ScannerGige, ScannerBinaryScansThroughTheLink) {
+    GigeFixture f;
+    {
+        SimBoard sim(f.board); // the rig as the board binns it (no camera is opened yet: the
+                               // fake camera of this scope is gone before the binary starts)
+        write_table(f.dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
+    }
+    fpp::test::TempDir scratch;
+    const auto run = fpp::test::run_tool(
+        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once",
+        scratch.path());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    const auto scans = list_scans(f.store);
+    ASSERT_EQ(scans.size(), 1u);
+    EXPECT_TRUE(fs::exists(scans[0] / "cloud.ply"));
+    EXPECT_NE(run.output.find(scans[0].string()), std::string::npos) << run.output;
+}
+
+TEST(ScannerGige, HardwareBoardWithoutTheHardwareFailsNamingTheDevice) {
+    // The same board without its sim section: DRM display, GPIO lines, Aravis
+    // camera. This machine has no /dev/dri card (or no free one), no such
+    // GPIO chip and no camera: the first device opened is named, nothing is
+    // written.
+    fpp::test::TempDir dir;
+    std::string text = gige_board_yaml(dir / "scans");
+    text = text.substr(0, text.find("sim: {"));
+    text.replace(text.find("card: auto"), 10, "card: /dev/dri/card9");
+    const fs::path board = dir / "hardware.yaml";
+    std::ofstream(board) << text;
+    fpp::test::TempDir scratch;
+    const auto run = fpp::test::run_tool(
+        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(board) + " --once --mode capture",
+        scratch.path());
+    EXPECT_EQ(run.exit_code, 1) << run.output;
+    const bool named = run.output.find("gpiochip0") != std::string::npos ||
+                       run.output.find("/dev/dri/card9") != std::string::npos;
+    EXPECT_TRUE(named) << run.output;
+    EXPECT_NE(run.output.find("error"), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(dir / "scans") && !fs::is_empty(dir / "scans"));
+}
+#endif
+
+#else
+
+TEST(ScannerGige, NotBuilt) {
+    if (fpp::test::in_ci())
+        FAIL() << "fpp_aravis is not linked to this test";
+    GTEST_SKIP() << "the Aravis driver is not built (aravis-0.8 not found)";
+}
+
+#endif
