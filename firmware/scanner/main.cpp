@@ -1,5 +1,6 @@
 // fpp-scanner: the scanner head's firmware. Waits for the button, scans,
-// writes the point cloud into the scan store; --once scans once and exits.
+// writes the point cloud into the scan store; --once (or --scans N) scans
+// once (N times) and exits.
 #include "fpp/drivers/device_error.hpp"
 #include "fpp/error.hpp"
 #include "fpp/scanner/board_config.hpp"
@@ -11,6 +12,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -22,10 +24,12 @@ std::atomic<bool> g_stop{false};
 extern "C" void on_stop_signal(int) { g_stop.store(true); }
 
 void usage(std::FILE* out) {
-    std::fputs("usage: fpp-scanner --board FILE [--once] [--mode scan|capture] [--store DIR] [--table FILE]\n"
+    std::fputs("usage: fpp-scanner --board FILE [--once | --scans N] [--mode scan|capture]\n"
+               "                   [--store DIR] [--table FILE]\n"
                "  --board FILE   board configuration (fpp-scanner-board/1, e.g. board/sim.yaml)\n"
                "  --once         scan once as if the button had been pressed, print the output\n"
                "                 folder and exit (0 only when the outputs are written)\n"
+               "  --scans N      the same N times in a row, one output folder per line\n"
                "  --mode M       scan: point cloud (needs the board's table); capture: also the\n"
                "                 raw capture set (calibration sessions)\n"
                "  --store DIR    scan store directory (overrides the board's)\n"
@@ -41,6 +45,7 @@ int main(int argc, char** argv) {
     std::string store;
     std::string table;
     bool once = false;
+    int scans = 0; // --scans N; --once is --scans 1
     ScanMode mode = ScanMode::scan;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -49,6 +54,16 @@ int main(int argc, char** argv) {
         else if (a == "--store" && has_value) store = argv[++i];
         else if (a == "--table" && has_value) table = argv[++i];
         else if (a == "--once") once = true;
+        else if (a == "--scans" && has_value) {
+            const std::string n = argv[++i];
+            char* end = nullptr;
+            const long v = std::strtol(n.c_str(), &end, 10);
+            if (n.empty() || *end != '\0' || v < 1 || v > 100000) {
+                std::fprintf(stderr, "error: --scans must be 1..100000, not '%s'\n", n.c_str());
+                return 2;
+            }
+            scans = static_cast<int>(v);
+        }
         else if (a == "--mode" && has_value) {
             const std::string m = argv[++i];
             if (m == "scan") mode = ScanMode::scan;
@@ -95,9 +110,13 @@ int main(int argc, char** argv) {
         // Lines and display are released by the destructors, on every path.
         try {
             Scanner scanner(board, devices, log);
-            if (once) {
-                const ScanOutcome outcome = scanner.scan(mode, &g_stop);
-                std::printf("%s\n", outcome.folder.string().c_str());
+            if (once && scans == 0) scans = 1;
+            if (scans > 0) {
+                for (int k = 0; k < scans; ++k) {
+                    const ScanOutcome outcome = scanner.scan(mode, &g_stop);
+                    std::printf("%s\n", outcome.folder.string().c_str());
+                    std::fflush(stdout);
+                }
                 devices.display.restore();
                 return 0;
             }

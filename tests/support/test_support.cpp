@@ -6,12 +6,14 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace fpp::test {
 
 std::filesystem::path shared_dir() {
-    if (const char* env = std::getenv("FPP_SHARED_DIR"); env && *env) return env;
+    if (const char* env = std::getenv("FPP_SHARED_DIR"); env && *env)
+        return env;
     return FPP_SHARED_DIR_DEFAULT;
 }
 
@@ -19,7 +21,9 @@ std::filesystem::path dataset(const std::string& relative) {
     return shared_dir() / "datasets" / relative;
 }
 
-std::filesystem::path source_dir() { return FPP_SOURCE_DIR; }
+std::filesystem::path source_dir() {
+    return FPP_SOURCE_DIR;
+}
 
 bool in_ci() {
     const char* env = std::getenv("CI");
@@ -67,6 +71,21 @@ ToolRun run_tool(const std::string& exe, const std::string& args,
     }
     std::filesystem::remove(log); // the folder holds only what the tool wrote
     return run;
+}
+
+std::map<std::string, double> read_figures_csv(const std::filesystem::path& file) {
+    std::ifstream in(file);
+    std::string line;
+    if (!in || !std::getline(in, line) || line != "name,value,unit")
+        throw std::runtime_error(file.string() + ": missing, or not a figures.csv");
+    std::map<std::string, double> figures;
+    while (std::getline(in, line)) {
+        const auto a = line.find(','), b = line.rfind(',');
+        if (a == std::string::npos || a == b)
+            throw std::runtime_error(file.string() + ": malformed line '" + line + "'");
+        figures[line.substr(0, a)] = std::stod(line.substr(a + 1, b - a - 1));
+    }
+    return figures;
 }
 
 } // namespace fpp::test

@@ -2,6 +2,7 @@
 // Test helpers: where test data lives, temporary folders.
 
 #include <filesystem>
+#include <map>
 #include <string>
 
 namespace fpp::test {
@@ -17,7 +18,7 @@ bool in_ci();
 
 // A fresh empty folder, removed with its contents on destruction.
 class TempDir {
-public:
+  public:
     TempDir();
     ~TempDir();
     TempDir(const TempDir&) = delete;
@@ -25,35 +26,41 @@ public:
     const std::filesystem::path& path() const { return path_; }
     std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
 
-private:
+  private:
     std::filesystem::path path_;
 };
 
 // A command-line tool run through the shell, as a person runs it.
 struct ToolRun {
-    int exit_code = -1;  // -1 if it did not exit normally (signal)
-    std::string output;  // stdout and stderr
+    int exit_code = -1; // -1 if it did not exit normally (signal)
+    std::string output; // stdout and stderr
 };
 
 // The argument in single quotes for /bin/sh.
 std::string shell_quote(const std::string& s);
-inline std::string shell_quote(const std::filesystem::path& p) { return shell_quote(p.string()); }
+inline std::string shell_quote(const std::filesystem::path& p) {
+    return shell_quote(p.string());
+}
 
 // Runs `exe args` (args already quoted as needed), output captured through
 // a log file in `scratch` that is removed afterwards.
 ToolRun run_tool(const std::string& exe, const std::string& args,
                  const std::filesystem::path& scratch);
 
+// A figures.csv written by fpp-calib (header name,value,unit): name -> value.
+// Throws std::runtime_error naming the file if it is missing or malformed.
+std::map<std::string, double> read_figures_csv(const std::filesystem::path& file);
+
 } // namespace fpp::test
 
 // Skips the test with a clear message when a real dataset is absent; in CI
 // (where ../shared is always present) its absence is a failure instead.
-#define FPP_REQUIRE_DATASET(path_expr)                                                       \
-    do {                                                                                     \
-        if (!std::filesystem::exists(path_expr)) {                                           \
-            if (::fpp::test::in_ci()) {                                                      \
-                FAIL() << "real dataset missing in CI: " << (path_expr);                     \
-            }                                                                                \
-            GTEST_SKIP() << "real dataset not found (set FPP_SHARED_DIR): " << (path_expr);  \
-        }                                                                                    \
+#define FPP_REQUIRE_DATASET(path_expr)                                                             \
+    do {                                                                                           \
+        if (!std::filesystem::exists(path_expr)) {                                                 \
+            if (::fpp::test::in_ci()) {                                                            \
+                FAIL() << "real dataset missing in CI: " << (path_expr);                           \
+            }                                                                                      \
+            GTEST_SKIP() << "real dataset not found (set FPP_SHARED_DIR): " << (path_expr);        \
+        }                                                                                          \
     } while (0)

@@ -34,9 +34,14 @@ const char* kind_text(BoardDescription::Kind kind) {
 std::vector<fs::path> capture_folders(const fs::path& session) {
     std::vector<fs::path> out;
     std::error_code ec;
-    for (const fs::directory_entry& e : fs::directory_iterator(session, ec))
-        if (e.is_directory() && fs::exists(e.path() / "capture.yaml"))
+    for (const fs::directory_entry& e : fs::directory_iterator(session, ec)) {
+        if (!e.is_directory())
+            continue;
+        if (fs::exists(e.path() / "capture.yaml"))
             out.push_back(e.path());
+        else if (fs::exists(e.path() / "capture" / "capture.yaml")) // an fpp-scanner scan
+            out.push_back(e.path() / "capture");
+    }
     if (ec)
         throw InputError(session, "", "cannot list the folder: " + ec.message());
     std::sort(out.begin(), out.end());
@@ -60,7 +65,9 @@ SessionFolder read_session_folder(const fs::path& session, BoardDescription::Kin
                              kind_text(s.board.kind) + ")");
     s.poses = capture_folders(session);
     if (s.poses.empty())
-        throw InputError(session, "", "no capture sets (sub-folders holding capture.yaml)");
+        throw InputError(session, "",
+                         "no capture sets (sub-folders holding capture.yaml, or fpp-scanner scans "
+                         "holding capture/)");
     for (const fs::path& f : s.poses) {
         const fs::path yaml = f / "capture.yaml";
         s.manifests.push_back(read_manifest(yaml));
@@ -72,7 +79,8 @@ SessionFolder read_session_folder(const fs::path& session, BoardDescription::Kin
             throw InputError(yaml, "camera",
                              "camera size " + size_text(m.camera) + " differs from " +
                                  s.poses.front().filename().string() + "'s " +
-                                 size_text(s.camera_size) + "; all poses must come from one camera");
+                                 size_text(s.camera_size) +
+                                 "; all poses must come from one camera");
         } else if (!(m.projector == s.projector_size)) {
             throw InputError(yaml, "projector",
                              "projector size " + size_text(m.projector) + " differs from " +

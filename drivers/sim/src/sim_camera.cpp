@@ -2,6 +2,9 @@
 
 #include "fpp/drivers/device_error.hpp"
 
+#include <stdexcept>
+#include <utility>
+
 namespace fpp::sim {
 
 namespace {
@@ -10,20 +13,37 @@ const char* const kDevice = "sim camera";
 
 SimCamera::SimCamera(const Renderer& renderer, const SimDisplay& display, drivers::Clock& clock,
                      const drivers::CameraSettings& settings, std::uint64_t noise_seed)
-    : renderer_(renderer), display_(display), clock_(clock), settings_(settings),
+    : renderer_(&renderer), display_(display), clock_(clock), settings_(settings),
       seed_(noise_seed), dark_(renderer.rig().projector_size) {}
 
-Size SimCamera::size() const { return renderer_.rig().camera_size; }
+Size SimCamera::size() const {
+    return renderer_->rig().camera_size;
+}
 
-int SimCamera::bit_depth() const { return renderer_.rig().sensor.bit_depth > 8 ? 16 : 8; }
+int SimCamera::bit_depth() const {
+    return renderer_->rig().sensor.bit_depth > 8 ? 16 : 8;
+}
 
 void SimCamera::check_present() const {
-    if (gone_) throw drivers::DeviceError(kDevice, "camera gone (no response)");
+    if (gone_)
+        throw drivers::DeviceError(kDevice, "camera gone (no response)");
 }
 
 void SimCamera::start() {
     check_present();
+    if (on_start_)
+        on_start_();
     streaming_ = true;
+}
+
+void SimCamera::on_start(std::function<void()> hook) {
+    on_start_ = std::move(hook);
+}
+
+void SimCamera::set_renderer(const Renderer& renderer) {
+    if (!(renderer.rig().camera_size == renderer_->rig().camera_size))
+        throw std::invalid_argument("SimCamera::set_renderer: another camera size");
+    renderer_ = &renderer;
 }
 
 void SimCamera::stop() {
@@ -41,12 +61,14 @@ void SimCamera::software_trigger() {
     if (settings_.trigger != drivers::TriggerMode::software)
         throw drivers::DeviceError(kDevice, "software trigger while triggered by line " +
                                                 settings_.trigger_source);
-    if (!streaming_) throw drivers::DeviceError(kDevice, "software trigger while stopped");
+    if (!streaming_)
+        throw drivers::DeviceError(kDevice, "software trigger while stopped");
     expose(clock_.now_ns());
 }
 
 void SimCamera::line_trigger(std::int64_t t_ns) {
-    if (gone_ || !streaming_ || settings_.trigger != drivers::TriggerMode::line) return;
+    if (gone_ || !streaming_ || settings_.trigger != drivers::TriggerMode::line)
+        return;
     expose(t_ns);
 }
 
@@ -57,7 +79,8 @@ void SimCamera::expose(std::int64_t t_ns) {
         gone_ = true;
         return;
     }
-    if (fault == CameraFault::dropped) ++next_frame_id_;
+    if (fault == CameraFault::dropped)
+        ++next_frame_id_;
     Exposure e;
     e.frame_id = next_frame_id_++;
     e.start_ns = t_ns;
@@ -65,7 +88,8 @@ void SimCamera::expose(std::int64_t t_ns) {
     const auto exposure_ns = static_cast<std::int64_t>(settings_.exposure_us * 1000.0);
     e.pattern_at_end = display_.on_screen_at(t_ns + exposure_ns);
     exposures_.push_back(e);
-    if (fault == CameraFault::timeout) return;
+    if (fault == CameraFault::timeout)
+        return;
     queue_.push_back({e, fault == CameraFault::incomplete});
 }
 
@@ -73,8 +97,8 @@ drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) 
     check_present();
     if (queue_.empty()) {
         clock_.sleep_for(timeout);
-        throw drivers::DeviceError(kDevice, "no frame within " + std::to_string(timeout.count()) +
-                                                " ms");
+        throw drivers::DeviceError(kDevice,
+                                   "no frame within " + std::to_string(timeout.count()) + " ms");
     }
     Pending p = queue_.front();
     queue_.pop_front();
@@ -89,7 +113,8 @@ drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) 
             ? dark_
             : display_.pattern(static_cast<std::size_t>(p.exposure.pattern));
     drivers::CapturedFrame out;
-    out.frame = renderer_.render(light, Renderer::frame_seed(seed_, static_cast<int>(p.exposure.frame_id)));
+    out.frame = renderer_->render(
+        light, Renderer::frame_seed(seed_, static_cast<int>(p.exposure.frame_id)));
     out.frame_id = p.exposure.frame_id;
     out.timestamp_ns = p.exposure.start_ns;
     return out;

@@ -2,25 +2,70 @@
 
 #include "sim_gige_camera.hpp"
 
+#include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
 #include "fpp/sim/sim_clock.hpp"
 
+#include <charconv>
+#include <filesystem>
 #include <stdexcept>
+#include <string_view>
 
 namespace fpp::scanner {
 
+namespace {
+
+constexpr std::string_view kSessionPrefix = "session:";
+
+// "session:checkerboard:N" or "session:plane:N": the calibration board of a
+// simulated session (fpp/sim/session.hpp) at its N poses.
+sim::SessionOptions parse_session_scene(const std::string& text) {
+    const std::string rest = text.substr(kSessionPrefix.size());
+    const auto colon = rest.find(':');
+    const std::string kind = rest.substr(0, colon);
+    sim::SessionOptions o;
+    if (kind == "checkerboard")
+        o.kind = sim::SessionKind::checkerboard;
+    else if (kind == "plane")
+        o.kind = sim::SessionKind::plane;
+    else
+        throw std::invalid_argument("session scene '" + text +
+                                    "': the board must be checkerboard or plane");
+    int poses = 0;
+    const std::string count = colon == std::string::npos ? "" : rest.substr(colon + 1);
+    const auto [end, ec] = std::from_chars(count.data(), count.data() + count.size(), poses);
+    if (ec != std::errc() || end != count.data() + count.size() || poses < 1 || poses > 200)
+        throw std::invalid_argument("session scene '" + text +
+                                    "': give 1..200 poses, e.g. session:" + kind + ":15");
+    o.poses = poses;
+    return o;
+}
+
+} // namespace
+
 SimBoard::SimBoard(const BoardConfig& board) {
-    if (!board.sim) throw std::logic_error("SimBoard on a board without a sim section");
+    if (!board.sim)
+        throw std::logic_error("SimBoard on a board without a sim section");
     const SimConfig& s = *board.sim;
-    if (s.virtual_clock) clock_ = std::make_unique<sim::VirtualClock>();
-    else clock_ = std::make_unique<drivers::SteadyClock>();
+    if (s.virtual_clock)
+        clock_ = std::make_unique<sim::VirtualClock>();
+    else
+        clock_ = std::make_unique<drivers::SteadyClock>();
     rig_ = sim::load_rig(s.rig);
-    if (s.binning > 1) rig_ = rig_.binned_camera(s.binning);
+    if (s.binning > 1)
+        rig_ = rig_.binned_camera(s.binning);
     sim::Scene scene;
     try {
-        scene = sim::scene_from_argument(s.scene);
+        if (s.scene.starts_with(kSessionPrefix)) {
+            session_ = parse_session_scene(s.scene);
+            session_->seed = s.seed;
+            session_poses_ = sim::session_poses(rig_, *session_);
+            scene = sim::session_scene(*session_, session_poses_[0]);
+        } else {
+            scene = sim::scene_from_argument(s.scene);
+        }
     } catch (const std::invalid_argument& e) {
         throw InputError(board.file, "sim.scene", e.what());
     }
@@ -36,14 +81,38 @@ SimBoard::SimBoard(const BoardConfig& board) {
         camera_ = std::make_unique<sim::SimCamera>(*renderer_, *display_, *clock_,
                                                    board.camera.settings, s.seed);
     }
+    if (session_) {
+        // The board's description, as a person would write it for the board
+        // they hold, so that the store is a session folder for fpp-calib.
+        const auto board_yaml = board.store.directory / "board.yaml";
+        if (!std::filesystem::exists(board_yaml)) {
+            std::filesystem::create_directories(board.store.directory);
+            write_file_atomically(board_yaml, sim::session_board_yaml(*session_));
+        }
+        camera_->on_start([this] { next_session_pose(); });
+    }
     trigger_ = std::make_unique<sim::SimTrigger>(
         *clock_, [camera = camera_.get()](std::int64_t t) { camera->line_trigger(t); });
     button_ = std::make_unique<sim::SimButton>(board.gpio.debounce);
     led_ = std::make_unique<sim::SimLed>();
 }
 
+void SimBoard::next_session_pose() {
+    // A scan that took no frame (an attempt that failed at once) keeps the
+    // pose; any other scan moves the board on, cycling through the poses.
+    if (camera_->exposures().size() == exposures_at_pose_)
+        return;
+    exposures_at_pose_ = camera_->exposures().size();
+    pose_index_ = (pose_index_ + 1) % session_poses_.size();
+    auto next = std::make_unique<sim::Renderer>(
+        rig_, sim::session_scene(*session_, session_poses_[pose_index_]));
+    camera_->set_renderer(*next);
+    renderer_ = std::move(next);
+}
+
 Devices SimBoard::devices() {
-    drivers::Camera& camera = gige_camera_ ? *gige_camera_ : static_cast<drivers::Camera&>(*camera_);
+    drivers::Camera& camera =
+        gige_camera_ ? *gige_camera_ : static_cast<drivers::Camera&>(*camera_);
     return Devices{*display_, *trigger_, *button_, *led_, camera, *clock_};
 }
 

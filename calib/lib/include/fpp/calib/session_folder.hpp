@@ -1,7 +1,9 @@
 #pragma once
 // A calibration session folder: board.yaml (fpp-board/1) and one capture set
-// per pose (any sub-folder holding capture.yaml, in name order). Shared by
-// the stereo (checkerboard) and hybrid (plane) calibrations.
+// per pose, in name order: any sub-folder holding capture.yaml, or an
+// fpp-scanner scan folder holding one in capture/ (a scan store of
+// capture-mode scans is a session). Shared by the stereo (checkerboard) and
+// hybrid (plane) calibrations.
 
 #include "fpp/capture_set.hpp"
 
@@ -31,7 +33,7 @@ SessionFolder read_session_folder(const std::filesystem::path& session,
                                   const std::string& purpose,
                                   const std::string& axes_reason);
 
-// Sub-folders of `session` holding capture.yaml, by name.
+// The capture set folders of `session` (sub/ or sub/capture/), by name.
 std::vector<std::filesystem::path> capture_folders(const std::filesystem::path& session);
 
 } // namespace fpp::calib

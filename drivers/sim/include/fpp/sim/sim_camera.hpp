@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,7 @@ struct Exposure {
 };
 
 class SimCamera final : public drivers::Camera {
-public:
+  public:
     // The renderer must outlive the camera. Settings: trigger mode, exposure
     // (time spent before the frame is read out) and frame timeout are used.
     SimCamera(const Renderer& renderer, const SimDisplay& display, drivers::Clock& clock,
@@ -51,16 +52,23 @@ public:
     // The trigger input (wired to SimTrigger); ignored while stopped or in
     // software trigger mode, as on a real camera.
     void line_trigger(std::int64_t t_ns);
+    // Called at every start(), before streaming: where the scene may change
+    // between scans (a person moving the board between button presses).
+    void on_start(std::function<void()> hook);
+    // Renders with `renderer` from the next exposure on; it must outlive the
+    // camera and have the same camera size (std::invalid_argument otherwise).
+    void set_renderer(const Renderer& renderer);
     // Fault at the `at_trigger`-th trigger (0-based) since construction.
     void inject_fault(CameraFault fault, int at_trigger);
     // Every exposure taken, in order.
     const std::vector<Exposure>& exposures() const { return exposures_; }
     bool streaming() const { return streaming_; }
 
-private:
+  private:
     void expose(std::int64_t t_ns);
     void check_present() const;
-    const Renderer& renderer_;
+    const Renderer* renderer_;
+    std::function<void()> on_start_;
     const SimDisplay& display_;
     drivers::Clock& clock_;
     drivers::CameraSettings settings_;

@@ -5,11 +5,21 @@
 // camera.driver aravis the sim camera is the sensor of a GigE Vision link:
 // its frames reach the scanner through Aravis's fake camera and the Aravis
 // driver.
+//
+// sim.scene "session:checkerboard:N" or "session:plane:N" holds a calibration
+// board (fpp/sim/session.hpp) at the N poses of a simulated session, moved on
+// to the next pose at every scan, as a person would between button presses;
+// the board's description is written to the store as board.yaml (unless one
+// is there), so that capture-mode scans make a session folder for fpp-calib.
+#include <cstddef>
 #include <memory>
+#include <optional>
+#include <vector>
 
 #include <fpp/scanner/board_config.hpp>
 #include <fpp/scanner/scanner.hpp>
 #include <fpp/sim/renderer.hpp>
+#include <fpp/sim/session.hpp>
 #include <fpp/sim/sim_camera.hpp>
 #include <fpp/sim/sim_display.hpp>
 #include <fpp/sim/sim_gpio.hpp>
@@ -17,7 +27,7 @@
 namespace fpp::scanner {
 
 class SimBoard {
-public:
+  public:
     // Throws InputError for a bad rig or scene file, DeviceError when the
     // GigE link cannot be set up, std::logic_error when
     // the board is not a sim board.
@@ -37,7 +47,7 @@ public:
     sim::SimButton& button() { return *button_; }
     sim::SimLed& led() { return *led_; }
 
-private:
+  private:
     std::unique_ptr<drivers::Clock> clock_;
     sim::Rig rig_;
     std::unique_ptr<sim::Renderer> renderer_;
@@ -47,6 +57,12 @@ private:
     std::unique_ptr<sim::SimTrigger> trigger_;
     std::unique_ptr<sim::SimButton> button_;
     std::unique_ptr<sim::SimLed> led_;
+    // Session scenes.
+    void next_session_pose();
+    std::optional<sim::SessionOptions> session_;
+    std::vector<sim::Pose> session_poses_;
+    std::size_t pose_index_ = 0;
+    std::size_t exposures_at_pose_ = 0;
 };
 
 } // namespace fpp::scanner

@@ -1,0 +1,115 @@
+// The whole story on the virtual scanner, with the product's two programs as
+// a person runs them: fpp-scanner records a checkerboard session and a
+// flat-board session in capture mode (the sim board moves the board on at
+// every scan), fpp-calib calibrates the stereo pair from the first and fits
+// the hybrid table from the second, fpp-scanner loads the table and scans the
+// composite scene, and the cloud is compared with the scene's ground truth
+// (rendered by fpp-calib simulate for the same rig). Camera binned 4 x 4
+// (400 x 300) to keep it to seconds.
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using fpp::test::run_tool;
+using fpp::test::shell_quote;
+using fpp::test::TempDir;
+
+namespace {
+
+// board/sim.yaml with its scene, sequence, clock and binning replaced.
+std::string sim_board(const std::string& scene, const std::string& sequence) {
+    std::ifstream in(fpp::test::source_dir() / "board/sim.yaml");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string text = ss.str();
+    auto replace = [&](const std::string& from, const std::string& to) {
+        const auto at = text.find(from);
+        ASSERT_NE(at, std::string::npos) << from;
+        text.replace(at, from.size(), to);
+    };
+    replace("scene: composite", "scene: \"" + scene + "\"");
+    replace("sequence: gray-x\n", "sequence: " + sequence + "\n");
+    replace("clock: steady", "clock: virtual");
+    replace("binning: 2", "binning: 4");
+    replace("rig: sim/", "rig: " + (fpp::test::source_dir() / "board/sim").string() + "/");
+    return text;
+}
+
+std::vector<std::string> lines(const std::string& text) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string l; std::getline(in, l);)
+        out.push_back(l);
+    return out;
+}
+
+} // namespace
+
+TEST(ScannerToCalibration, SessionsRecordedByTheScannerCalibrateItToTheTruth) {
+    TempDir dir;
+    const fs::path checkerboard = dir / "checkerboard";
+    const fs::path planes = dir / "planes";
+    const fs::path scans = dir / "scans";
+    std::ofstream(dir / "checkerboard.yaml") << sim_board("session:checkerboard:15", "gray-xy");
+    std::ofstream(dir / "planes.yaml") << sim_board("session:plane:30", "gray-x");
+    std::ofstream(dir / "scan.yaml") << sim_board("composite", "gray-x");
+    auto scanner = [&](const std::string& args) {
+        return run_tool(FPP_SCANNER_EXE, args, dir.path());
+    };
+    auto calib = [&](const std::string& args) { return run_tool(FPP_CALIB_EXE, args, dir.path()); };
+
+    // Sessions: one capture-mode scan per pose, into stores that become
+    // session folders (the sim board writes board.yaml beside the scans).
+    const auto cb = scanner("--board " + shell_quote(dir / "checkerboard.yaml") +
+                            " --mode capture --scans 15 --store " + shell_quote(checkerboard));
+    ASSERT_EQ(cb.exit_code, 0) << cb.output;
+    EXPECT_TRUE(fs::exists(checkerboard / "board.yaml"));
+    int written = 0;
+    for (const std::string& l : lines(cb.output))
+        written += fs::exists(fs::path(l) / "capture" / "capture.yaml") ? 1 : 0;
+    EXPECT_EQ(written, 15) << cb.output;
+    const auto pl = scanner("--board " + shell_quote(dir / "planes.yaml") +
+                            " --mode capture --scans 30 --store " + shell_quote(planes));
+    ASSERT_EQ(pl.exit_code, 0) << pl.output;
+
+    // Host calibration from what the scanner recorded.
+    const auto stereo =
+        calib("stereo " + shell_quote(checkerboard) + " --out " + shell_quote(dir / "calib.yaml"));
+    ASSERT_EQ(stereo.exit_code, 0) << stereo.output;
+    EXPECT_NE(stereo.output.find("from 15 of 15 poses"), std::string::npos) << stereo.output;
+    const auto hybrid =
+        calib("hybrid " + shell_quote(planes) + " --calib " + shell_quote(dir / "calib.yaml") +
+              " --out " + shell_quote(dir / "table.fpt"));
+    ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
+
+    // A button press on the scanner with that table.
+    const auto scan = scanner("--board " + shell_quote(dir / "scan.yaml") + " --once --store " +
+                              shell_quote(scans) + " --table " + shell_quote(dir / "table.fpt"));
+    ASSERT_EQ(scan.exit_code, 0) << scan.output;
+    const auto folder = lines(scan.output).back();
+    ASSERT_TRUE(fs::exists(fs::path(folder) / "cloud.ply")) << scan.output;
+
+    // Against the truth of the same scene on the same rig.
+    const auto truth = calib(
+        "simulate --rig " +
+        shell_quote(fpp::test::source_dir() / "board/sim/paper-rig-effects.yaml") +
+        " --scene composite --sequence gray-x --binning 4 --out " + shell_quote(dir / "truth"));
+    ASSERT_EQ(truth.exit_code, 0) << truth.output;
+    const auto eval =
+        calib("evaluate " + shell_quote(fs::path(folder) / "cloud.ply") + " --truth " +
+              shell_quote(dir / "truth") + " --out " + shell_quote(dir / "eval"));
+    ASSERT_EQ(eval.exit_code, 0) << eval.output;
+    const auto f = fpp::test::read_figures_csv(dir / "eval" / "figures.csv");
+    std::printf("scanner -> fpp-calib -> scanner: %.0f points, 3D RMS %.4f mm, Z mean %.4f mm\n",
+                f.at("cloud.points"), f.at("cloud.truth.distance_rms"),
+                f.at("cloud.truth.dz_mean"));
+    EXPECT_GT(f.at("cloud.truth.coverage"), 85.0); // percent of the lit true surface
+    EXPECT_LT(f.at("cloud.truth.distance_rms"), 0.1);
+}
