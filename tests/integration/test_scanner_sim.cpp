@@ -345,4 +345,66 @@ TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
     EXPECT_NE(bad.output.find("error: " + f.table_file.string()), std::string::npos) << bad.output;
     EXPECT_EQ(list_scans(f.store).size(), 1u);
 }
+
+// The store on a file system of its own, in a private mount namespace of the
+// child: read-only (a bind mount remounted ro), or full (a 256 KiB tmpfs,
+// which a 400 x 300 cloud overflows). Both need CAP_SYS_ADMIN (root in CI);
+// chmod alone would not stop root.
+namespace {
+
+fpp::test::ToolRun run_with_store_mount(const Fixture& f, const std::string& mount_commands,
+                             const fpp::test::TempDir& scratch) {
+    const std::string store = fpp::test::shell_quote(f.store);
+    const std::string script = "set -e; " + mount_commands + "; exec " +
+                               fpp::test::shell_quote(std::string(FPP_SCANNER_EXE)) + " --board " +
+                               fpp::test::shell_quote(f.board_file) + " --once";
+    return fpp::test::run_tool("unshare", "-m sh -c " + fpp::test::shell_quote(script),
+                               scratch.path());
+}
+
+bool can_mount_privately() {
+    return std::system("unshare -m true > /dev/null 2>&1") == 0;
+}
+
+} // namespace
+
+TEST(ScannerCli, ReadOnlyOrFullStoreFailsCleanlyAndLeavesNothing) {
+    if (!can_mount_privately()) {
+        if (fpp::test::in_ci()) FAIL() << "unshare -m is not permitted";
+        GTEST_SKIP() << "needs a private mount namespace (unshare -m, root)";
+    }
+    Fixture f;
+    {
+        SimBoard sim(f.board);
+        f.make_table(sim.rig());
+    }
+    fpp::test::TempDir scratch;
+    // One good scan first: the faults must leave it alone.
+    const auto ok = fpp::test::run_tool(FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once", scratch.path());
+    ASSERT_EQ(ok.exit_code, 0) << ok.output;
+    ASSERT_EQ(list_scans(f.store).size(), 1u);
+    const auto before = list_scans(f.store);
+    const std::string store = fpp::test::shell_quote(f.store);
+
+    const auto ro = run_with_store_mount(
+        f, "mount --bind " + store + " " + store + "; mount -o remount,bind,ro " + store, scratch);
+    EXPECT_EQ(ro.exit_code, 1) << ro.output;
+    EXPECT_NE(ro.output.find("error: "), std::string::npos) << ro.output;
+    EXPECT_NE(ro.output.find(f.store.string()), std::string::npos) << ro.output;
+    EXPECT_NE(ro.output.find("Read-only file system"), std::string::npos) << ro.output;
+    EXPECT_EQ(list_scans(f.store), before);
+
+    // A full disk: the tmpfs hides the store's contents while mounted.
+    const auto full = run_with_store_mount(
+        f, "mount -t tmpfs -o size=256k fpp-full " + store, scratch);
+    EXPECT_EQ(full.exit_code, 1) << full.output;
+    EXPECT_NE(full.output.find("error: "), std::string::npos) << full.output;
+    EXPECT_NE(full.output.find("No space left on device"), std::string::npos) << full.output;
+    EXPECT_EQ(full.output.find("scan written"), std::string::npos) << full.output;
+    // Back on the real store: the earlier scan and nothing else.
+    EXPECT_EQ(list_scans(f.store), before);
+    std::size_t entries = 0;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator(f.store)) ++entries;
+    EXPECT_EQ(entries, 1u);
+}
 #endif
