@@ -16,10 +16,16 @@
 #include "rig_truth_table.hpp"
 #include "test_support.hpp"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 namespace fs = std::filesystem;
@@ -406,5 +412,51 @@ TEST(ScannerCli, ReadOnlyOrFullStoreFailsCleanlyAndLeavesNothing) {
     std::size_t entries = 0;
     for ([[maybe_unused]] const auto& e : fs::directory_iterator(f.store)) ++entries;
     EXPECT_EQ(entries, 1u);
+}
+
+TEST(ScannerCli, SigtermDuringAScanAbortsItCleanly) {
+    // Slow flips (0.1 s each, steady clock): the 17-pattern scan takes about
+    // 2 s, and SIGTERM arrives as soon as the scan has started.
+    Fixture f;
+    {
+        SimBoard sim(f.board);
+        f.make_table(sim.rig());
+    }
+    std::string text = board_yaml(f.store, "table: table.fpt\n");
+    text.replace(text.find("flip_latency_us: 16667, clock: virtual"), 38,
+                 "flip_latency_us: 100000, clock: steady");
+    write_text(f.board_file, text);
+    const fs::path log = f.dir / "scanner.log";
+    const std::string board = f.board_file.string(); // no allocation after fork()
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+        if (fd < 0 || dup2(fd, STDERR_FILENO) < 0 || dup2(fd, STDOUT_FILENO) < 0) _exit(127);
+        execl(FPP_SCANNER_EXE, FPP_SCANNER_EXE, "--board", board.c_str(), "--once",
+              static_cast<char*>(nullptr));
+        _exit(127);
+    }
+    auto read_log = [&] {
+        std::ifstream in(log);
+        std::stringstream ss;
+        ss << in.rdbuf();
+        return ss.str();
+    };
+    bool started = false;
+    for (int i = 0; i < 10000 && !started; ++i) { // up to 10 s
+        started = read_log().find("scan started") != std::string::npos;
+        if (!started) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    ASSERT_TRUE(started) << read_log();
+    ASSERT_EQ(kill(pid, SIGTERM), 0);
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status) << "\n" << read_log();
+    EXPECT_EQ(WEXITSTATUS(status), 1) << read_log();
+    const std::string out = read_log();
+    EXPECT_NE(out.find("abort"), std::string::npos) << out;
+    EXPECT_EQ(out.find("scan written"), std::string::npos) << out;
+    EXPECT_TRUE(!fs::exists(f.store) || fs::is_empty(f.store)) << out;
 }
 #endif
