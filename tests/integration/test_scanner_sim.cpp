@@ -330,6 +330,31 @@ TEST(ScannerBoardConfig, RejectsBadFieldsNamingThem) {
     expect_field("max_mb: 64", "max_mb: 64, extra: 1", "store.extra");
 }
 
+TEST(ScannerBoardConfig, ShippedBoardFilesAreValid) {
+    // Every board description under board/ reads; the hardware ones drive an
+    // Aravis camera from a line trigger, the simulated ones carry a sim
+    // section.
+    int hardware = 0, simulated = 0;
+    for (const auto& e : fs::directory_iterator(fpp::test::source_dir() / "board")) {
+        if (e.path().extension() != ".yaml") continue;
+        SCOPED_TRACE(e.path().string());
+        const BoardConfig b = read_board_config(e.path());
+        if (b.sim) {
+            ++simulated;
+            continue;
+        }
+        ++hardware;
+        EXPECT_EQ(b.camera.driver, CameraDriver::aravis);
+        EXPECT_EQ(b.camera.settings.trigger, drivers::TriggerMode::line);
+        EXPECT_TRUE(b.table.has_value());
+        EXPECT_NE(b.gpio.trigger_line, b.gpio.button_line);
+        EXPECT_NE(b.gpio.led_line, b.gpio.button_line);
+        EXPECT_NE(b.gpio.led_line, b.gpio.trigger_line);
+    }
+    EXPECT_GE(hardware, 2); // Raspberry Pi 5, ROCK 5B
+    EXPECT_GE(simulated, 4);
+}
+
 #ifdef FPP_SCANNER_EXE
 TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
     Fixture f;
