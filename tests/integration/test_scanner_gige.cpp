@@ -181,6 +181,19 @@ TEST(ScannerGige, HardwareBoardWithoutTheHardwareFailsNamingTheDevice) {
     EXPECT_TRUE(named) << run.output;
     EXPECT_NE(run.output.find("error"), std::string::npos) << run.output;
     EXPECT_FALSE(fs::exists(dir / "scans") && !fs::is_empty(dir / "scans"));
+
+    // The same with only the camera simulated (sim.camera_only): the display
+    // and the lines are still this machine's, which it lacks.
+    std::string camera_only = gige_board_yaml(dir / "scans");
+    camera_only.replace(camera_only.find("seed: 3}"), 8, "seed: 3, camera_only: true}");
+    const fs::path board2 = dir / "camera-only.yaml";
+    std::ofstream(board2) << camera_only;
+    const auto run2 = fpp::test::run_tool(
+        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(board2) + " --once --mode capture",
+        scratch.path());
+    EXPECT_EQ(run2.exit_code, 1) << run2.output;
+    EXPECT_NE(run2.output.find("error: gpiochip0"), std::string::npos) << run2.output;
+    EXPECT_FALSE(fs::exists(dir / "scans") && !fs::is_empty(dir / "scans"));
 }
 #endif
 

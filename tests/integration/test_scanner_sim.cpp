@@ -12,21 +12,24 @@
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
+#include "fpp/sim/observed_display.hpp"
+#include "fpp/sim/sim_camera.hpp"
 #include "fpp/sim/sim_clock.hpp"
+#include "fpp/sim/sim_display.hpp"
 #include "rig_truth_table.hpp"
 #include "test_support.hpp"
 
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <fcntl.h>
 #include <fstream>
 #include <mutex>
+#include <signal.h>
 #include <sstream>
+#include <sys/wait.h>
 #include <thread>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace fpp;
@@ -48,11 +51,14 @@ std::string board_yaml(const fs::path& store, const std::string& table_line,
            "         trigger: line, trigger_source: Line0, packet_size: 0, buffer_count: 4,\n"
            "         frame_timeout_ms: 200}\n"
            "sequence: gray-x\n" +
-           table_line +
-           "store: {directory: " + store.string() + ", max_mb: 64}\n"
+           table_line + "store: {directory: " + store.string() +
+           ", max_mb: 64}\n"
            "timing: {settle_us: 2000, trigger_pulse_us: 100, flip_timeout_ms: 100}\n"
-           "sim: {rig: " + rig.string() + ", scene: composite, binning: 4,\n"
-           "      flip_latency_us: 16667, clock: virtual, seed: 3" + extra_sim + "}\n";
+           "sim: {rig: " +
+           rig.string() +
+           ", scene: composite, binning: 4,\n"
+           "      flip_latency_us: 16667, clock: virtual, seed: 3" +
+           extra_sim + "}\n";
 }
 
 void write_text(const fs::path& path, const std::string& text) {
@@ -77,11 +83,14 @@ struct Fixture {
         write_text(board_file, board_yaml(store, with_table ? "table: table.fpt\n" : ""));
         board = read_board_config(board_file);
     }
-    void make_table(const sim::Rig& rig) { write_table(table_file, fpp::test::rig_truth_table(rig)); }
+    void make_table(const sim::Rig& rig) {
+        write_table(table_file, fpp::test::rig_truth_table(rig));
+    }
     bool logged(const std::string& part) {
         std::lock_guard lock(lines_mutex);
         for (const auto& l : lines)
-            if (l.find(part) != std::string::npos) return true;
+            if (l.find(part) != std::string::npos)
+                return true;
         return false;
     }
 };
@@ -94,7 +103,8 @@ double rms_against_truth(const fs::path& ply, const Image<float>& truth, std::si
         const int px = int(pts.pixel[i] % std::uint32_t(truth.width()));
         const int py = int(pts.pixel[i] / std::uint32_t(truth.width()));
         const float* t = &truth.at(px, py, 0);
-        if (!std::isfinite(t[2])) continue;
+        if (!std::isfinite(t[2]))
+            continue;
         const double dx = pts.x[i] - t[0], dy = pts.y[i] - t[1], dz = pts.z[i] - t[2];
         sum += dx * dx + dy * dy + dz * dz;
         ++compared;
@@ -118,7 +128,8 @@ TEST(ScannerSim, ScanWritesCloudCloseToTruth) {
     // The composite scene fills most of the 400 x 300 binned image.
     EXPECT_GT(out.points, 60000u);
     std::size_t compared = 0;
-    const double rms = rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
+    const double rms =
+        rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
     std::printf("scan: %zu points, RMS %.4f mm against truth over %zu; streaming %.3f ms/frame, "
                 "last frame to disk %.1f ms\n",
                 out.points, rms, compared, out.timings.push_mean_ms,
@@ -142,7 +153,8 @@ TEST(ScannerSim, ScanWritesCloudCloseToTruth) {
 TEST(ScannerSim, TriggerBeforeFlipCompletesCapturesWrongPattern) {
     Fixture f(false);
     SimBoard sim(f.board);
-    const auto patterns = render_sequence(f.board.sequence(sim.display().size()), sim.display().size());
+    const auto patterns =
+        render_sequence(f.board.sequence(sim.display().size()), sim.display().size());
     sim.display().prepare(patterns);
     sim.camera().start();
     sim.display().show(0);
@@ -162,6 +174,71 @@ TEST(ScannerSim, TriggerBeforeFlipCompletesCapturesWrongPattern) {
     EXPECT_LT(early.timestamp_ns, flip.timestamp_ns);
 }
 
+TEST(ScannerSim, CameraSeeingADisplayThroughItsFlipEventsScansAsTheSimBoard) {
+    // What a camera_only board does with a real display, with the sim
+    // display in its place: the camera renders what the flip events say is
+    // on screen, triggered from software.
+    Fixture f;
+    SimBoard sim(f.board);
+    f.make_table(sim.rig());
+    f.board.camera.settings.trigger = drivers::TriggerMode::software;
+    sim::VirtualClock clock;
+    sim::SimDisplay display(sim.rig().projector_size, clock);
+    sim::ObservedDisplay observed(display);
+    sim::SimCamera camera(sim.renderer(), observed, clock, f.board.camera.settings, 3);
+    Scanner scanner(
+        f.board, Devices{observed, sim.trigger(), sim.button(), sim.led(), camera, clock}, f.log);
+    const ScanOutcome out = scanner.scan(ScanMode::scan);
+    std::size_t compared = 0;
+    const double rms =
+        rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
+    EXPECT_GT(out.points, 60000u);
+    EXPECT_LT(rms, 0.1);
+    ASSERT_EQ(camera.exposures().size(), static_cast<std::size_t>(out.frames));
+    for (std::size_t i = 0; i < camera.exposures().size(); ++i) {
+        EXPECT_EQ(camera.exposures()[i].pattern, static_cast<int>(i));
+        // The observer agrees with the display's own schedule.
+        EXPECT_EQ(display.on_screen_at(camera.exposures()[i].start_ns), static_cast<int>(i));
+    }
+}
+
+TEST(ScannerBoardConfig, CameraOnlyNeedsSoftwareTriggerAndSteadyClock) {
+    fpp::test::TempDir dir;
+    std::string text = board_yaml(dir / "scans", "");
+    auto with = [&](const std::string& from, const std::string& to) {
+        std::string t = text;
+        t.replace(t.find(from), from.size(), to);
+        return t;
+    };
+    const std::string camera_only = with("seed: 3", "seed: 3, camera_only: true");
+    const std::string ok = [&] {
+        std::string t = camera_only;
+        t.replace(t.find("trigger: line"), 13, "trigger: software");
+        t.replace(t.find("clock: virtual"), 14, "clock: steady");
+        return t;
+    }();
+    const BoardConfig b = parse_board_config(ok, dir / "board.yaml");
+    ASSERT_TRUE(b.sim.has_value());
+    EXPECT_TRUE(b.sim->camera_only);
+    auto field_of = [&](const std::string& yaml) {
+        try {
+            parse_board_config(yaml, dir / "board.yaml");
+        } catch (const InputError& e) {
+            return e.field();
+        }
+        return std::string("accepted");
+    };
+    std::string line_trigger = ok;
+    line_trigger.replace(line_trigger.find("trigger: software"), 17, "trigger: line");
+    EXPECT_EQ(field_of(line_trigger), "camera.trigger");
+    std::string virtual_clock = ok;
+    virtual_clock.replace(virtual_clock.find("clock: steady"), 13, "clock: virtual");
+    EXPECT_EQ(field_of(virtual_clock), "sim.clock");
+    std::string not_bool = ok;
+    not_bool.replace(not_bool.find("camera_only: true"), 17, "camera_only: yes please");
+    EXPECT_EQ(field_of(not_bool), "sim.camera_only");
+}
+
 TEST(ScannerSim, EarlyFlipEventsAreCaughtAsPatternMismatch) {
     // A display whose events arrive 5 ms before the pattern is on screen, with
     // 2 ms of settle: frames show the previous pattern.
@@ -173,7 +250,8 @@ TEST(ScannerSim, EarlyFlipEventsAreCaughtAsPatternMismatch) {
     scanner.scan(ScanMode::scan);
     int mismatched = 0;
     const auto& exposures = sim.camera().exposures();
-    for (std::size_t i = 0; i < exposures.size(); ++i) mismatched += exposures[i].pattern != int(i);
+    for (std::size_t i = 0; i < exposures.size(); ++i)
+        mismatched += exposures[i].pattern != int(i);
     EXPECT_EQ(mismatched, int(exposures.size()));
 }
 
@@ -204,8 +282,8 @@ TEST(ScannerSim, CameraGoneMidScanFailsWithoutOutput) {
 }
 
 TEST(ScannerSim, FrameTimeoutAndDroppedFrameAreRetriedOnce) {
-    for (auto fault : {sim::CameraFault::timeout, sim::CameraFault::dropped,
-                       sim::CameraFault::incomplete}) {
+    for (auto fault :
+         {sim::CameraFault::timeout, sim::CameraFault::dropped, sim::CameraFault::incomplete}) {
         Fixture f;
         SimBoard sim(f.board);
         f.make_table(sim.rig());
@@ -241,7 +319,8 @@ TEST(ScannerSim, FlipFailureAndStopRequestLeaveNothing) {
 
     std::atomic<bool> stop{false};
     sim.display().on_flip([&](const drivers::FlipEvent& e) {
-        if (e.index == 4) stop = true;
+        if (e.index == 4)
+            stop = true;
     });
     EXPECT_THROW(scanner.scan(ScanMode::scan, &stop), ScanAborted);
     EXPECT_TRUE(list_scans(f.store).empty());
@@ -277,7 +356,8 @@ TEST(ScannerSim, ButtonDuringScanIsIgnoredAndLogged) {
     f.make_table(sim.rig());
     Scanner scanner(f.board, sim.devices(), f.log);
     sim.display().on_flip([&](const drivers::FlipEvent& e) {
-        if (e.index == 3) sim.button().press(2); // one press, two bounces
+        if (e.index == 3)
+            sim.button().press(2); // one press, two bounces
     });
     std::atomic<bool> stop{false};
     sim.button().press();
@@ -293,7 +373,8 @@ TEST(ScannerSim, ButtonDuringScanIsIgnoredAndLogged) {
 
 TEST(ScannerSim, StorePrunedToItsLimit) {
     fpp::test::TempDir dir;
-    for (const char* name : {"scan-20200101-000000-000", "scan-20200102-000000-000", "scan-20200103-000000-000"}) {
+    for (const char* name :
+         {"scan-20200101-000000-000", "scan-20200102-000000-000", "scan-20200103-000000-000"}) {
         fs::create_directories(dir / name);
         write_text(dir / name / "cloud.ply", std::string(1000, 'x'));
     }
@@ -306,7 +387,8 @@ TEST(ScannerBoardConfig, RejectsBadFieldsNamingThem) {
     fpp::test::TempDir dir;
     const std::string good = board_yaml(dir / "scans", "table: t.fpt\n");
     EXPECT_NO_THROW(parse_board_config(good, dir / "b.yaml"));
-    auto expect_field = [&](const std::string& from, const std::string& to, const std::string& field) {
+    auto expect_field = [&](const std::string& from, const std::string& to,
+                            const std::string& field) {
         std::string text = good;
         const auto at = text.find(from);
         ASSERT_NE(at, std::string::npos) << from;
@@ -336,7 +418,8 @@ TEST(ScannerBoardConfig, ShippedBoardFilesAreValid) {
     // section.
     int hardware = 0, simulated = 0;
     for (const auto& e : fs::directory_iterator(fpp::test::source_dir() / "board")) {
-        if (e.path().extension() != ".yaml") continue;
+        if (e.path().extension() != ".yaml")
+            continue;
         SCOPED_TRACE(e.path().string());
         const BoardConfig b = read_board_config(e.path());
         if (b.sim) {
@@ -363,7 +446,9 @@ TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
         f.make_table(sim.rig());
     }
     fpp::test::TempDir scratch;
-    const auto ok = fpp::test::run_tool(FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once", scratch.path());
+    const auto ok = fpp::test::run_tool(
+        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once",
+        scratch.path());
     ASSERT_EQ(ok.exit_code, 0) << ok.output;
     const auto scans = list_scans(f.store);
     ASSERT_EQ(scans.size(), 1u);
@@ -371,7 +456,9 @@ TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
     EXPECT_TRUE(fs::exists(scans[0] / "cloud.ply"));
 
     fs::remove(f.table_file);
-    const auto bad = fpp::test::run_tool(FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once", scratch.path());
+    const auto bad = fpp::test::run_tool(
+        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once",
+        scratch.path());
     EXPECT_EQ(bad.exit_code, 1) << bad.output;
     EXPECT_NE(bad.output.find("error: " + f.table_file.string()), std::string::npos) << bad.output;
     EXPECT_EQ(list_scans(f.store).size(), 1u);
@@ -384,7 +471,7 @@ TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
 namespace {
 
 fpp::test::ToolRun run_with_store_mount(const Fixture& f, const std::string& mount_commands,
-                             const fpp::test::TempDir& scratch) {
+                                        const fpp::test::TempDir& scratch) {
     const std::string store = fpp::test::shell_quote(f.store);
     const std::string script = "set -e; " + mount_commands + "; exec " +
                                fpp::test::shell_quote(std::string(FPP_SCANNER_EXE)) + " --board " +
@@ -401,7 +488,8 @@ bool can_mount_privately() {
 
 TEST(ScannerCli, ReadOnlyOrFullStoreFailsCleanlyAndLeavesNothing) {
     if (!can_mount_privately()) {
-        if (fpp::test::in_ci()) FAIL() << "unshare -m is not permitted";
+        if (fpp::test::in_ci())
+            FAIL() << "unshare -m is not permitted";
         GTEST_SKIP() << "needs a private mount namespace (unshare -m, root)";
     }
     Fixture f;
@@ -411,7 +499,9 @@ TEST(ScannerCli, ReadOnlyOrFullStoreFailsCleanlyAndLeavesNothing) {
     }
     fpp::test::TempDir scratch;
     // One good scan first: the faults must leave it alone.
-    const auto ok = fpp::test::run_tool(FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once", scratch.path());
+    const auto ok = fpp::test::run_tool(
+        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once",
+        scratch.path());
     ASSERT_EQ(ok.exit_code, 0) << ok.output;
     ASSERT_EQ(list_scans(f.store).size(), 1u);
     const auto before = list_scans(f.store);
@@ -426,8 +516,8 @@ TEST(ScannerCli, ReadOnlyOrFullStoreFailsCleanlyAndLeavesNothing) {
     EXPECT_EQ(list_scans(f.store), before);
 
     // A full disk: the tmpfs hides the store's contents while mounted.
-    const auto full = run_with_store_mount(
-        f, "mount -t tmpfs -o size=256k fpp-full " + store, scratch);
+    const auto full =
+        run_with_store_mount(f, "mount -t tmpfs -o size=256k fpp-full " + store, scratch);
     EXPECT_EQ(full.exit_code, 1) << full.output;
     EXPECT_NE(full.output.find("error: "), std::string::npos) << full.output;
     EXPECT_NE(full.output.find("No space left on device"), std::string::npos) << full.output;
@@ -435,7 +525,8 @@ TEST(ScannerCli, ReadOnlyOrFullStoreFailsCleanlyAndLeavesNothing) {
     // Back on the real store: the earlier scan and nothing else.
     EXPECT_EQ(list_scans(f.store), before);
     std::size_t entries = 0;
-    for ([[maybe_unused]] const auto& e : fs::directory_iterator(f.store)) ++entries;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator(f.store))
+        ++entries;
     EXPECT_EQ(entries, 1u);
 }
 
@@ -457,7 +548,8 @@ TEST(ScannerCli, SigtermDuringAScanAbortsItCleanly) {
     ASSERT_GE(pid, 0);
     if (pid == 0) {
         const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-        if (fd < 0 || dup2(fd, STDERR_FILENO) < 0 || dup2(fd, STDOUT_FILENO) < 0) _exit(127);
+        if (fd < 0 || dup2(fd, STDERR_FILENO) < 0 || dup2(fd, STDOUT_FILENO) < 0)
+            _exit(127);
         execl(FPP_SCANNER_EXE, FPP_SCANNER_EXE, "--board", board.c_str(), "--once",
               static_cast<char*>(nullptr));
         _exit(127);
@@ -471,7 +563,8 @@ TEST(ScannerCli, SigtermDuringAScanAbortsItCleanly) {
     bool started = false;
     for (int i = 0; i < 10000 && !started; ++i) { // up to 10 s
         started = read_log().find("scan started") != std::string::npos;
-        if (!started) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        if (!started)
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     ASSERT_TRUE(started) << read_log();
     ASSERT_EQ(kill(pid, SIGTERM), 0);

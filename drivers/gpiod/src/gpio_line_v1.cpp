@@ -53,6 +53,9 @@ public:
         ts.tv_sec = static_cast<time_t>(ns / 1'000'000'000);
         ts.tv_nsec = static_cast<long>(ns % 1'000'000'000);
         const int ready = gpiod_line_event_wait(request_.get(), &ts);
+        // A signal (SIGTERM from systemd) ends the wait like a timeout: the
+        // caller looks at its stop flag.
+        if (ready < 0 && errno == EINTR) return std::nullopt;
         if (ready < 0)
             throw DeviceError(name(), "waiting for an edge failed: " + std::string(std::strerror(errno)));
         if (ready == 0) return std::nullopt;

@@ -11,7 +11,7 @@ namespace {
 const char* const kDevice = "sim camera";
 }
 
-SimCamera::SimCamera(const Renderer& renderer, const SimDisplay& display, drivers::Clock& clock,
+SimCamera::SimCamera(const Renderer& renderer, const Screen& display, drivers::Clock& clock,
                      const drivers::CameraSettings& settings, std::uint64_t noise_seed)
     : renderer_(&renderer), display_(display), clock_(clock), settings_(settings),
       seed_(noise_seed), dark_(renderer.rig().projector_size) {}
@@ -109,7 +109,7 @@ drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) 
         throw drivers::DeviceError(kDevice, "frame " + std::to_string(p.exposure.frame_id) +
                                                 " incomplete (missing packets)");
     const Image<std::uint8_t>& light =
-        p.exposure.pattern == SimDisplay::kNothing
+        p.exposure.pattern == Screen::kNothing
             ? dark_
             : display_.pattern(static_cast<std::size_t>(p.exposure.pattern));
     drivers::CapturedFrame out;

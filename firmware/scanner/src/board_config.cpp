@@ -18,9 +18,11 @@ using yaml_fields::Reader;
 
 // "auto" or WIDTHxHEIGHT, each 1 to 5 digits without a leading zero.
 bool valid_mode(const std::string& mode) {
-    if (mode == "auto") return true;
+    if (mode == "auto")
+        return true;
     const auto x = mode.find('x');
-    if (x == std::string::npos) return false;
+    if (x == std::string::npos)
+        return false;
     auto number = [](const std::string& s) {
         return !s.empty() && s.size() <= 5 && s[0] != '0' &&
                std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
@@ -47,7 +49,8 @@ public:
     std::string non_empty(const YAML::Node& map, const std::string& parent,
                           std::string_view key) const {
         std::string s = text(map, parent, key);
-        if (s.empty()) r_.fail(map[std::string(key)], child(parent, key), "must not be empty");
+        if (s.empty())
+            r_.fail(map[std::string(key)], child(parent, key), "must not be empty");
         return s;
     }
     bool flag(const YAML::Node& map, const std::string& parent, std::string_view key) const {
@@ -62,8 +65,8 @@ public:
     BoardConfig parse(const std::string& yaml_text) const {
         const YAML::Node root = r_.load(yaml_text);
         r_.expect_map(root, "",
-                      {"format", "name", "display", "gpio", "camera", "sequence", "table",
-                       "store", "timing", "sim"});
+                      {"format", "name", "display", "gpio", "camera", "sequence", "table", "store",
+                       "timing", "sim"});
         BoardConfig c;
         c.file = r_.origin();
         if (text(root, "", "format") != kBoardConfigFormat)
@@ -73,14 +76,18 @@ public:
         parse_gpio(r_.require(root, "", "gpio"), c.gpio);
         parse_camera(r_.require(root, "", "camera"), c.camera);
         parse_sequence_field(r_.require(root, "", "sequence"), c);
-        if (root["table"] && !root["table"].IsNull()) c.table = path(root, "", "table");
+        if (root["table"] && !root["table"].IsNull())
+            c.table = path(root, "", "table");
         parse_store(r_.require(root, "", "store"), c.store);
         parse_timing(r_.require(root, "", "timing"), c.timing);
         if (c.camera.driver == CameraDriver::sim && !root["sim"])
             r_.fail("sim", "missing field (camera.driver is sim)");
         if (root["sim"]) {
             c.sim = parse_sim(root["sim"]);
-            if (c.camera.driver == CameraDriver::aravis) check_gige_link(root, c);
+            if (c.camera.driver == CameraDriver::aravis)
+                check_gige_link(root, c);
+            if (c.sim->camera_only)
+                check_camera_only(root, c);
         }
         return c;
     }
@@ -115,27 +122,34 @@ private:
                       {"driver", "device", "pixel_format", "exposure_us", "trigger",
                        "trigger_source", "packet_size", "buffer_count", "frame_timeout_ms"});
         const std::string driver = text(n, "camera", "driver");
-        if (driver == "sim") c.driver = CameraDriver::sim;
-        else if (driver == "aravis") c.driver = CameraDriver::aravis;
-        else r_.fail(n["driver"], "camera.driver", "must be sim or aravis");
+        if (driver == "sim")
+            c.driver = CameraDriver::sim;
+        else if (driver == "aravis")
+            c.driver = CameraDriver::aravis;
+        else
+            r_.fail(n["driver"], "camera.driver", "must be sim or aravis");
         c.device = text(n, "camera", "device");
         auto& s = c.settings;
         s.pixel_format = text(n, "camera", "pixel_format");
-        if (s.pixel_format != "Mono8" && s.pixel_format != "Mono10" &&
-            s.pixel_format != "Mono12" && s.pixel_format != "Mono16")
+        if (s.pixel_format != "Mono8" && s.pixel_format != "Mono10" && s.pixel_format != "Mono12" &&
+            s.pixel_format != "Mono16")
             r_.fail(n["pixel_format"], "camera.pixel_format",
                     "must be Mono8, Mono10, Mono12 or Mono16");
         s.exposure_us = r_.real_value(r_.require(n, "camera", "exposure_us"), "camera.exposure_us");
         if (!(s.exposure_us >= 1.0 && s.exposure_us <= 1e6))
             r_.fail(n["exposure_us"], "camera.exposure_us", "must be in 1..1000000");
         const std::string trigger = text(n, "camera", "trigger");
-        if (trigger == "line") s.trigger = drivers::TriggerMode::line;
-        else if (trigger == "software") s.trigger = drivers::TriggerMode::software;
-        else r_.fail(n["trigger"], "camera.trigger", "must be line or software");
+        if (trigger == "line")
+            s.trigger = drivers::TriggerMode::line;
+        else if (trigger == "software")
+            s.trigger = drivers::TriggerMode::software;
+        else
+            r_.fail(n["trigger"], "camera.trigger", "must be line or software");
         s.trigger_source = non_empty(n, "camera", "trigger_source");
         s.packet_size = int_in(n, "camera", "packet_size", 0, 16384);
         s.buffer_count = int_in(n, "camera", "buffer_count", 2, 64);
-        s.frame_timeout = std::chrono::milliseconds(int_in(n, "camera", "frame_timeout_ms", 1, 60000));
+        s.frame_timeout =
+            std::chrono::milliseconds(int_in(n, "camera", "frame_timeout_ms", 1, 60000));
     }
     void parse_sequence_field(const YAML::Node& n, BoardConfig& c) const {
         if (n.IsScalar()) {
@@ -151,7 +165,8 @@ private:
         YAML::Emitter out;
         out << YAML::BeginMap << YAML::Key << "sequence" << YAML::Value << n << YAML::EndMap;
         c.sequence_blocks = parse_sequence(out.c_str(), r_.origin());
-        if (c.sequence_blocks.empty()) r_.fail(n, "sequence", "must not be empty");
+        if (c.sequence_blocks.empty())
+            r_.fail(n, "sequence", "must not be empty");
     }
     void parse_store(const YAML::Node& n, StoreConfig& s) const {
         r_.expect_map(n, "store", {"directory", "max_mb"});
@@ -163,7 +178,8 @@ private:
         t.settle = std::chrono::microseconds(int_in(n, "timing", "settle_us", 0, 1'000'000));
         t.trigger_pulse =
             std::chrono::microseconds(int_in(n, "timing", "trigger_pulse_us", 1, 100'000));
-        t.flip_timeout = std::chrono::milliseconds(int_in(n, "timing", "flip_timeout_ms", 1, 10'000));
+        t.flip_timeout =
+            std::chrono::milliseconds(int_in(n, "timing", "flip_timeout_ms", 1, 10'000));
     }
     // The virtual scanner behind a real GigE Vision link: its frames go
     // through Aravis's fake camera, which has no line trigger and stamps
@@ -183,19 +199,39 @@ private:
                     "must be steady with camera.driver aravis (frames carry host time)");
     }
 
+    // Real display and lines, simulated camera: nothing wires the trigger
+    // line to it, and the display's flip events carry the host's time.
+    void check_camera_only(const YAML::Node& root, const BoardConfig& c) const {
+        if (c.camera.settings.trigger != drivers::TriggerMode::software)
+            r_.fail(root["camera"]["trigger"], "camera.trigger",
+                    "must be software with sim.camera_only (no line reaches a simulated camera)");
+        if (c.sim->virtual_clock)
+            r_.fail(root["sim"]["clock"], "sim.clock",
+                    "must be steady with sim.camera_only (the display's flips carry host time)");
+    }
+
     SimConfig parse_sim(const YAML::Node& n) const {
-        r_.expect_map(n, "sim", {"rig", "scene", "binning", "flip_latency_us", "clock", "seed"});
+        r_.expect_map(
+            n, "sim",
+            {"rig", "scene", "binning", "flip_latency_us", "clock", "seed", "camera_only"});
         SimConfig s;
         s.rig = path(n, "sim", "rig");
         s.scene = non_empty(n, "sim", "scene");
-        if (s.scene.ends_with(".yaml")) s.scene = path(n, "sim", "scene").string();
+        if (s.scene.ends_with(".yaml"))
+            s.scene = path(n, "sim", "scene").string();
         s.binning = int_in(n, "sim", "binning", 1, 8);
-        s.flip_latency = std::chrono::microseconds(int_in(n, "sim", "flip_latency_us", 0, 1'000'000));
+        s.flip_latency =
+            std::chrono::microseconds(int_in(n, "sim", "flip_latency_us", 0, 1'000'000));
         const std::string clock = text(n, "sim", "clock");
-        if (clock == "virtual") s.virtual_clock = true;
-        else if (clock == "steady") s.virtual_clock = false;
-        else r_.fail(n["clock"], "sim.clock", "must be virtual or steady");
+        if (clock == "virtual")
+            s.virtual_clock = true;
+        else if (clock == "steady")
+            s.virtual_clock = false;
+        else
+            r_.fail(n["clock"], "sim.clock", "must be virtual or steady");
         s.seed = static_cast<std::uint64_t>(int_in(n, "sim", "seed", 0, 1 << 30));
+        if (n["camera_only"])
+            s.camera_only = flag(n, "sim", "camera_only");
         return s;
     }
 

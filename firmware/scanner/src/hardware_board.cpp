@@ -36,9 +36,9 @@ drivers::GpioLineConfig line(const GpioConfig& gpio, int offset, bool active_low
 
 } // namespace
 
-HardwareBoard::HardwareBoard(const BoardConfig& board) {
-    if (board.sim)
-        throw std::logic_error("HardwareBoard on a board with a sim section");
+HardwareBoard::HardwareBoard(const BoardConfig& board, bool with_camera) {
+    if (board.sim && !board.sim->camera_only)
+        throw std::logic_error("HardwareBoard on a simulated board");
     const GpioConfig& gpio = board.gpio;
 #if FPP_HAVE_GPIOD
     led_ =
@@ -63,6 +63,10 @@ HardwareBoard::HardwareBoard(const BoardConfig& board) {
     button_ = std::make_unique<drivers::GpiodButtonInput>(
         line(gpio, gpio.button_line, gpio.button_active_low), gpio.debounce);
 #endif
+    if (!with_camera)
+        return;
+    if (!with_camera)
+        return;
     if (board.camera.driver != CameraDriver::aravis)
         throw std::logic_error("HardwareBoard: camera.driver sim without a sim section");
 #if FPP_HAVE_ARAVIS
@@ -75,6 +79,10 @@ HardwareBoard::HardwareBoard(const BoardConfig& board) {
 HardwareBoard::~HardwareBoard() = default;
 
 Devices HardwareBoard::devices() {
+    if (!camera_)
+        throw std::logic_error("HardwareBoard::devices: opened without its camera");
+    if (!camera_)
+        throw std::logic_error("HardwareBoard::devices: opened without its camera");
     return Devices{*display_, *trigger_, *button_, *led_, *camera_, clock_};
 }
 

@@ -2,6 +2,8 @@
 
 #include "sim_gige_camera.hpp"
 
+#include "fpp/scanner/hardware_board.hpp"
+
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
 #include "fpp/sim/rig.hpp"
@@ -70,15 +72,32 @@ SimBoard::SimBoard(const BoardConfig& board) {
         throw InputError(board.file, "sim.scene", e.what());
     }
     renderer_ = std::make_unique<sim::Renderer>(rig_, scene);
-    display_ = std::make_unique<sim::SimDisplay>(rig_.projector_size, *clock_, s.flip_latency);
+    const sim::Screen* screen = nullptr;
+    if (s.camera_only) {
+        // The board's own display and lines; the camera sees what the display
+        // has really flipped to.
+        hardware_ = std::make_unique<HardwareBoard>(board, false);
+        if (!(hardware_->display().size() == rig_.projector_size))
+            throw InputError(board.file, "sim.rig",
+                             "the rig's projector is " + std::to_string(rig_.projector_size.width) +
+                                 "x" + std::to_string(rig_.projector_size.height) +
+                                 ", the display shows " +
+                                 std::to_string(hardware_->display().size().width) + "x" +
+                                 std::to_string(hardware_->display().size().height));
+        observed_ = std::make_unique<sim::ObservedDisplay>(hardware_->display());
+        screen = observed_.get();
+    } else {
+        display_ = std::make_unique<sim::SimDisplay>(rig_.projector_size, *clock_, s.flip_latency);
+        screen = display_.get();
+    }
     if (board.camera.driver == CameraDriver::aravis) {
         // The sensor is triggered by the link, from software.
         drivers::CameraSettings sensor = board.camera.settings;
         sensor.trigger = drivers::TriggerMode::software;
-        camera_ = std::make_unique<sim::SimCamera>(*renderer_, *display_, *clock_, sensor, s.seed);
+        camera_ = std::make_unique<sim::SimCamera>(*renderer_, *screen, *clock_, sensor, s.seed);
         gige_camera_ = make_sim_gige_camera(*camera_, board.camera.device, board.camera.settings);
     } else {
-        camera_ = std::make_unique<sim::SimCamera>(*renderer_, *display_, *clock_,
+        camera_ = std::make_unique<sim::SimCamera>(*renderer_, *screen, *clock_,
                                                    board.camera.settings, s.seed);
     }
     if (session_) {
@@ -91,6 +110,8 @@ SimBoard::SimBoard(const BoardConfig& board) {
         }
         camera_->on_start([this] { next_session_pose(); });
     }
+    if (hardware_)
+        return;
     trigger_ = std::make_unique<sim::SimTrigger>(
         *clock_, [camera = camera_.get()](std::int64_t t) { camera->line_trigger(t); });
     button_ = std::make_unique<sim::SimButton>(board.gpio.debounce);
@@ -113,6 +134,10 @@ void SimBoard::next_session_pose() {
 Devices SimBoard::devices() {
     drivers::Camera& camera =
         gige_camera_ ? *gige_camera_ : static_cast<drivers::Camera&>(*camera_);
+    if (hardware_)
+        return Devices{
+            *observed_, hardware_->trigger(), hardware_->button(), hardware_->led(), camera,
+            *clock_};
     return Devices{*display_, *trigger_, *button_, *led_, camera, *clock_};
 }
 

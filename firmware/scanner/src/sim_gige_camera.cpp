@@ -13,7 +13,7 @@ namespace fpp::scanner {
 namespace {
 
 class SimGigeCamera final : public drivers::Camera {
-  public:
+public:
     SimGigeCamera(sim::SimCamera& sensor, const std::string& address,
                   const drivers::CameraSettings& settings)
         : sensor_(sensor), fake_(sensor.size(), address), driver_(address, settings),
@@ -40,7 +40,7 @@ class SimGigeCamera final : public drivers::Camera {
         return driver_.next_frame(timeout);
     }
 
-  private:
+private:
     sim::SimCamera& sensor_;
     drivers::AravisFakeCamera fake_; // declared before the driver that connects to it
     drivers::AravisCamera driver_;

@@ -1,8 +1,9 @@
 #pragma once
 // The camera of the virtual scanner behind fpp::drivers::Camera. At each
-// trigger (software or the sim trigger line) it notes the pattern that the
-// SimDisplay has on screen at that instant and renders the scene under it:
-// a trigger fired before its flip completed captures the previous pattern,
+// trigger (software or the sim trigger line) it notes the pattern on screen
+// at that instant (a SimDisplay, or a real display seen through
+// ObservedDisplay) and renders the scene under it: a trigger fired before
+// its flip completed captures the previous pattern,
 // exactly the mistake a real rig would make. Fault hooks for tests.
 #include <chrono>
 #include <cstdint>
@@ -14,7 +15,7 @@
 #include <fpp/drivers/camera.hpp>
 #include <fpp/drivers/clock.hpp>
 #include <fpp/sim/renderer.hpp>
-#include <fpp/sim/sim_display.hpp>
+#include <fpp/sim/screen.hpp>
 
 namespace fpp::sim {
 
@@ -30,15 +31,15 @@ enum class CameraFault {
 struct Exposure {
     std::uint64_t frame_id = 0;
     std::int64_t start_ns = 0;
-    int pattern = SimDisplay::kNothing;        // on screen at exposure start
-    int pattern_at_end = SimDisplay::kNothing; // on screen at exposure end
+    int pattern = Screen::kNothing;        // on screen at exposure start
+    int pattern_at_end = Screen::kNothing; // on screen at exposure end
 };
 
 class SimCamera final : public drivers::Camera {
-  public:
+public:
     // The renderer must outlive the camera. Settings: trigger mode, exposure
     // (time spent before the frame is read out) and frame timeout are used.
-    SimCamera(const Renderer& renderer, const SimDisplay& display, drivers::Clock& clock,
+    SimCamera(const Renderer& renderer, const Screen& screen, drivers::Clock& clock,
               const drivers::CameraSettings& settings, std::uint64_t noise_seed = 1);
 
     Size size() const override;
@@ -64,12 +65,12 @@ class SimCamera final : public drivers::Camera {
     const std::vector<Exposure>& exposures() const { return exposures_; }
     bool streaming() const { return streaming_; }
 
-  private:
+private:
     void expose(std::int64_t t_ns);
     void check_present() const;
     const Renderer* renderer_;
     std::function<void()> on_start_;
-    const SimDisplay& display_;
+    const Screen& display_;
     drivers::Clock& clock_;
     drivers::CameraSettings settings_;
     std::uint64_t seed_;

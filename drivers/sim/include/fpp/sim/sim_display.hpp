@@ -13,13 +13,13 @@
 
 #include <fpp/drivers/clock.hpp>
 #include <fpp/drivers/display.hpp>
+#include <fpp/sim/screen.hpp>
 
 namespace fpp::sim {
 
-class SimDisplay final : public drivers::Display {
+class SimDisplay final : public drivers::Display, public Screen {
 public:
-    // Nothing on screen (-1) until the first flip completes.
-    static constexpr int kNothing = -1;
+    // Nothing on screen (kNothing) until the first flip completes.
 
     SimDisplay(Size size, drivers::Clock& clock,
                std::chrono::nanoseconds flip_latency = std::chrono::nanoseconds(16'666'667));
@@ -33,9 +33,11 @@ public:
 
     // --- simulation side ---
     // Pattern index on screen at time t_ns (clock time), kNothing for none.
-    int on_screen_at(std::int64_t t_ns) const;
+    int on_screen_at(std::int64_t t_ns) const override;
     // The prepared pattern image (projector size, 8-bit).
-    const Image<std::uint8_t>& pattern(std::size_t index) const { return patterns_.at(index); }
+    const Image<std::uint8_t>& pattern(std::size_t index) const override {
+        return patterns_.at(index);
+    }
     std::size_t pattern_count() const { return patterns_.size(); }
     // Every flip event delivered, in order.
     const std::vector<drivers::FlipEvent>& flips() const { return flips_; }

@@ -19,13 +19,19 @@
 //   store: {directory: <path>, max_mb: N}   oldest scans pruned beyond N MiB
 //   timing: {settle_us: N, trigger_pulse_us: N, flip_timeout_ms: N}
 //   sim: {rig: <rig yaml>, scene: <scene name or yaml>, binning: N,
-//         flip_latency_us: N, clock: virtual | steady, seed: N}
+//         flip_latency_us: N, clock: virtual | steady, seed: N,
+//         camera_only: bool (optional, default false)}
 //
 // A sim section makes a simulated board: the virtual scanner stands in for
 // projector, lines and scene. With camera.driver sim its camera is simulated
 // too; with camera.driver aravis the rendered frames are served by Aravis's
 // fake GigE Vision camera at camera.device (a local address) and read by the
 // real Aravis driver (needs camera.trigger software and sim.clock steady).
+// With sim.camera_only the display and lines are the hardware ones (as
+// without a sim section) and only the camera and scene are simulated, the
+// camera seeing what the real display has flipped to (camera.trigger
+// software, sim.clock steady): a real board's kernel drivers with a virtual
+// scene.
 // Without a sim section the board is hardware: DRM display, GPIO lines and
 // an Aravis camera (camera.driver aravis).
 #include <chrono>
@@ -72,7 +78,7 @@ struct StoreConfig {
 };
 
 struct TimingConfig {
-    std::chrono::microseconds settle{0};            // after the flip event, before the trigger
+    std::chrono::microseconds settle{0}; // after the flip event, before the trigger
     std::chrono::microseconds trigger_pulse{100};
     std::chrono::milliseconds flip_timeout{100};
 };
@@ -84,6 +90,7 @@ struct SimConfig {
     std::chrono::microseconds flip_latency{16'667};
     bool virtual_clock = true;
     std::uint64_t seed = 1;
+    bool camera_only = false; // display and lines are hardware
 };
 
 struct BoardConfig {
@@ -92,8 +99,8 @@ struct BoardConfig {
     DisplayConfig display;
     GpioConfig gpio;
     CameraConfig camera;
-    std::string sequence_name;   // standard sequence, or "" when blocks are given
-    Sequence sequence_blocks;    // when given as blocks
+    std::string sequence_name; // standard sequence, or "" when blocks are given
+    Sequence sequence_blocks;  // when given as blocks
     std::optional<std::filesystem::path> table;
     StoreConfig store;
     TimingConfig timing;

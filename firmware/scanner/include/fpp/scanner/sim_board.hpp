@@ -11,13 +11,20 @@
 // to the next pose at every scan, as a person would between button presses;
 // the board's description is written to the store as board.yaml (unless one
 // is there), so that capture-mode scans make a session folder for fpp-calib.
+//
+// With sim.camera_only the display, trigger, button and LED are the board's
+// hardware (HardwareBoard) and only the camera and scene are simulated; the
+// sim-side accessors below (display, trigger, button, led) are then not
+// available.
 #include <cstddef>
 #include <memory>
 #include <optional>
 #include <vector>
 
 #include <fpp/scanner/board_config.hpp>
+#include <fpp/scanner/hardware_board.hpp>
 #include <fpp/scanner/scanner.hpp>
+#include <fpp/sim/observed_display.hpp>
 #include <fpp/sim/renderer.hpp>
 #include <fpp/sim/session.hpp>
 #include <fpp/sim/sim_camera.hpp>
@@ -27,7 +34,7 @@
 namespace fpp::scanner {
 
 class SimBoard {
-  public:
+public:
     // Throws InputError for a bad rig or scene file, DeviceError when the
     // GigE link cannot be set up, std::logic_error when
     // the board is not a sim board.
@@ -47,12 +54,15 @@ class SimBoard {
     sim::SimButton& button() { return *button_; }
     sim::SimLed& led() { return *led_; }
 
-  private:
+private:
     std::unique_ptr<drivers::Clock> clock_;
     sim::Rig rig_;
     std::unique_ptr<sim::Renderer> renderer_;
     std::unique_ptr<sim::SimDisplay> display_;
     std::unique_ptr<sim::SimCamera> camera_;
+    // sim.camera_only: the hardware display and lines, the display observed.
+    std::unique_ptr<HardwareBoard> hardware_;
+    std::unique_ptr<sim::ObservedDisplay> observed_;
     std::unique_ptr<drivers::Camera> gige_camera_; // camera.driver aravis
     std::unique_ptr<sim::SimTrigger> trigger_;
     std::unique_ptr<sim::SimButton> button_;
