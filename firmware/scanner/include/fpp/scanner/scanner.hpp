@@ -16,6 +16,7 @@
 
 #include <fpp/coefficient_table.hpp>
 #include <fpp/decoder.hpp>
+#include <fpp/point_cloud.hpp>
 #include <fpp/drivers/camera.hpp>
 #include <fpp/drivers/clock.hpp>
 #include <fpp/drivers/display.hpp>
@@ -103,6 +104,7 @@ private:
     CoefficientTable table_;
     std::uint64_t table_file_hash_ = 0;
     DecodeResult recycled_; // image memory reused scan after scan
+    PointCloud cloud_;      // likewise
     std::atomic<int> scans_completed_{0};
 };
 

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The scanner on the virtual ARM board, end to end: the host's fpp-scanner
+# and fpp-calib record and calibrate (sessions on the simulated board,
+# stereo, hybrid table, camera binned 4 x 4); the arm64 fpp-scanner then runs
+# in the VM on tests/vm/vm-camera-only.yaml (virtio-gpu DRM flips, PL061
+# lines, simulated camera over Aravis's fake GigE camera), waits for the
+# button, which QEMU's power button presses, scans the composite scene with
+# the table and is stopped by SIGTERM; the cloud it wrote is compared with
+# the scene's ground truth on the host, and its flip log must show every
+# pattern flipped in order with each frame exposed after its flip.
+# Usage: tests/vm/run_vm_board_scan.sh HOST_BUILD [AARCH64_BUILD]
+# Exit status: 0 passed, 1 failed, 77 skipped (as tests/vm/run_vm_scan.sh).
+set -euo pipefail
+source_dir=$(cd "$(dirname "$0")/../.." && pwd)
+host="$1"
+build="${2:-$source_dir/build/aarch64}"
+scanner="$host/firmware/scanner/fpp-scanner"
+calib="$host/calib/fpp-calib"
+fail() { echo "run_vm_board_scan: FAILED: $*"; exit 1; }
+[ -x "$scanner" ] && [ -x "$calib" ] || { echo "run_vm_board_scan: SKIPPED: no host tools in $host"; exit 77; }
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-board.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+# Session boards of board/, binned 4 x 4, rigs found from here.
+for b in sim-checkerboard-session sim-plane-session; do
+  sed -e 's/^\(  binning:\) 2$/\1 4/' -e "s|rig: sim/|rig: $source_dir/board/sim/|" \
+    "$source_dir/board/$b.yaml" > "$work/$b.yaml"
+  grep -q '^  binning: 4$' "$work/$b.yaml" || fail "board/$b.yaml has no 'binning: 2' line"
+done
+"$scanner" --board "$work/sim-checkerboard-session.yaml" --mode capture --scans 15 \
+  --store "$work/cb" > /dev/null 2> "$work/host.log" || fail "checkerboard session (see $work/host.log)"
+"$scanner" --board "$work/sim-plane-session.yaml" --mode capture --scans 30 \
+  --store "$work/planes" > /dev/null 2>> "$work/host.log" || fail "plane session"
+"$calib" stereo "$work/cb" --out "$work/calib.yaml" > /dev/null 2>> "$work/host.log" || fail "stereo"
+"$calib" hybrid "$work/planes" --calib "$work/calib.yaml" --out "$work/table.fpt" \
+  > /dev/null 2>> "$work/host.log" || fail "hybrid"
+
+# The guest's files: the board, its rig and scene, the table.
+mkdir -p "$work/files"
+cp "$source_dir/tests/vm/vm-camera-only.yaml" "$work/files/"
+cp -r "$source_dir/board/sim" "$work/files/sim"
+status=0
+"$source_dir/tests/vm/run_vm_scan.sh" --build "$build" --board "$work/files/vm-camera-only.yaml" \
+  --mode scan --table "$work/table.fpt" --button --keep "$work/vm" || status=$?
+[ "$status" -eq 0 ] || exit "$status"
+scan=$(find "$work/vm/scans" -mindepth 1 -maxdepth 1 -type d -name 'scan-*')
+grep -q '"board": "vm-camera-only"' "$scan/scan.json" || fail "not the VM board's scan"
+
+# Every pattern flipped through the kernel, in order, each frame after its flip.
+flips=$(grep -c '"pattern": ' "$scan/scan.json" || true)
+frames=$(sed -n 's/^ *"frames": \([0-9]*\),$/\1/p' "$scan/scan.json")
+[ "$flips" -eq "$frames" ] || fail "$flips flips for $frames frames"
+awk '/"pattern": / {
+       match($0, /"pattern": [0-9]+/); p = substr($0, RSTART + 11, RLENGTH - 11) + 0
+       match($0, /"flip_ns": [0-9]+/); f = substr($0, RSTART + 11, RLENGTH - 11) + 0
+       match($0, /"frame_ns": [0-9]+/); e = substr($0, RSTART + 12, RLENGTH - 12) + 0
+       if (p != n++ || e < f) { print "pattern " p " out of order or exposed before its flip"; exit 1 }
+     }' "$scan/scan.json" || fail "flip log"
+
+# Against the truth of the same scene.
+"$calib" simulate --rig "$source_dir/board/sim/paper-rig-effects.yaml" --scene composite \
+  --sequence gray-x --binning 4 --out "$work/truth" > /dev/null 2>> "$work/host.log" || fail "truth"
+"$calib" evaluate "$scan/cloud.ply" --truth "$work/truth" --out "$work/eval" \
+  > /dev/null 2>> "$work/host.log" || fail "evaluate"
+rms=$(sed -n 's/^cloud.truth.distance_rms,\([^,]*\),mm$/\1/p' "$work/eval/figures.csv")
+points=$(sed -n 's/^cloud.points,\([^,]*\),$/\1/p' "$work/eval/figures.csv")
+echo "run_vm_board_scan: $points points from the VM, 3D RMS $rms mm against the truth, $flips flips"
+awk -v r="$rms" -v n="$points" 'BEGIN { exit !(r < 0.1 && n > 50000) }' ||
+  fail "cloud: $points points, RMS $rms mm (want > 50000 points within 0.1 mm)"
+echo "run_vm_board_scan: PASSED"

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Checks the virtual ARM board itself (toolchain/vm/run-vm.sh), without the
+# firmware's cross build: cross-compiles tests/vm/vm_probe.cpp against the
+# arm64 libdrm and libgpiod, boots the board with it and checks that it lit
+# the virtio-gpu display and flipped pages, drove a PL061 line, and saw the
+# button edge that the harness made with QEMU's system_powerdown.
+# Usage: tests/vm/run_vm_probe.sh [--keep DIR] [--timeout S]
+# Exit status: 0 passed, 1 failed, 77 skipped (no qemu-system-aarch64, no
+# kernel cache, no cross compiler or arm64 libdrm/libgpiod development files).
+set -euo pipefail
+
+here=$(cd "$(dirname "$0")" && pwd)
+source_dir=$(cd "$here/../.." && pwd)
+cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
+keep="" timeout_s=120
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --keep) keep="$2"; shift 2 ;;
+    --timeout) timeout_s="$2"; shift 2 ;;
+    -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
+    *) echo "run_vm_probe: unknown argument '$1'" >&2; exit 2 ;;
+  esac
+done
+
+skip() { echo "run_vm_probe: SKIPPED: $*"; exit 77; }
+fail() { echo "run_vm_probe: FAILED: $*"; exit 1; }
+command -v qemu-system-aarch64 > /dev/null ||
+  skip "qemu-system-aarch64 not installed (apt-get install qemu-system-arm)"
+[ -s "$cache/kernel-release" ] ||
+  skip "no arm64 kernel in $cache (toolchain/vm/fetch-deps.sh fills it at install time)"
+command -v aarch64-linux-gnu-g++ > /dev/null || skip "no aarch64-linux-gnu-g++ (g++-aarch64-linux-gnu)"
+for f in /usr/lib/aarch64-linux-gnu/libdrm.so /usr/lib/aarch64-linux-gnu/libgpiod.so \
+  /usr/include/libdrm/drm.h /usr/include/gpiod.h; do
+  [ -e "$f" ] || skip "no $f (libdrm-dev:arm64, libgpiod-dev:arm64)"
+done
+
+t_start=$EPOCHREALTIME
+work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-probe.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+out="${keep:-$work/out}"
+mkdir -p "$out"
+aarch64-linux-gnu-g++ -std=c++20 -O2 -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wold-style-cast \
+  -Wdouble-promotion -Werror -I/usr/include/libdrm "$here/vm_probe.cpp" -o "$work/vm-probe" -ldrm -lgpiod ||
+  fail "cannot cross-compile vm_probe.cpp"
+
+status=0
+"$source_dir/toolchain/vm/run-vm.sh" --bin "$work/vm-probe" --out "$out" --timeout "$timeout_s" --quiet \
+  --press-on '^vm-probe: waiting for the button' --presses 1 -- vm-probe --wait-ms 30000 \
+  2> "$work/run-vm.err" || status=$?
+# The results folder is temporary unless --keep was given.
+if [ -n "$keep" ]; then cat "$work/run-vm.err"; else grep -v '^run-vm: results in' "$work/run-vm.err" || true; fi
+grep -E '^(fpp-vm-init: (drm|gpio gpiochip)|vm-probe: .*(OK|FAIL))' "$out/console.log" || true
+if [ "$status" -ne 0 ]; then
+  echo "--- guest console:"
+  cat "$out/console.log"
+  fail "run-vm.sh returned $status"
+fi
+for expected in '^vm-probe: display OK' '^vm-probe: gpio OK: button rising edge' '^run-vm: button pressed'; do
+  grep -q "$expected" "$out/console.log" || fail "no line matching '$expected' on the console"
+done
+total=$(awk -v a="$t_start" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.1f", b - a }')
+echo "run_vm_probe: PASSED in ${total} s"
