@@ -1,7 +1,19 @@
 #!/usr/bin/env bash
-# Installs every build and test dependency of fpp from Debian 12 packages.
+# Installs every build and test dependency of fpp from Debian 12 packages:
+#   1. the native build: firmware, host tool, tests and benchmarks;
+#   2. the cross build for the scanner's target, AArch64 (Debian arm64):
+#      the cross compiler, qemu-user to run the arm64 tests, and the arm64
+#      packages of the firmware (preset aarch64). Skipped with --native-only.
 # Non-interactive and idempotent: packages already present are left alone.
+# Usage: toolchain/install-deps.sh [--native-only]
 set -euo pipefail
+
+native_only=0
+case "${1:-}" in
+  "") ;;
+  --native-only) native_only=1 ;;
+  *) echo "usage: $0 [--native-only]" >&2; exit 2 ;;
+esac
 
 packages=(
   # build
@@ -21,21 +33,136 @@ packages=(
   python3-open3d cloudcompare meshlab xvfb xauth
 )
 
+# --- Cross build for AArch64 (toolchain/aarch64-linux-gnu.cmake) -------------
+# Only what the firmware needs: the host tool (OpenCV) and the benchmarks are
+# not cross-built (OpenCV's arm64 -dev package cannot be co-installed with the
+# amd64 one). The arm64 packages are Debian multiarch packages that sit beside
+# the amd64 ones in /usr/lib/aarch64-linux-gnu; a Multi-Arch: same package
+# must have the same version on both architectures, which apt keeps by
+# installing both from the same package index.
+cross_arch=arm64
+cross_packages=(
+  # cross compiler (aarch64-linux-gnu-g++, binutils) and qemu-aarch64-static
+  # to run the arm64 test binaries
+  g++-aarch64-linux-gnu qemu-user-static
+  # core and virtual scanner; yaml-cpp: the library only, see below
+  libpng-dev:arm64 libtiff-dev:arm64 libyaml-cpp0.7:arm64
+  # device drivers (as above)
+  libaravis-dev:arm64 libusb-1.0-0-dev:arm64 libdrm-dev:arm64 libgpiod-dev:arm64
+  # tests (static libraries and CMake package files)
+  libgtest-dev:arm64
+)
+# libyaml-cpp-dev is not multiarch: installing its arm64 package REMOVES the
+# amd64 one that the native build needs. Its arm64 files (CMake package, .pc,
+# libyaml-cpp.a, and the headers, identical on both architectures) are
+# unpacked instead into this folder, which the toolchain file reads.
+cross_extra_prefix=/opt/fpp-cross/aarch64-linux-gnu
+
 as_root() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
 }
 
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
+# Prints, one a line, the given packages that are not installed.
+not_installed() {
+  local p
+  for p in "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || echo "$p"
+  done
+}
 
+export DEBIAN_FRONTEND=noninteractive
+updated=0
+# apt-get update once, and only when something is to be installed.
+apt_install() {
+  if [ "$updated" -eq 0 ]; then as_root apt-get update -q; updated=1; fi
+  as_root apt-get install -y -q --no-install-recommends "$@"
+}
+
+# Native packages.
+mapfile -t missing < <(not_installed "${packages[@]}")
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
-  exit 0
+else
+  echo "install-deps: installing ${missing[*]}"
+  apt_install "${missing[@]}"
 fi
 
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-as_root apt-get update -q
-as_root apt-get install -y -q --no-install-recommends "${missing[@]}"
+[ "$native_only" -eq 1 ] && exit 0
+
+# Cross packages (after the native ones: an arm64 package and its amd64
+# twin then come from the same index).
+if ! dpkg --print-foreign-architectures | grep -qx "$cross_arch"; then
+  echo "install-deps: adding the $cross_arch architecture"
+  as_root dpkg --add-architecture "$cross_arch"
+  updated=0 # the index must now be read for arm64 too
+fi
+mapfile -t missing < <(not_installed "${cross_packages[@]}")
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#cross_packages[@]} $cross_arch cross-build packages present"
+else
+  echo "install-deps: installing ${missing[*]}"
+  apt_install "${missing[@]}"
+fi
+
+# libyaml-cpp-dev:arm64 unpacked beside the system (see cross_extra_prefix),
+# the same version as the installed arm64 library; redone when that changes.
+yaml_version="$(dpkg-query -W -f='${Version}' libyaml-cpp0.7:arm64)"
+stamp="$cross_extra_prefix/libyaml-cpp-dev.version"
+if [ "$(cat "$stamp" 2>/dev/null)" = "$yaml_version" ]; then
+  echo "install-deps: libyaml-cpp-dev:$cross_arch $yaml_version unpacked in $cross_extra_prefix"
+else
+  echo "install-deps: unpacking libyaml-cpp-dev:$cross_arch $yaml_version into $cross_extra_prefix"
+  [ "$updated" -eq 1 ] || { as_root apt-get update -q; updated=1; }
+  download="$(mktemp -d)"
+  trap 'rm -rf "$download"' EXIT
+  chmod 755 "$download"
+  # apt downloads as its own user _apt when run as root
+  if [ "$(id -u)" -eq 0 ] && id -u _apt > /dev/null 2>&1; then chown _apt "$download"; fi
+  (cd "$download" && apt-get download -q "libyaml-cpp-dev:$cross_arch=$yaml_version")
+  as_root rm -rf "$cross_extra_prefix"
+  as_root mkdir -p "$cross_extra_prefix"
+  as_root dpkg-deb -x "$download"/libyaml-cpp-dev_*_"$cross_arch".deb "$cross_extra_prefix"
+  # The package's CMake file points at the shared library beside it, which
+  # the installed libyaml-cpp0.7:arm64 provides in the system folder.
+  libdir="$cross_extra_prefix/usr/lib/aarch64-linux-gnu"
+  shared="$(readlink -f /usr/lib/aarch64-linux-gnu/libyaml-cpp.so.0.7)"
+  as_root ln -sf "$shared" "$libdir/$(basename "$shared")"
+  as_root ln -sf "$(basename "$shared")" "$libdir/libyaml-cpp.so.0.7"
+  echo "$yaml_version" | as_root tee "$stamp" > /dev/null
+fi
+
+# The arm64 programs that tests start themselves (fpp-scanner through
+# /bin/sh, fork/exec) run on this machine only if the kernel hands arm64 ELF
+# files to qemu: register qemu-user-static's binfmt_misc entry, as
+# systemd-binfmt does at boot on a Debian system (not inside a container).
+# Its "F" flag opens qemu now, so that it also works in other mount namespaces.
+binfmt=/proc/sys/fs/binfmt_misc
+register_qemu_binfmt() {
+  mountpoint -q "$binfmt" || as_root mount -t binfmt_misc binfmt_misc "$binfmt" || return 1
+  if [ -e "$binfmt/qemu-aarch64" ]; then # registered but disabled
+    echo 1 | as_root tee "$binfmt/qemu-aarch64" > /dev/null
+  else
+    as_root tee "$binfmt/register" < /usr/lib/binfmt.d/qemu-aarch64.conf > /dev/null
+  fi
+}
+if [ "$(head -n 1 "$binfmt/qemu-aarch64" 2>/dev/null)" = enabled ]; then
+  echo "install-deps: qemu-aarch64 registered with binfmt_misc"
+elif register_qemu_binfmt; then
+  echo "install-deps: registered qemu-aarch64 with binfmt_misc"
+else
+  echo "install-deps: warning: cannot register qemu-aarch64 with binfmt_misc: the aarch64" \
+       "tests that start programs (fpp-scanner) will fail" >&2
+fi
+
+# --- The virtual ARM board (toolchain/vm, tests/vm) --------------------------
+# qemu-system-aarch64 and cpio from packages; the arm64 kernel, busybox and
+# the guest's tools are downloaded as Debian packages into a cache now, by
+# toolchain/vm/fetch-deps.sh (idempotent), so that no test downloads.
+mapfile -t missing < <(not_installed qemu-system-arm cpio)
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: qemu-system-arm and cpio present"
+else
+  echo "install-deps: installing ${missing[*]}"
+  apt_install "${missing[@]}"
+fi
+as_root "$(dirname "$0")/vm/fetch-deps.sh"

@@ -17,7 +17,10 @@ build="${2:-$source_dir/build/aarch64}"
 scanner="$host/firmware/scanner/fpp-scanner"
 calib="$host/calib/fpp-calib"
 fail() { echo "run_vm_board_scan: FAILED: $*"; exit 1; }
-[ -x "$scanner" ] && [ -x "$calib" ] || { echo "run_vm_board_scan: SKIPPED: no host tools in $host"; exit 77; }
+if ! [ -x "$scanner" ] || ! [ -x "$calib" ]; then
+  [ "${CI:-}" = true ] && fail "no host tools in $host"
+  echo "run_vm_board_scan: SKIPPED: no host tools in $host"; exit 77
+fi
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-board.XXXXXX")
 trap 'rm -rf "$work"' EXIT

@@ -22,7 +22,11 @@ while [ $# -gt 0 ]; do
   esac
 done
 
-skip() { echo "run_vm_probe: SKIPPED: $*"; exit 77; }
+# In CI (CI=true) everything the VM needs is installed: a skip is a failure.
+skip() {
+  if [ "${CI:-}" = true ]; then echo "run_vm_probe: FAILED (CI): $*"; exit 1; fi
+  echo "run_vm_probe: SKIPPED: $*"; exit 77
+}
 fail() { echo "run_vm_probe: FAILED: $*"; exit 1; }
 command -v qemu-system-aarch64 > /dev/null ||
   skip "qemu-system-aarch64 not installed (apt-get install qemu-system-arm)"

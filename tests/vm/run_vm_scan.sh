@@ -42,7 +42,11 @@ while [ $# -gt 0 ]; do
 done
 case "$mode" in capture|scan) ;; *) echo "run_vm_scan: --mode capture or scan" >&2; exit 2 ;; esac
 
-skip() { echo "run_vm_scan: SKIPPED: $*"; exit 77; }
+# In CI (CI=true) everything the VM needs is installed: a skip is a failure.
+skip() {
+  if [ "${CI:-}" = true ]; then echo "run_vm_scan: FAILED (CI): $*"; exit 1; fi
+  echo "run_vm_scan: SKIPPED: $*"; exit 77
+}
 fail() { echo "run_vm_scan: FAILED: $*"; exit 1; }
 command -v qemu-system-aarch64 > /dev/null ||
   skip "qemu-system-aarch64 not installed (apt-get install qemu-system-arm)"
