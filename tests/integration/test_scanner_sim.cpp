@@ -86,6 +86,19 @@ struct Fixture {
     void make_table(const sim::Rig& rig) {
         write_table(table_file, fpp::test::rig_truth_table(rig));
     }
+    // The table of the board's own rig (a sim board is built for it and let go).
+    void make_board_table() {
+        SimBoard sim(board);
+        make_table(sim.rig());
+    }
+#ifdef FPP_SCANNER_EXE
+    // fpp-scanner --board board.yaml --once, as a person runs it.
+    fpp::test::ToolRun run_once(const fpp::test::TempDir& scratch) const {
+        return fpp::test::run_tool(FPP_SCANNER_EXE,
+                                   "--board " + fpp::test::shell_quote(board_file) + " --once",
+                                   scratch.path());
+    }
+#endif
     bool logged(const std::string& part) {
         std::lock_guard lock(lines_mutex);
         for (const auto& l : lines)
@@ -441,14 +454,9 @@ TEST(ScannerBoardConfig, ShippedBoardFilesAreValid) {
 #ifdef FPP_SCANNER_EXE
 TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
     Fixture f;
-    {
-        SimBoard sim(f.board);
-        f.make_table(sim.rig());
-    }
+    f.make_board_table();
     fpp::test::TempDir scratch;
-    const auto ok = fpp::test::run_tool(
-        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once",
-        scratch.path());
+    const auto ok = f.run_once(scratch);
     ASSERT_EQ(ok.exit_code, 0) << ok.output;
     const auto scans = list_scans(f.store);
     ASSERT_EQ(scans.size(), 1u);
@@ -456,9 +464,7 @@ TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
     EXPECT_TRUE(fs::exists(scans[0] / "cloud.ply"));
 
     fs::remove(f.table_file);
-    const auto bad = fpp::test::run_tool(
-        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once",
-        scratch.path());
+    const auto bad = f.run_once(scratch);
     EXPECT_EQ(bad.exit_code, 1) << bad.output;
     EXPECT_NE(bad.output.find("error: " + f.table_file.string()), std::string::npos) << bad.output;
     EXPECT_EQ(list_scans(f.store).size(), 1u);
@@ -493,15 +499,10 @@ TEST(ScannerCli, ReadOnlyOrFullStoreFailsCleanlyAndLeavesNothing) {
         GTEST_SKIP() << "needs a private mount namespace (unshare -m, root)";
     }
     Fixture f;
-    {
-        SimBoard sim(f.board);
-        f.make_table(sim.rig());
-    }
+    f.make_board_table();
     fpp::test::TempDir scratch;
     // One good scan first: the faults must leave it alone.
-    const auto ok = fpp::test::run_tool(
-        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once",
-        scratch.path());
+    const auto ok = f.run_once(scratch);
     ASSERT_EQ(ok.exit_code, 0) << ok.output;
     ASSERT_EQ(list_scans(f.store).size(), 1u);
     const auto before = list_scans(f.store);
@@ -534,10 +535,7 @@ TEST(ScannerCli, SigtermDuringAScanAbortsItCleanly) {
     // Slow flips (0.1 s each, steady clock): the 17-pattern scan takes about
     // 2 s, and SIGTERM arrives as soon as the scan has started.
     Fixture f;
-    {
-        SimBoard sim(f.board);
-        f.make_table(sim.rig());
-    }
+    f.make_board_table();
     std::string text = board_yaml(f.store, "table: table.fpt\n");
     text.replace(text.find("flip_latency_us: 16667, clock: virtual"), 38,
                  "flip_latency_us: 100000, clock: steady");

@@ -16,14 +16,14 @@
 //   projector skew 6.5 +- 0.5 px (a LightCrafter 4500 addressed as
 //   1824 x 1140 on a 912-column diamond array).
 
-#if __has_include("fpp/calib/stereo_session.hpp")
-
 #include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#if __has_include("fpp/calib/stereo_session.hpp")
 
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/stereo_session.hpp"
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <iostream>
