@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Bad board files on the virtual ARM board's real kernel devices, in one
+# boot: a GPIO line the chip does not have, a line another process holds, a
+# display mode the connector does not offer, a DRM card that does not exist.
+# Each must stop fpp-scanner at start with exit 1 and an error naming what is
+# wrong; then the good board must still scan (nothing was left claimed).
+# Usage: tests/vm/run_vm_bad_boards.sh [AARCH64_BUILD]
+# Exit status: 0 passed, 1 failed, 77 skipped (as tests/vm/run_vm_scan.sh).
+set -euo pipefail
+source_dir=$(cd "$(dirname "$0")/../.." && pwd)
+build="${1:-$source_dir/build/aarch64}"
+cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
+fail() { echo "run_vm_bad_boards: FAILED: $*"; exit 1; }
+skip() {
+  [ "${CI:-}" = true ] && fail "(CI) $*"
+  echo "run_vm_bad_boards: SKIPPED: $*"; exit 77
+}
+command -v qemu-system-aarch64 > /dev/null || skip "qemu-system-aarch64 not installed"
+[ -s "$cache/kernel-release" ] || skip "no arm64 kernel in $cache (toolchain/vm/fetch-deps.sh)"
+[ -x "$build/firmware/scanner/fpp-scanner" ] || skip "no cross-built fpp-scanner in $build"
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-bad.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+files="$work/files"
+mkdir -p "$files" "$work/out"
+cp -r "$source_dir/board/sim" "$files/sim"
+good="$source_dir/tests/vm/vm-camera-only.yaml"
+cp "$good" "$files/good.yaml"
+variant() { # NAME FROM TO
+  sed "s|$2|$3|" "$good" > "$files/$1.yaml"
+  cmp -s "$good" "$files/$1.yaml" && fail "vm-camera-only.yaml has no '$2'"
+  return 0
+}
+variant no-such-line '  led_line: 1' '  led_line: 9'
+variant line-held '  led_line: 1' '  led_line: 5'
+variant no-such-mode 'mode: 1280x800' 'mode: 1234x567'
+variant no-such-card 'card: auto' 'card: /dev/dri/card7'
+cat > "$files/bad-boards.sh" << 'GUEST'
+# In the guest: each case's exit status and first error line, then the good
+# board's capture scan.
+run() { # NAME [holder command...]
+  name=$1; shift
+  if [ $# -gt 0 ]; then
+    "$@" & holder=$!
+    # until the holder has the line (emulated CPUs are slow to start it)
+    i=0
+    while ! gpioinfo gpiochip0 | grep -q '"gpioset"' && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
+  fi
+  fpp-scanner --board "$name.yaml" --once --mode capture --store /out/scans-$name \
+    > /dev/null 2> /out/$name.log
+  echo "$name $? $(grep -m 1 '^error: ' /out/$name.log)" >> /out/results.txt
+  if [ -n "${holder:-}" ]; then kill $holder; wait $holder 2> /dev/null; holder=; fi
+}
+run no-such-line
+run line-held gpioset --mode=signal gpiochip0 5=0
+run no-such-mode
+run no-such-card
+fpp-scanner --board good.yaml --once --mode capture --store /out/scans-good > /dev/null 2> /out/good.log
+echo "good $?" >> /out/results.txt
+GUEST
+status=0
+"$source_dir/toolchain/vm/run-vm.sh" --build "$build" --files "$files" --out "$work/out" \
+  --timeout 240 --quiet -- sh bad-boards.sh 2> "$work/run-vm.err" || status=$?
+[ "$status" -eq 0 ] || { cat "$work/run-vm.err" "$work/out/console.log"; fail "the VM run ended with $status"; }
+results="$work/out/results.txt"
+[ -s "$results" ] || fail "no results from the guest"
+cat "$results"
+expect() { # NAME TEXT...: exit 1 and an error line holding every TEXT
+  local line
+  line=$(grep "^$1 " "$results") || fail "$1: no result"
+  [ "$(cut -d ' ' -f 2 <<< "$line")" = 1 ] || fail "$1: exit status is not 1: $line"
+  shift
+  for text in "$@"; do
+    grep -qF -- "$text" <<< "$line" || fail "'$text' not in: $line"
+  done
+  for d in "$work"/out/scans-*; do
+    [ "$d" = "$work/out/scans-good" ] || [ ! -d "$d" ] || [ -z "$(ls -A "$d")" ] ||
+      fail "a failed start left files in $d"
+  done
+}
+expect no-such-line "gpiochip0 line 9"
+expect line-held "gpiochip0 line 5"
+expect no-such-mode "1234x567"
+expect no-such-card "/dev/dri/card7"
+grep -qx "good 0" "$results" || { cat "$work/out/good.log"; fail "the good board did not scan after the failures"; }
+echo "run_vm_bad_boards: PASSED"
