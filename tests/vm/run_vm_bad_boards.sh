@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Bad board files on the virtual ARM board's real kernel devices, in one
 # boot: a GPIO line the chip does not have, a line another process holds, a
-# display mode the connector does not offer, a DRM card that does not exist.
+# display mode the connector does not offer, a DRM card, a connector and a
+# GPIO chip that do not exist.
 # Each must stop fpp-scanner at start with exit 1 and an error naming what is
 # wrong; then the good board must still scan (nothing was left claimed).
 # Usage: tests/vm/run_vm_bad_boards.sh [AARCH64_BUILD]
@@ -35,6 +36,8 @@ variant no-such-line '  led_line: 1' '  led_line: 9'
 variant line-held '  led_line: 1' '  led_line: 5'
 variant no-such-mode 'mode: 1280x800' 'mode: 1234x567'
 variant no-such-card 'card: auto' 'card: /dev/dri/card7'
+variant no-such-connector 'connector: auto' 'connector: HDMI-A-9'
+variant no-such-chip '  chip: gpiochip0' '  chip: gpiochip7'
 cat > "$files/bad-boards.sh" << 'GUEST'
 # In the guest: each case's exit status and first error line, then the good
 # board's capture scan.
@@ -55,6 +58,8 @@ run no-such-line
 run line-held gpioset --mode=signal gpiochip0 5=0
 run no-such-mode
 run no-such-card
+run no-such-connector
+run no-such-chip
 fpp-scanner --board good.yaml --once --mode capture --store /out/scans-good > /dev/null 2> /out/good.log
 echo "good $?" >> /out/results.txt
 GUEST
@@ -82,5 +87,7 @@ expect no-such-line "gpiochip0 line 9"
 expect line-held "gpiochip0 line 5"
 expect no-such-mode "1234x567"
 expect no-such-card "/dev/dri/card7"
+expect no-such-connector "HDMI-A-9"
+expect no-such-chip "gpiochip7"
 grep -qx "good 0" "$results" || { cat "$work/out/good.log"; fail "the good board did not scan after the failures"; }
 echo "run_vm_bad_boards: PASSED"
