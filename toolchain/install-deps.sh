@@ -78,14 +78,20 @@ apt_install() {
   as_root apt-get install -y -q --no-install-recommends "$@"
 }
 
-# Native packages.
-mapfile -t missing < <(not_installed "${packages[@]}")
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all ${#packages[@]} packages present"
-else
-  echo "install-deps: installing ${missing[*]}"
-  apt_install "${missing[@]}"
-fi
+# Installs those of the packages (after the description) that are missing.
+ensure_installed() {
+  local what="$1" missing
+  shift
+  mapfile -t missing < <(not_installed "$@")
+  if [ ${#missing[@]} -eq 0 ]; then
+    echo "install-deps: all $# $what present"
+  else
+    echo "install-deps: installing ${missing[*]}"
+    apt_install "${missing[@]}"
+  fi
+}
+
+ensure_installed packages "${packages[@]}"
 
 [ "$native_only" -eq 1 ] && exit 0
 
@@ -96,13 +102,7 @@ if ! dpkg --print-foreign-architectures | grep -qx "$cross_arch"; then
   as_root dpkg --add-architecture "$cross_arch"
   updated=0 # the index must now be read for arm64 too
 fi
-mapfile -t missing < <(not_installed "${cross_packages[@]}")
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all ${#cross_packages[@]} $cross_arch cross-build packages present"
-else
-  echo "install-deps: installing ${missing[*]}"
-  apt_install "${missing[@]}"
-fi
+ensure_installed "$cross_arch cross-build packages" "${cross_packages[@]}"
 
 # libyaml-cpp-dev:arm64 unpacked beside the system (see cross_extra_prefix),
 # the same version as the installed arm64 library; redone when that changes.
@@ -158,11 +158,5 @@ fi
 # qemu-system-aarch64 and cpio from packages; the arm64 kernel, busybox and
 # the guest's tools are downloaded as Debian packages into a cache now, by
 # toolchain/vm/fetch-deps.sh (idempotent), so that no test downloads.
-mapfile -t missing < <(not_installed qemu-system-arm cpio)
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: qemu-system-arm and cpio present"
-else
-  echo "install-deps: installing ${missing[*]}"
-  apt_install "${missing[@]}"
-fi
+ensure_installed "virtual ARM board packages" qemu-system-arm cpio
 as_root "$(dirname "$0")/vm/fetch-deps.sh"

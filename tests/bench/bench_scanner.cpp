@@ -37,6 +37,7 @@
 #include "best_time_reporter.hpp"
 
 #include "rig_truth_table.hpp"
+#include "sim_board_yaml.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -100,7 +101,6 @@ double heap_in_use_bytes() {
 
 // --- the rig's table ---------------------------------------------------------
 
-
 std::size_t table_bytes(const fpp::TableInfo& info) {
     return static_cast<std::size_t>(info.tile_count()) *
            static_cast<std::size_t>(fpp::table_planes(info.model)) *
@@ -125,26 +125,15 @@ struct Board {
         store = dir / "scans";
         table_file = dir / "table.fpt";
         const fs::path board_file = dir / "board.yaml";
-        std::ofstream(board_file)
-            << "format: fpp-scanner-board/1\n"
-               "name: bench-sim\n"
-               "display: {card: auto, connector: auto, mode: auto}\n"
-               "gpio: {chip: gpiochip0, trigger_line: 17, button_line: 27, led_line: 22,\n"
-               "       trigger_active_low: false, button_active_low: true,\n"
-               "       led_active_low: false, debounce_ms: 30}\n"
-               "camera: {driver: sim, device: \"\", pixel_format: Mono8, exposure_us: 8000,\n"
-               "         trigger: line, trigger_source: Line0, packet_size: 0,\n"
-               "         buffer_count: 4, frame_timeout_ms: 500}\n"
-               "sequence: gray-x\n"
-               "table: table.fpt\n"
-               "store: {directory: "
-            << store.string()
-            << ", max_mb: 1}\n"
-               "timing: {settle_us: 2000, trigger_pulse_us: 100, flip_timeout_ms: 100}\n"
-               "sim: {rig: "
-            << fpp::sim::effects_rig_path().string()
-            << ", scene: composite, binning: 1,\n"
-               "      flip_latency_us: 16667, clock: virtual, seed: 1}\n";
+        fpp::test::SimBoardYaml yaml;
+        yaml.name = "bench-sim";
+        yaml.store = store;
+        yaml.table = "table.fpt";
+        yaml.max_mb = 1;
+        yaml.binning = 1;
+        yaml.seed = 1;
+        yaml.frame_timeout_ms = 500;
+        std::ofstream(board_file) << yaml.text();
         config = fpp::scanner::read_board_config(board_file);
     }
     ~Board() {

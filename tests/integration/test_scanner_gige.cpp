@@ -17,6 +17,7 @@
 #include "fpp/scanner/sim_board.hpp"
 #include "network_isolation.hpp"
 #include "rig_truth_table.hpp"
+#include "sim_board_yaml.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -32,27 +33,17 @@ namespace {
 // Before main(), while the process has one thread.
 const fpp::test::NetworkIsolation isolation;
 
+// The test board with its camera behind the GigE link (steady clock, 5 ms flips).
 std::string gige_board_yaml(const fs::path& store) {
-    const fs::path rig = fpp::test::source_dir() / "board/sim/paper-rig-effects.yaml";
-    return "format: fpp-scanner-board/1\n"
-           "name: test-sim-gige\n"
-           "display: {card: auto, connector: auto, mode: auto}\n"
-           "gpio: {chip: gpiochip0, trigger_line: 17, button_line: 27, led_line: 22,\n"
-           "       trigger_active_low: false, button_active_low: true, led_active_low: false,\n"
-           "       debounce_ms: 30}\n"
-           "camera: {driver: aravis, device: 127.0.0.1, pixel_format: Mono8, exposure_us: 8000,\n"
-           "         trigger: software, trigger_source: Line0, packet_size: 0, buffer_count: 4,\n"
-           "         frame_timeout_ms: 1000}\n"
-           "sequence: gray-x\n"
-           "table: table.fpt\n"
-           "store: {directory: " +
-           store.string() +
-           ", max_mb: 64}\n"
-           "timing: {settle_us: 2000, trigger_pulse_us: 100, flip_timeout_ms: 100}\n"
-           "sim: {rig: " +
-           rig.string() +
-           ", scene: composite, binning: 4,\n"
-           "      flip_latency_us: 5000, clock: steady, seed: 3}\n";
+    fpp::test::SimBoardYaml b;
+    b.name = "test-sim-gige";
+    b.store = store;
+    b.table = "table.fpt";
+    b.gige = true;
+    b.steady_clock = true;
+    b.flip_latency_us = 5000;
+    b.frame_timeout_ms = 1000;
+    return b.text();
 }
 
 struct GigeFixture {
@@ -65,24 +56,6 @@ struct GigeFixture {
         board = read_board_config(board_file);
     }
 };
-
-// RMS 3D distance (mm) of the PLY's points from the truth at their pixels.
-double rms_against_truth(const fs::path& ply, const Image<float>& truth, std::size_t& compared) {
-    const PlyPoints pts = read_ply(ply);
-    double sum = 0;
-    compared = 0;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        const int px = static_cast<int>(pts.pixel[i] % static_cast<std::uint32_t>(truth.width()));
-        const int py = static_cast<int>(pts.pixel[i] / static_cast<std::uint32_t>(truth.width()));
-        const float* t = &truth.at(px, py, 0);
-        if (!std::isfinite(t[2]))
-            continue;
-        const double dx = pts.x[i] - t[0], dy = pts.y[i] - t[1], dz = pts.z[i] - t[2];
-        sum += dx * dx + dy * dy + dz * dz;
-        ++compared;
-    }
-    return compared ? std::sqrt(sum / static_cast<double>(compared)) : std::nan("");
-}
 
 } // namespace
 
@@ -119,8 +92,8 @@ TEST(ScannerGige, ScanThroughTheFakeGigeCameraIsCloseToTruth) {
     EXPECT_EQ(out.frames, scanner.frames_per_scan());
     EXPECT_GT(out.points, 60000u);
     std::size_t compared = 0;
-    const double rms =
-        rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
+    const double rms = fpp::test::ply_rms_against_truth(out.folder / "cloud.ply",
+                                                        sim.renderer().truth_xyz(), compared);
     std::printf("GigE scan: %zu points, RMS %.4f mm against truth over %zu; capture %.1f ms\n",
                 out.points, rms, compared, out.timings.capture_ms);
     EXPECT_GT(compared, out.points * 9 / 10);

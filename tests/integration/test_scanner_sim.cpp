@@ -17,6 +17,7 @@
 #include "fpp/sim/sim_clock.hpp"
 #include "fpp/sim/sim_display.hpp"
 #include "rig_truth_table.hpp"
+#include "sim_board_yaml.hpp"
 #include "test_support.hpp"
 
 #include <array>
@@ -38,27 +39,12 @@ using drivers::LedState;
 
 namespace {
 
-std::string board_yaml(const fs::path& store, const std::string& table_line,
-                       const std::string& extra_sim = "") {
-    const fs::path rig = fpp::test::source_dir() / "board/sim/paper-rig-effects.yaml";
-    return "format: fpp-scanner-board/1\n"
-           "name: test-sim\n"
-           "display: {card: auto, connector: auto, mode: auto}\n"
-           "gpio: {chip: gpiochip0, trigger_line: 17, button_line: 27, led_line: 22,\n"
-           "       trigger_active_low: false, button_active_low: true, led_active_low: false,\n"
-           "       debounce_ms: 30}\n"
-           "camera: {driver: sim, device: \"\", pixel_format: Mono8, exposure_us: 8000,\n"
-           "         trigger: line, trigger_source: Line0, packet_size: 0, buffer_count: 4,\n"
-           "         frame_timeout_ms: 200}\n"
-           "sequence: gray-x\n" +
-           table_line + "store: {directory: " + store.string() +
-           ", max_mb: 64}\n"
-           "timing: {settle_us: 2000, trigger_pulse_us: 100, flip_timeout_ms: 100}\n"
-           "sim: {rig: " +
-           rig.string() +
-           ", scene: composite, binning: 4,\n"
-           "      flip_latency_us: 16667, clock: virtual, seed: 3" +
-           extra_sim + "}\n";
+// The test board: camera binned 4 x 4 (400 x 300), virtual clock.
+std::string board_yaml(const fs::path& store, const std::string& table = "") {
+    fpp::test::SimBoardYaml b;
+    b.store = store;
+    b.table = table;
+    return b.text();
 }
 
 void write_text(const fs::path& path, const std::string& text) {
@@ -80,7 +66,7 @@ struct Fixture {
     }};
 
     explicit Fixture(bool with_table = true) {
-        write_text(board_file, board_yaml(store, with_table ? "table: table.fpt\n" : ""));
+        write_text(board_file, board_yaml(store, with_table ? "table.fpt" : ""));
         board = read_board_config(board_file);
     }
     void make_table(const sim::Rig& rig) {
@@ -108,23 +94,6 @@ struct Fixture {
     }
 };
 
-double rms_against_truth(const fs::path& ply, const Image<float>& truth, std::size_t& compared) {
-    const PlyPoints pts = read_ply(ply);
-    double sum = 0;
-    compared = 0;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        const int px = int(pts.pixel[i] % std::uint32_t(truth.width()));
-        const int py = int(pts.pixel[i] / std::uint32_t(truth.width()));
-        const float* t = &truth.at(px, py, 0);
-        if (!std::isfinite(t[2]))
-            continue;
-        const double dx = pts.x[i] - t[0], dy = pts.y[i] - t[1], dz = pts.z[i] - t[2];
-        sum += dx * dx + dy * dy + dz * dz;
-        ++compared;
-    }
-    return std::sqrt(sum / double(compared));
-}
-
 } // namespace
 
 TEST(ScannerSim, ScanWritesCloudCloseToTruth) {
@@ -141,8 +110,8 @@ TEST(ScannerSim, ScanWritesCloudCloseToTruth) {
     // The composite scene fills most of the 400 x 300 binned image.
     EXPECT_GT(out.points, 60000u);
     std::size_t compared = 0;
-    const double rms =
-        rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
+    const double rms = fpp::test::ply_rms_against_truth(out.folder / "cloud.ply",
+                                                        sim.renderer().truth_xyz(), compared);
     std::printf("scan: %zu points, RMS %.4f mm against truth over %zu; streaming %.3f ms/frame, "
                 "last frame to disk %.1f ms\n",
                 out.points, rms, compared, out.timings.push_mean_ms,
@@ -203,8 +172,8 @@ TEST(ScannerSim, CameraSeeingADisplayThroughItsFlipEventsScansAsTheSimBoard) {
         f.board, Devices{observed, sim.trigger(), sim.button(), sim.led(), camera, clock}, f.log);
     const ScanOutcome out = scanner.scan(ScanMode::scan);
     std::size_t compared = 0;
-    const double rms =
-        rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
+    const double rms = fpp::test::ply_rms_against_truth(out.folder / "cloud.ply",
+                                                        sim.renderer().truth_xyz(), compared);
     EXPECT_GT(out.points, 60000u);
     EXPECT_LT(rms, 0.1);
     ASSERT_EQ(camera.exposures().size(), static_cast<std::size_t>(out.frames));
@@ -217,7 +186,7 @@ TEST(ScannerSim, CameraSeeingADisplayThroughItsFlipEventsScansAsTheSimBoard) {
 
 TEST(ScannerBoardConfig, CameraOnlyNeedsSoftwareTriggerAndSteadyClock) {
     fpp::test::TempDir dir;
-    std::string text = board_yaml(dir / "scans", "");
+    std::string text = board_yaml(dir / "scans");
     auto with = [&](const std::string& from, const std::string& to) {
         std::string t = text;
         t.replace(t.find(from), from.size(), to);
@@ -398,7 +367,7 @@ TEST(ScannerSim, StorePrunedToItsLimit) {
 
 TEST(ScannerBoardConfig, RejectsBadFieldsNamingThem) {
     fpp::test::TempDir dir;
-    const std::string good = board_yaml(dir / "scans", "table: t.fpt\n");
+    const std::string good = board_yaml(dir / "scans", "t.fpt");
     EXPECT_NO_THROW(parse_board_config(good, dir / "b.yaml"));
     auto expect_field = [&](const std::string& from, const std::string& to,
                             const std::string& field) {
@@ -536,7 +505,7 @@ TEST(ScannerCli, SigtermDuringAScanAbortsItCleanly) {
     // 2 s, and SIGTERM arrives as soon as the scan has started.
     Fixture f;
     f.make_board_table();
-    std::string text = board_yaml(f.store, "table: table.fpt\n");
+    std::string text = board_yaml(f.store, "table.fpt");
     text.replace(text.find("flip_latency_us: 16667, clock: virtual"), 38,
                  "flip_latency_us: 100000, clock: steady");
     write_text(f.board_file, text);

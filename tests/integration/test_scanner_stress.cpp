@@ -19,6 +19,7 @@
 #include "fpp/scanner/sim_board.hpp"
 #include "fpp/sim/rig.hpp"
 #include "rig_truth_table.hpp"
+#include "sim_board_yaml.hpp"
 #include "test_support.hpp"
 
 #include <algorithm>
@@ -65,27 +66,16 @@ sim::Rig small_rig() {
     return rig;
 }
 
-
 std::string board_yaml(const fs::path& store, const fs::path& rig) {
-    return "format: fpp-scanner-board/1\n"
-           "name: stress-sim\n"
-           "display: {card: auto, connector: auto, mode: auto}\n"
-           "gpio: {chip: gpiochip0, trigger_line: 17, button_line: 27, led_line: 22,\n"
-           "       trigger_active_low: false, button_active_low: true, led_active_low: false,\n"
-           "       debounce_ms: 30}\n"
-           "camera: {driver: sim, device: \"\", pixel_format: Mono8, exposure_us: 8000,\n"
-           "         trigger: line, trigger_source: Line0, packet_size: 0, buffer_count: 4,\n"
-           "         frame_timeout_ms: 200}\n"
-           "sequence: gray-x\n"
-           "table: table.fpt\n"
-           "store: {directory: " +
-           store.string() +
-           ", max_mb: 1}\n"
-           "timing: {settle_us: 2000, trigger_pulse_us: 100, flip_timeout_ms: 100}\n"
-           "sim: {rig: " +
-           rig.string() +
-           ", scene: composite, binning: 1,\n"
-           "      flip_latency_us: 16667, clock: virtual, seed: 7}\n";
+    fpp::test::SimBoardYaml b;
+    b.name = "stress-sim";
+    b.store = store;
+    b.rig = rig;
+    b.table = "table.fpt";
+    b.max_mb = 1;
+    b.binning = 1;
+    b.seed = 7;
+    return b.text();
 }
 
 // The scan store's folder: on a RAM file system when there is one. Each
@@ -93,7 +83,7 @@ std::string board_yaml(const fs::path& store, const fs::path& rig) {
 // to 20 ms, which made 1000 scans take minutes. Durability is not what this
 // test checks. Removed with its contents on destruction.
 class StoreDir {
-  public:
+public:
     explicit StoreDir(const fs::path& fallback) {
         std::string name = "/dev/shm/fpp-test-stress-XXXXXX";
         if (fs::is_directory("/dev/shm") && ::mkdtemp(name.data()) != nullptr) {
@@ -112,29 +102,10 @@ class StoreDir {
     StoreDir& operator=(const StoreDir&) = delete;
     const fs::path& path() const { return path_; }
 
-  private:
+private:
     fs::path path_;
     bool owned_ = false;
 };
-
-// RMS distance (mm) of a PLY's points to the scene's truth, over the points
-// whose pixel has a truth.
-double rms_against_truth(const fs::path& ply, const Image<float>& truth, std::size_t& compared) {
-    const PlyPoints pts = read_ply(ply);
-    double sum = 0;
-    compared = 0;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        const auto width = std::uint32_t(truth.width());
-        const float* t = &truth.at(int(pts.pixel[i] % width), int(pts.pixel[i] / width), 0);
-        if (!std::isfinite(t[2]))
-            continue;
-        const double dx = pts.x[i] - t[0], dy = pts.y[i] - t[1], dz = pts.z[i] - t[2];
-        sum += dx * dx + dy * dy + dz * dz;
-        ++compared;
-    }
-    return compared > 0 ? std::sqrt(sum / double(compared))
-                        : std::numeric_limits<double>::infinity();
-}
 
 } // namespace
 
@@ -177,11 +148,11 @@ TEST(ScannerStress, ThousandScansEachFrameShowsItsPattern) {
         max_points = std::max(max_points, out.points);
         // The newest scan is never pruned: its cloud is there to be read.
         if (s == 0)
-            first_rms = rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(),
-                                          first_compared);
+            first_rms = fpp::test::ply_rms_against_truth(
+                out.folder / "cloud.ply", sim.renderer().truth_xyz(), first_compared);
         if (s == kScans - 1) {
-            last_rms = rms_against_truth(out.folder / "cloud.ply", sim.renderer().truth_xyz(),
-                                         last_compared);
+            last_rms = fpp::test::ply_rms_against_truth(out.folder / "cloud.ply",
+                                                        sim.renderer().truth_xyz(), last_compared);
             last_folder = out.folder;
         }
     }

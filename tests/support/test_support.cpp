@@ -1,7 +1,11 @@
 #include "test_support.hpp"
 
+#include "fpp/point_cloud.hpp"
+
 #include <sys/wait.h>
 
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <random>
@@ -86,6 +90,24 @@ std::map<std::string, double> read_figures_csv(const std::filesystem::path& file
         figures[line.substr(0, a)] = std::stod(line.substr(a + 1, b - a - 1));
     }
     return figures;
+}
+
+double ply_rms_against_truth(const std::filesystem::path& ply, const Image<float>& truth_xyz,
+                             std::size_t& compared) {
+    const PlyPoints pts = read_ply(ply);
+    const auto width = static_cast<std::uint32_t>(truth_xyz.width());
+    double sum = 0;
+    compared = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        const float* t = &truth_xyz.at(static_cast<int>(pts.pixel[i] % width),
+                                       static_cast<int>(pts.pixel[i] / width), 0);
+        if (!std::isfinite(t[2]))
+            continue;
+        const double dx = pts.x[i] - t[0], dy = pts.y[i] - t[1], dz = pts.z[i] - t[2];
+        sum += dx * dx + dy * dy + dz * dz;
+        ++compared;
+    }
+    return compared ? std::sqrt(sum / static_cast<double>(compared)) : std::nan("");
 }
 
 } // namespace fpp::test

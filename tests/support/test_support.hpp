@@ -1,9 +1,12 @@
 #pragma once
 // Test helpers: where test data lives, temporary folders.
 
+#include <cstddef>
 #include <filesystem>
 #include <map>
 #include <string>
+
+#include "fpp/image.hpp"
 
 namespace fpp::test {
 
@@ -18,7 +21,7 @@ bool in_ci();
 
 // A fresh empty folder, removed with its contents on destruction.
 class TempDir {
-  public:
+public:
     TempDir();
     ~TempDir();
     TempDir(const TempDir&) = delete;
@@ -26,7 +29,7 @@ class TempDir {
     const std::filesystem::path& path() const { return path_; }
     std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
 
-  private:
+private:
     std::filesystem::path path_;
 };
 
@@ -50,6 +53,13 @@ ToolRun run_tool(const std::string& exe, const std::string& args,
 // A figures.csv written by fpp-calib (header name,value,unit): name -> value.
 // Throws std::runtime_error naming the file if it is missing or malformed.
 std::map<std::string, double> read_figures_csv(const std::filesystem::path& file);
+
+// RMS 3D distance (mm) of a PLY's points (written by fpp::write_ply, with
+// pixel indices) to `truth_xyz` (3-channel float, camera frame, NaN = no
+// surface) at their pixels; `compared` gets the number of points that have a
+// true surface (NaN when none has).
+double ply_rms_against_truth(const std::filesystem::path& ply, const Image<float>& truth_xyz,
+                             std::size_t& compared);
 
 } // namespace fpp::test
 

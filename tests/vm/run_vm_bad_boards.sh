@@ -10,15 +10,11 @@
 set -euo pipefail
 source_dir=$(cd "$(dirname "$0")/../.." && pwd)
 build="${1:-$source_dir/build/aarch64}"
-cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
-fail() { echo "run_vm_bad_boards: FAILED: $*"; exit 1; }
-skip() {
-  [ "${CI:-}" = true ] && fail "(CI) $*"
-  echo "run_vm_bad_boards: SKIPPED: $*"; exit 77
-}
-command -v qemu-system-aarch64 > /dev/null || skip "qemu-system-aarch64 not installed"
-[ -s "$cache/kernel-release" ] || skip "no arm64 kernel in $cache (toolchain/vm/fetch-deps.sh)"
-[ -x "$build/firmware/scanner/fpp-scanner" ] || skip "no cross-built fpp-scanner in $build"
+test_name=run_vm_bad_boards
+# shellcheck source=tests/vm/common.sh
+source "$source_dir/tests/vm/common.sh"
+require_vm
+require_arm64_scanner "$build"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-bad.XXXXXX")
 trap 'rm -rf "$work"' EXIT

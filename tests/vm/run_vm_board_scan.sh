@@ -16,11 +16,10 @@ host="$1"
 build="${2:-$source_dir/build/aarch64}"
 scanner="$host/firmware/scanner/fpp-scanner"
 calib="$host/calib/fpp-calib"
-fail() { echo "run_vm_board_scan: FAILED: $*"; exit 1; }
-if ! [ -x "$scanner" ] || ! [ -x "$calib" ]; then
-  [ "${CI:-}" = true ] && fail "no host tools in $host"
-  echo "run_vm_board_scan: SKIPPED: no host tools in $host"; exit 77
-fi
+test_name=run_vm_board_scan
+# shellcheck source=tests/vm/common.sh
+source "$source_dir/tests/vm/common.sh"
+{ [ -x "$scanner" ] && [ -x "$calib" ]; } || skip "no host tools in $host"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-board.XXXXXX")
 trap 'rm -rf "$work"' EXIT

@@ -11,7 +11,6 @@ set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
 source_dir=$(cd "$here/../.." && pwd)
-cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
 keep="" timeout_s=120
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -22,16 +21,10 @@ while [ $# -gt 0 ]; do
   esac
 done
 
-# In CI (CI=true) everything the VM needs is installed: a skip is a failure.
-skip() {
-  if [ "${CI:-}" = true ]; then echo "run_vm_probe: FAILED (CI): $*"; exit 1; fi
-  echo "run_vm_probe: SKIPPED: $*"; exit 77
-}
-fail() { echo "run_vm_probe: FAILED: $*"; exit 1; }
-command -v qemu-system-aarch64 > /dev/null ||
-  skip "qemu-system-aarch64 not installed (apt-get install qemu-system-arm)"
-[ -s "$cache/kernel-release" ] ||
-  skip "no arm64 kernel in $cache (toolchain/vm/fetch-deps.sh fills it at install time)"
+test_name=run_vm_probe
+# shellcheck source=tests/vm/common.sh
+source "$source_dir/tests/vm/common.sh"
+require_vm
 command -v aarch64-linux-gnu-g++ > /dev/null || skip "no aarch64-linux-gnu-g++ (g++-aarch64-linux-gnu)"
 for f in /usr/lib/aarch64-linux-gnu/libdrm.so /usr/lib/aarch64-linux-gnu/libgpiod.so \
   /usr/include/libdrm/drm.h /usr/include/gpiod.h; do

@@ -25,7 +25,6 @@ set -euo pipefail
 source_dir=$(cd "$(dirname "$0")/../.." && pwd)
 build="$source_dir/build/aarch64"
 board="" table="" mode=capture button=0 fake_camera=0 keep="" timeout_s=240
-cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
@@ -42,19 +41,11 @@ while [ $# -gt 0 ]; do
 done
 case "$mode" in capture|scan) ;; *) echo "run_vm_scan: --mode capture or scan" >&2; exit 2 ;; esac
 
-# In CI (CI=true) everything the VM needs is installed: a skip is a failure.
-skip() {
-  if [ "${CI:-}" = true ]; then echo "run_vm_scan: FAILED (CI): $*"; exit 1; fi
-  echo "run_vm_scan: SKIPPED: $*"; exit 77
-}
-fail() { echo "run_vm_scan: FAILED: $*"; exit 1; }
-command -v qemu-system-aarch64 > /dev/null ||
-  skip "qemu-system-aarch64 not installed (apt-get install qemu-system-arm)"
-[ -s "$cache/kernel-release" ] ||
-  skip "no arm64 kernel in $cache (toolchain/vm/fetch-deps.sh fills it at install time)"
-scanner="$build/firmware/scanner/fpp-scanner"
-[ -x "$scanner" ] || skip "no cross-built $scanner (cmake --preset aarch64 && cmake --build build/aarch64)"
-readelf -h "$scanner" | grep -q 'Machine:.*AArch64' || skip "$scanner is not an AArch64 build"
+test_name=run_vm_scan
+# shellcheck source=tests/vm/common.sh
+source "$source_dir/tests/vm/common.sh"
+require_vm
+require_arm64_scanner "$build"
 
 t_start=$EPOCHREALTIME
 work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-scan.XXXXXX")

@@ -1,0 +1,24 @@
+# shellcheck shell=bash disable=SC2154
+# Sourced by the tests/vm scripts after they set `test_name`: how they fail
+# and skip, and the checks every one of them makes before booting the VM.
+# Exit status: 0 passed, 1 failed, 77 skipped; in CI (CI=true) everything the
+# VM needs is installed, so a skip is a failure there.
+cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
+fail() { echo "$test_name: FAILED: $*"; exit 1; }
+skip() {
+  [ "${CI:-}" != true ] || fail "(CI) $*"
+  echo "$test_name: SKIPPED: $*"; exit 77
+}
+# QEMU and the arm64 kernel cache (toolchain/vm/fetch-deps.sh).
+require_vm() {
+  command -v qemu-system-aarch64 > /dev/null ||
+    skip "qemu-system-aarch64 not installed (apt-get install qemu-system-arm)"
+  [ -s "$cache/kernel-release" ] ||
+    skip "no arm64 kernel in $cache (toolchain/vm/fetch-deps.sh fills it at install time)"
+}
+# The cross-built scanner of the AArch64 build folder $1.
+require_arm64_scanner() {
+  local scanner="$1/firmware/scanner/fpp-scanner"
+  [ -x "$scanner" ] || skip "no cross-built $scanner (cmake --workflow --preset aarch64)"
+  readelf -h "$scanner" | grep -q 'Machine:.*AArch64' || skip "$scanner is not an AArch64 build"
+}
