@@ -288,10 +288,10 @@ int run_reconstruct(const ReconstructArgs& args) {
     }
 
     std::vector<std::string> comments = {
-        use_table ? "fpp-calib reconstruct: hybrid model (" +
-                        std::string(to_string(table.info().model)) +
-                        " coefficient table), camera frame, mm"
-                  : "fpp-calib reconstruct: stereo (SV) model, camera frame, mm",
+        use_table
+            ? "fpp-calib reconstruct: hybrid model (" + std::string(to_string(table.info().model)) +
+                  " coefficient table), camera frame, mm"
+            : "fpp-calib reconstruct: stereo (SV) model, camera frame, mm",
         "capture " + fs::path(args.capture).filename().string() +
             (use_table ? ", table " : ", calibration ") + calib_path.filename().string() +
             ", axes " + to_string(stats.axes),
@@ -306,7 +306,7 @@ int run_reconstruct(const ReconstructArgs& args) {
     // The TIFF is published inside the PLY's atomic write, just before the
     // PLY itself: a failure while writing either leaves neither.
     write_atomically(out, [&](const fs::path& temp) {
-        write_file_synced(temp, encode_ply(cloud, comments));
+        write_ply_synced(temp, cloud, comments);
         if (!xyz_out.empty())
             write_tiff(xyz_out, cloud.xyz);
     });
@@ -354,8 +354,7 @@ int run_reconstruct(const ReconstructArgs& args) {
         report << "table " << model_seconds << " s, writing ";
     else
         report << "camera rays " << prepare_seconds << " s, SV " << model_seconds << " s, writing ";
-    report
-           << write_seconds << " s\n"
+    report << write_seconds << " s\n"
            << "wrote " << out.string() << (xyz_out.empty() ? "" : " and " + xyz_out.string())
            << "\n";
     std::cout << report.str();

@@ -301,7 +301,8 @@ struct Frames {
 };
 
 // Streaming decoder work frame by frame on real frames, as in the scanner
-// (all threads, result images recycled). Every sample is kept, per frame
+// (all threads, one decoder restarted scan after scan, result images
+// recycled). Every sample is kept, per frame
 // index, over all runs of this benchmark (repetitions included); counters:
 // the frame with the slowest median, its best and median time (ms).
 std::vector<std::vector<double>> g_push_samples_ms;
@@ -320,9 +321,9 @@ void push_per_frame(benchmark::State& state) {
     const fpp::Size projector = g_context->sim->display().size();
     const fpp::Sequence& sequence = g_context->scanner->sequence();
     g_push_samples_ms.resize(fx.frames.size());
+    fpp::StreamingDecoder decoder(sequence, camera, projector);
     for (auto _ : state) {
-        fpp::StreamingDecoder decoder(sequence, camera, projector, fpp::DecodeOptions{},
-                                      std::move(fx.decoded));
+        decoder.restart(std::move(fx.decoded));
         for (std::size_t i = 0; i < fx.frames.size(); ++i) {
             const auto t0 = std::chrono::steady_clock::now();
             decoder.push(fx.frames[i]);
@@ -432,14 +433,15 @@ DecoderHeap measure_decoder_heap(const fpp::Sequence& sequence, fpp::Size camera
     return heap;
 }
 
-// Frames the streaming decoder keeps: all but the last of its longest phase
-// block (a block is decoded at its last frame; earlier ones wait in slots).
+// Frames the streaming decoder keeps: those of its longest phase block (a
+// block is decoded in slices from its last frame on, so all its frames wait
+// in slots until the last slice).
 int frames_held(const fpp::Sequence& sequence) {
     int steps = 0;
     for (const auto& block : sequence)
         if (const auto* phase = std::get_if<fpp::PhaseBlock>(&block))
             steps = std::max(steps, phase->steps);
-    return std::max(steps - 1, 0);
+    return steps;
 }
 
 void print_row(const char* label, const ScanRecord& r) {
@@ -587,7 +589,7 @@ int run(int argc, char** argv) {
                 rss_start / kMiB, rss_sim / kMiB, (rss_sim - rss_start) / kMiB, rss_scanner / kMiB,
                 (rss_scanner - rss_sim) / kMiB, peak_setup / kMiB);
     std::printf("  table %.1f; frames held by the streaming decoder: %d x %.2f = %.1f "
-                "(one phase block but its last frame); table + frames = %.1f\n",
+                "(one phase block); table + frames = %.1f\n",
                 table / kMiB, held, frame_bytes / kMiB, held * frame_bytes / kMiB,
                 (table + held * frame_bytes) / kMiB);
     std::printf("  decoder heap (measured): state planes %.1f, peak %.1f (planes + frames), "

@@ -34,7 +34,8 @@ std::string read_text(const fs::path& path) {
 
 std::vector<std::string> listing(const fs::path& folder) {
     std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(folder)) names.push_back(e.path().filename().string());
+    for (const auto& e : fs::directory_iterator(folder))
+        names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
 }
@@ -105,7 +106,8 @@ TEST(AtomicFile, ParentThatIsAFileIsIoError) {
 }
 
 TEST(AtomicFile, ReadOnlyFolderIsIoErrorAndLeavesNothing) {
-    if (::geteuid() == 0) GTEST_SKIP() << "root ignores folder permissions";
+    if (::geteuid() == 0)
+        GTEST_SKIP() << "root ignores folder permissions";
     TempDir dir;
     fs::create_directory(dir / "ro");
     fs::permissions(dir / "ro", fs::perms::owner_read | fs::perms::owner_exec);
@@ -115,7 +117,8 @@ TEST(AtomicFile, ReadOnlyFolderIsIoErrorAndLeavesNothing) {
 }
 
 TEST(AtomicFile, FullDiskSaysNoSpaceLeft) {
-    if (!fs::exists("/dev/full")) GTEST_SKIP() << "/dev/full not available";
+    if (!fs::exists("/dev/full"))
+        GTEST_SKIP() << "/dev/full not available";
     try {
         fpp::write_file_synced("/dev/full", std::string(8192, 'x'));
         FAIL() << "no error";
@@ -124,6 +127,52 @@ TEST(AtomicFile, FullDiskSaysNoSpaceLeft) {
         EXPECT_TRUE(contains(e.what(), "no space left")) << e.what();
     }
     EXPECT_TRUE(contains(fpp::describe_errno("write failed", ENOSPC), "no space left"));
+}
+
+// Pieces of all sizes, past the size at which written bytes are handed to
+// the write-back, arrive in order; writing after finish() is refused.
+TEST(SyncedFileWriter, PiecesArriveInOrderAcrossWritebackChunks) {
+    TempDir dir;
+    const fs::path path = dir / "pieces.bin";
+    std::string expected;
+    {
+        fpp::SyncedFileWriter out(path);
+        for (int i = 0; i < 40; ++i) {
+            const std::string piece(static_cast<std::size_t>(1 + i * 37 * 1024),
+                                    static_cast<char>('a' + i % 26));
+            out.write(piece);
+            expected += piece;
+        }
+        out.finish();
+        EXPECT_THROW(out.write("late"), fpp::IoError);
+        EXPECT_THROW(out.finish(), fpp::IoError);
+    }
+    ASSERT_GT(expected.size(), std::size_t{16} << 20);
+    EXPECT_TRUE(read_text(path) == expected);
+    EXPECT_EQ(listing(dir.path()), std::vector<std::string>{"pieces.bin"});
+}
+
+TEST(SyncedFileWriter, FullDiskNamesTheFile) {
+    if (!fs::exists("/dev/full"))
+        GTEST_SKIP() << "/dev/full not available";
+    fpp::SyncedFileWriter out("/dev/full");
+    try {
+        out.write(std::string(8192, 'x'));
+        FAIL() << "no error";
+    } catch (const fpp::IoError& e) {
+        EXPECT_TRUE(contains(e.what(), "/dev/full")) << e.what();
+        EXPECT_TRUE(contains(e.what(), "no space left")) << e.what();
+    }
+}
+
+TEST(SyncedFileWriter, MissingFolderIsIoErrorNamingThePath) {
+    TempDir dir;
+    try {
+        fpp::SyncedFileWriter out(dir / "no" / "such" / "file.bin");
+        FAIL() << "no error";
+    } catch (const fpp::IoError& e) {
+        EXPECT_TRUE(contains(e.what(), "no/such/file.bin")) << e.what();
+    }
 }
 
 TEST(AtomicFile, FsyncPathWorksOnFilesAndFoldersAndFailsOnMissing) {
@@ -141,10 +190,12 @@ TEST(AtomicFile, ConcurrentWritersNeverProduceAMixedFile) {
     std::vector<std::thread> threads;
     for (int t = 0; t < 4; ++t) {
         threads.emplace_back([&, t] {
-            for (int i = 0; i < 5; ++i) fpp::write_file_atomically(dir / "shared", t % 2 ? a : b);
+            for (int i = 0; i < 5; ++i)
+                fpp::write_file_atomically(dir / "shared", t % 2 ? a : b);
         });
     }
-    for (auto& t : threads) t.join();
+    for (auto& t : threads)
+        t.join();
     const std::string result = read_text(dir / "shared");
     EXPECT_TRUE(result == a || result == b);
     EXPECT_EQ(listing(dir.path()), std::vector<std::string>{"shared"});

@@ -35,8 +35,10 @@ constexpr double kPi = std::numbers::pi;
 // Ideal intensity in [0, 1] of frame `k` of a block at projector coordinate q
 // along the block's axis (spec/capture-set.md).
 double intensity(const fpp::PatternBlock& block, int k, double q) {
-    if (std::holds_alternative<fpp::WhiteBlock>(block)) return 1.0;
-    if (std::holds_alternative<fpp::BlackBlock>(block)) return 0.0;
+    if (std::holds_alternative<fpp::WhiteBlock>(block))
+        return 1.0;
+    if (std::holds_alternative<fpp::BlackBlock>(block))
+        return 0.0;
     if (const auto* p = std::get_if<fpp::PhaseBlock>(&block))
         return 0.5 + 0.5 * std::cos(2 * kPi * q / p->period + p->phase_offset +
                                     p->shift_sign * 2 * kPi * k / p->steps);
@@ -48,8 +50,8 @@ double intensity(const fpp::PatternBlock& block, int k, double q) {
             inverted = k % 2 == 1;
         }
         const int planes = g->bits + (g->complementary ? 1 : 0);
-        const auto n = static_cast<unsigned>(
-            std::floor((g->complementary ? 2.0 : 1.0) * q / g->period));
+        const auto n =
+            static_cast<unsigned>(std::floor((g->complementary ? 2.0 : 1.0) * q / g->period));
         const unsigned code = n ^ (n >> 1);
         const bool on = ((code >> (planes - 1 - plane)) & 1u) != 0;
         return on != inverted ? 1.0 : 0.0;
@@ -59,9 +61,12 @@ double intensity(const fpp::PatternBlock& block, int k, double q) {
 }
 
 Axis block_axis(const fpp::PatternBlock& block) {
-    if (const auto* p = std::get_if<fpp::PhaseBlock>(&block)) return p->axis;
-    if (const auto* g = std::get_if<fpp::GrayBlock>(&block)) return g->axis;
-    if (const auto* c = std::get_if<fpp::CenterlineBlock>(&block)) return c->axis;
+    if (const auto* p = std::get_if<fpp::PhaseBlock>(&block))
+        return p->axis;
+    if (const auto* g = std::get_if<fpp::GrayBlock>(&block))
+        return g->axis;
+    if (const auto* c = std::get_if<fpp::CenterlineBlock>(&block))
+        return c->axis;
     return Axis::x;
 }
 
@@ -85,8 +90,8 @@ struct Synth {
                 const double bump = 25.0 * std::exp(-(dx * dx + dy * dy) / (2 * 45.0 * 45.0));
                 s.truth_x.at(x, y) = static_cast<float>(15.0 + 1.87 * x + 0.11 * y + bump);
                 s.truth_y.at(x, y) = static_cast<float>(12.0 + 0.07 * x + 1.89 * y - 0.6 * bump);
-                s.gain.at(x, y) = static_cast<float>(170.0 + 40.0 * std::sin(x * 0.013) *
-                                                                 std::cos(y * 0.017));
+                s.gain.at(x, y) =
+                    static_cast<float>(170.0 + 40.0 * std::sin(x * 0.013) * std::cos(y * 0.017));
             }
         return s;
     }
@@ -98,7 +103,8 @@ struct Synth {
         const int extent = axis == Axis::x ? projector.width : projector.height;
         std::vector<double> profile(static_cast<std::size_t>(extent));
         for (int i = 0; i < extent; ++i)
-            profile[static_cast<std::size_t>(i)] = std::round(255.0 * intensity(block, k, i)) / 255.0;
+            profile[static_cast<std::size_t>(i)] =
+                std::round(255.0 * intensity(block, k, i)) / 255.0;
         std::normal_distribution<double> gauss(0.0, noise);
         const double full = bit_depth == 8 ? 255.0 : 65535.0;
         const double scale = bit_depth == 8 ? 1.0 : 257.0;
@@ -123,7 +129,8 @@ struct Synth {
                         t * profile[static_cast<std::size_t>(i0 + 1)];
                 }
                 double dn = offset + double(gain.at(x, y)) * v;
-                if (noise > 0) dn += gauss(rng);
+                if (noise > 0)
+                    dn += gauss(rng);
                 dn = std::clamp(std::round(dn * scale), 0.0, full);
                 if (bit_depth == 8)
                     f.u8.at(x, y) = static_cast<std::uint8_t>(dn);
@@ -189,10 +196,12 @@ Accuracy accuracy(const Image<float>& decoded, const Image<float>& truth, double
     for (int y = margin; y < truth.height() - margin; ++y)
         for (int x = margin; x < truth.width() - margin; ++x) {
             const float t = truth.at(x, y);
-            if (!std::isfinite(t)) continue;
+            if (!std::isfinite(t))
+                continue;
             ++a.truth;
             const float d = decoded.at(x, y);
-            if (!std::isfinite(d)) continue;
+            if (!std::isfinite(d))
+                continue;
             ++a.valid;
             const double e = std::abs(double(d) - double(t));
             if (e > period / 2) {
@@ -208,15 +217,27 @@ Accuracy accuracy(const Image<float>& decoded, const Image<float>& truth, double
 }
 
 template <class T> bool same_bytes(const Image<T>& a, const Image<T>& b) {
-    if (a.size() != b.size() || a.channels() != b.channels()) return false;
-    if (a.empty()) return b.empty(); // memcmp must not see null pointers
+    if (a.size() != b.size() || a.channels() != b.channels())
+        return false;
+    if (a.empty())
+        return b.empty(); // memcmp must not see null pointers
     return std::memcmp(a.data(), b.data(), a.pixel_count() * a.channels() * sizeof(T)) == 0;
 }
 
+// Streams the frames through one buffer that is overwritten after each push,
+// as a camera's buffer goes back to its stream: the decoder must keep what it
+// reads later (a phase block is decoded in slices over the following frames).
 DecodeResult stream(const CaptureSet& set, const DecodeOptions& options = {}) {
     fpp::StreamingDecoder decoder(set.manifest.sequence, set.manifest.camera,
                                   set.manifest.projector, options);
-    for (const auto& f : set.frames) decoder.push(f);
+    fpp::Frame buffer;
+    for (const auto& f : set.frames) {
+        buffer = f;
+        decoder.push(buffer);
+        std::fill(buffer.u8.data(), buffer.u8.data() + buffer.u8.pixel_count(), std::uint8_t{0xA5});
+        std::fill(buffer.u16.data(), buffer.u16.data() + buffer.u16.pixel_count(),
+                  std::uint16_t{0xA5A5});
+    }
     return decoder.finish();
 }
 
@@ -233,52 +254,92 @@ std::vector<NamedSequence> method_sequences() {
     v.push_back({"complementary-gray",
                  {fpp::WhiteBlock{}, fpp::BlackBlock{}, phase(Axis::x, 20, 8),
                   gray(Axis::x, 20, 6, true), phase(Axis::y, 20, 8), gray(Axis::y, 20, 5, true)},
-                 "complementary-gray", "complementary-gray", 20, 20});
-    v.push_back({"plain-gray",
-                 {fpp::WhiteBlock{}, fpp::BlackBlock{}, phase(Axis::x, 20, 8),
-                  gray(Axis::x, 20, 6, false)},
-                 "gray", "", 20, 0});
+                 "complementary-gray",
+                 "complementary-gray",
+                 20,
+                 20});
+    v.push_back(
+        {"plain-gray",
+         {fpp::WhiteBlock{}, fpp::BlackBlock{}, phase(Axis::x, 20, 8), gray(Axis::x, 20, 6, false)},
+         "gray",
+         "",
+         20,
+         0});
     // Fractional periods: code edges fall between projector pixels (ceil()).
     v.push_back({"complementary-gray-fractional",
-                 {phase(Axis::x, 21.3, 8), gray(Axis::x, 21.3, 6, true)}, "complementary-gray", "",
-                 21.3, 0});
+                 {phase(Axis::x, 21.3, 8), gray(Axis::x, 21.3, 6, true)},
+                 "complementary-gray",
+                 "",
+                 21.3,
+                 0});
     v.push_back({"plain-gray-fractional",
                  {fpp::WhiteBlock{}, fpp::BlackBlock{}, phase(Axis::y, 17.65, 8),
                   gray(Axis::y, 17.65, 6, false)},
-                 "", "gray", 0, 17.65});
+                 "",
+                 "gray",
+                 0,
+                 17.65});
     v.push_back({"inverse-gray",
-                 {phase(Axis::x, 20, 8), gray(Axis::x, 20, 6, false, true)}, "inverse-gray", "",
-                 20, 0});
+                 {phase(Axis::x, 20, 8), gray(Axis::x, 20, 6, false, true)},
+                 "inverse-gray",
+                 "",
+                 20,
+                 0});
     v.push_back({"inverse-complementary-gray",
-                 {phase(Axis::y, 16, 4, -1, 0.7), gray(Axis::y, 16, 6, true, true)}, "",
-                 "inverse-complementary-gray", 0, 16});
+                 {phase(Axis::y, 16, 4, -1, 0.7), gray(Axis::y, 16, 6, true, true)},
+                 "",
+                 "inverse-complementary-gray",
+                 0,
+                 16});
     // Gray thresholded against the phase mean, gray frames before the phase block.
     v.push_back({"gray-before-phase",
                  {gray(Axis::x, 20, 6, true), phase(Axis::x, 20, 12, 1, -kPi)},
-                 "complementary-gray", "", 20, 0});
+                 "complementary-gray",
+                 "",
+                 20,
+                 0});
     v.push_back({"multi-period",
                  {phase(Axis::x, 20, 8), phase(Axis::x, 160, 8), phase(Axis::x, 800, 8)},
-                 "multi-period", "", 20, 0});
+                 "multi-period",
+                 "",
+                 20,
+                 0});
     // SLStudio style: 3 steps, negative shift, one-period cue, both axes.
     v.push_back({"one-period-cue",
-                 {phase(Axis::x, 50, 3, -1), phase(Axis::x, 800, 3, -1), phase(Axis::y, 37.5, 3, -1),
-                  phase(Axis::y, 600, 3, -1)},
-                 "multi-period", "multi-period", 50, 37.5});
+                 {phase(Axis::x, 50, 3, -1), phase(Axis::x, 800, 3, -1),
+                  phase(Axis::y, 37.5, 3, -1), phase(Axis::y, 600, 3, -1)},
+                 "multi-period",
+                 "multi-period",
+                 50,
+                 37.5});
     // Beats 420 (20/21) and 280 (21/22.702...), beat of beats 840 >= 800.
     v.push_back({"heterodyne",
-                 {phase(Axis::x, 20, 8), phase(Axis::x, 21, 8), phase(Axis::x, 1.0 / (1.0 / 21 - 1.0 / 280), 8)},
-                 "heterodyne", "", 20, 0});
+                 {phase(Axis::x, 20, 8), phase(Axis::x, 21, 8),
+                  phase(Axis::x, 1.0 / (1.0 / 21 - 1.0 / 280), 8)},
+                 "heterodyne",
+                 "",
+                 20,
+                 0});
     v.push_back({"heterodyne-two",
-                 {phase(Axis::y, 60, 8), phase(Axis::y, 64, 8)}, "", "heterodyne", 0, 60});
+                 {phase(Axis::y, 60, 8), phase(Axis::y, 64, 8)},
+                 "",
+                 "heterodyne",
+                 0,
+                 60});
     v.push_back({"centerline",
                  {fpp::WhiteBlock{}, phase(Axis::x, 20, 8), centerline(Axis::x, 400),
                   phase(Axis::y, 20, 8), centerline(Axis::y, 300)},
-                 "centerline", "centerline", 20, 20});
+                 "centerline",
+                 "centerline",
+                 20,
+                 20});
     v.push_back({"direct", {phase(Axis::x, 800, 12)}, "direct", "", 800, 0});
     return v;
 }
 
-void PrintTo(const NamedSequence& s, std::ostream* os) { *os << s.name; }
+void PrintTo(const NamedSequence& s, std::ostream* os) {
+    *os << s.name;
+}
 
 class MethodTest : public ::testing::TestWithParam<NamedSequence> {};
 
@@ -366,8 +427,8 @@ TEST(DecodePhase, WrappedPhaseModulationAndMeanAreExact) {
                         for (int x = 0; x < camera.width; ++x) {
                             const double phi = 2 * kPi * double(p.at(x, y)) / 512.0 + offset +
                                                sign * 2 * kPi * k / steps;
-                            f.u16.at(x, y) = static_cast<std::uint16_t>(
-                                std::lround(double(a.at(x, y)) + double(b.at(x, y)) * std::cos(phi)));
+                            f.u16.at(x, y) = static_cast<std::uint16_t>(std::lround(
+                                double(a.at(x, y)) + double(b.at(x, y)) * std::cos(phi)));
                         }
                     set.frames.push_back(std::move(f));
                 }
@@ -376,13 +437,17 @@ TEST(DecodePhase, WrappedPhaseModulationAndMeanAreExact) {
                 double max_p = 0, max_a = 0, max_b = 0;
                 for (int y = 0; y < camera.height; ++y)
                     for (int x = 0; x < camera.width; ++x) {
-                        max_p = std::max(max_p, std::abs(double(r.proj_x.at(x, y)) - double(p.at(x, y))));
-                        max_a = std::max(max_a, std::abs(double(r.mean.at(x, y)) - double(a.at(x, y))));
-                        max_b = std::max(max_b, std::abs(double(r.modulation.at(x, y)) - double(b.at(x, y))));
+                        max_p = std::max(max_p,
+                                         std::abs(double(r.proj_x.at(x, y)) - double(p.at(x, y))));
+                        max_a =
+                            std::max(max_a, std::abs(double(r.mean.at(x, y)) - double(a.at(x, y))));
+                        max_b = std::max(
+                            max_b, std::abs(double(r.modulation.at(x, y)) - double(b.at(x, y))));
                         EXPECT_EQ(r.mask.at(x, y), fpp::kDecodeValid);
                     }
                 // Rounding to integers: theta error ~ 1e-5 rad = 1e-3 px at period 512.
-                EXPECT_LT(max_p, 0.004) << steps << " steps, sign " << sign << ", offset " << offset;
+                EXPECT_LT(max_p, 0.004)
+                    << steps << " steps, sign " << sign << ", offset " << offset;
                 EXPECT_LT(max_a, 0.6) << steps << " " << sign << " " << offset;
                 EXPECT_LT(max_b, 1.0) << steps << " " << sign << " " << offset;
             }
@@ -423,9 +488,11 @@ TEST(DecodeMask, LowModulationAndSaturationAreFlagged) {
     // A dark patch (gain 2 DN: modulation about 1 DN < 0.02 * 255) and a
     // bright patch that clips at 255.
     for (int y = 50; y < 100; ++y)
-        for (int x = 50; x < 100; ++x) s.gain.at(x, y) = 2.0f;
+        for (int x = 50; x < 100; ++x)
+            s.gain.at(x, y) = 2.0f;
     for (int y = 200; y < 250; ++y)
-        for (int x = 250; x < 300; ++x) s.gain.at(x, y) = 300.0f;
+        for (int x = 250; x < 300; ++x)
+            s.gain.at(x, y) = 300.0f;
     const CaptureSet set = s.capture(method_sequences()[0].sequence);
     for (const DecodeResult& r : {fpp::decode(set), stream(set)}) {
         for (int y = 55; y < 95; ++y)
@@ -462,7 +529,8 @@ TEST(DecodeMask, SaturatedGrayFramesOnlyInvalidateWhenAsked) {
         for (int y = 100; y < 150; ++y)
             for (int x = 100; x < 150; ++x) {
                 std::uint8_t& v = set.frames[f].u8.at(x, y);
-                if (v > 100) v = 255;
+                if (v > 100)
+                    v = 255;
             }
     const DecodeResult lenient = fpp::decode(set);
     const Accuracy a = accuracy(lenient.proj_x, s.truth_x, 20);
@@ -473,7 +541,8 @@ TEST(DecodeMask, SaturatedGrayFramesOnlyInvalidateWhenAsked) {
     const DecodeResult r = fpp::decode(set, strict);
     std::size_t flagged = 0;
     for (int y = 100; y < 150; ++y)
-        for (int x = 100; x < 150; ++x) flagged += (r.mask.at(x, y) & fpp::kDecodeSaturated) != 0;
+        for (int x = 100; x < 150; ++x)
+            flagged += (r.mask.at(x, y) & fpp::kDecodeSaturated) != 0;
     EXPECT_GT(flagged, 1000u);
     EXPECT_TRUE(same_bytes(r.mask, stream(set, strict).mask));
 }
@@ -492,7 +561,8 @@ TEST(DecodeMask, CoarseFineDisagreementIsFlagged) {
     // Inside a patch the coarse frames see the map 8 px (0.4 fine periods) off.
     for (std::size_t f = 8; f < 16; ++f)
         for (int y = 50; y < 120; ++y)
-            for (int x = 200; x < 300; ++x) set.frames[f].u8.at(x, y) = moved.frames[f].u8.at(x, y);
+            for (int x = 200; x < 300; ++x)
+                set.frames[f].u8.at(x, y) = moved.frames[f].u8.at(x, y);
     const DecodeResult r = fpp::decode(set);
     std::size_t flagged = 0;
     for (int y = 55; y < 115; ++y)
@@ -522,13 +592,52 @@ TEST(DecodeApi, RecycledResultGivesTheSameBytes) {
     EXPECT_TRUE(same_bytes(fresh.proj_y, reused.proj_y));
     EXPECT_TRUE(same_bytes(fresh.mask, reused.mask));
     EXPECT_TRUE(same_bytes(fresh.modulation, reused.modulation));
-    fpp::StreamingDecoder d(set.manifest.sequence, set.manifest.camera, set.manifest.projector,
-                            {}, std::move(reused));
-    for (const auto& f : set.frames) d.push(f);
+    fpp::StreamingDecoder d(set.manifest.sequence, set.manifest.camera, set.manifest.projector, {},
+                            std::move(reused));
+    for (const auto& f : set.frames)
+        d.push(f);
     const DecodeResult streamed = d.finish();
     EXPECT_EQ(streamed.proj_x.data(), memory);
     EXPECT_TRUE(same_bytes(fresh.proj_x, streamed.proj_x));
     EXPECT_TRUE(same_bytes(fresh.mean, streamed.mean));
+}
+
+// One decoder restarted scan after scan, as the scanner uses it: every
+// sequence gives the batch decoder's bytes after a finished scan of another
+// bit depth and after a scan abandoned part-way, and reuses the images handed
+// back to it.
+TEST(DecodeApi, RestartedDecoderGivesTheSameBytesScanAfterScan) {
+    const Synth s = Synth::standard();
+    for (const NamedSequence& ns : method_sequences()) {
+        const CaptureSet deep = s.capture(ns.sequence, 16, 40.0, 5);
+        const CaptureSet shallow = s.capture(ns.sequence, 8, 1.0, 6);
+        fpp::StreamingDecoder d(ns.sequence, s.camera, s.projector);
+        auto run = [&](const CaptureSet& set) {
+            for (const auto& f : set.frames)
+                d.push(f);
+            return d.finish();
+        };
+        const DecodeResult first = run(deep);
+        EXPECT_TRUE(same_bytes(first.modulation, fpp::decode(deep).modulation)) << ns.name;
+        d.restart(DecodeResult(first));
+        // Abandoned after a few frames: the next scan starts from its first frame.
+        for (std::size_t i = 0; i < 3 && i < shallow.frames.size(); ++i)
+            d.push(shallow.frames[i]);
+        d.restart();
+        DecodeResult second = run(shallow);
+        const DecodeResult batch = fpp::decode(shallow);
+        EXPECT_TRUE(same_bytes(batch.proj_x, second.proj_x)) << ns.name;
+        EXPECT_TRUE(same_bytes(batch.proj_y, second.proj_y)) << ns.name;
+        EXPECT_TRUE(same_bytes(batch.modulation, second.modulation)) << ns.name;
+        EXPECT_TRUE(same_bytes(batch.mean, second.mean)) << ns.name;
+        EXPECT_TRUE(same_bytes(batch.mask, second.mask)) << ns.name;
+        const float* reused = second.modulation.data();
+        d.restart(std::move(second));
+        const DecodeResult third = run(deep);
+        EXPECT_EQ(third.modulation.data(), reused) << ns.name; // no new allocation
+        EXPECT_TRUE(same_bytes(first.proj_x, third.proj_x)) << ns.name;
+        EXPECT_TRUE(same_bytes(first.mask, third.mask)) << ns.name;
+    }
 }
 
 // Plain Gray repair near a step of the projector coordinate (an occlusion
@@ -555,15 +664,18 @@ TEST(DecodeGrayRepair, DoesNotCrossAnOcclusionEdge) {
         for (int y = 5; y < s.camera.height - 5; ++y)
             for (int x = 195; x < 205; ++x) {
                 const float d = r.proj_x.at(x, y);
-                if (!std::isfinite(d)) continue;
+                if (!std::isfinite(d))
+                    continue;
                 ++near_valid;
-                EXPECT_LT(std::abs(d - s.truth_x.at(x, y)), 1.0) << x << "," << y << " jump " << jump;
+                EXPECT_LT(std::abs(d - s.truth_x.at(x, y)), 1.0)
+                    << x << "," << y << " jump " << jump;
             }
         EXPECT_GT(near_valid, 0u);
         // Away from the edge, nearly everything decodes.
         Image<float> far = s.truth_x;
         for (int y = 0; y < s.camera.height; ++y)
-            for (int x = 190; x < 210; ++x) far.at(x, y) = std::numeric_limits<float>::quiet_NaN();
+            for (int x = 190; x < 210; ++x)
+                far.at(x, y) = std::numeric_limits<float>::quiet_NaN();
         EXPECT_GT(accuracy(r.proj_x, far, 20).coverage(), 0.99) << "jump " << jump;
     }
 }
@@ -586,7 +698,8 @@ TEST(DecodeCenterline, RegionWithoutCenterlineHasNoCue) {
     // An island (x in [20, 60)) separated from the rest by a dark band, on
     // the far side of the x centerline at projector x = 400.
     for (int y = 0; y < s.camera.height; ++y)
-        for (int x = 60; x < 70; ++x) s.gain.at(x, y) = 1.0f;
+        for (int x = 60; x < 70; ++x)
+            s.gain.at(x, y) = 1.0f;
     const Sequence seq{fpp::WhiteBlock{}, phase(Axis::x, 20, 8), centerline(Axis::x, 400)};
     const CaptureSet set = s.capture(seq);
     const DecodeResult r = fpp::decode(set);
@@ -598,7 +711,8 @@ TEST(DecodeCenterline, RegionWithoutCenterlineHasNoCue) {
         }
     Image<float> right = s.truth_x;
     for (int y = 0; y < s.camera.height; ++y)
-        for (int x = 0; x < 72; ++x) right.at(x, y) = std::numeric_limits<float>::quiet_NaN();
+        for (int x = 0; x < 72; ++x)
+            right.at(x, y) = std::numeric_limits<float>::quiet_NaN();
     const Accuracy a = accuracy(r.proj_x, right, 20);
     EXPECT_EQ(a.unwrap_errors, 0u);
     EXPECT_GT(a.coverage(), 0.995);
@@ -607,7 +721,8 @@ TEST(DecodeCenterline, RegionWithoutCenterlineHasNoCue) {
 // --- API contract -----------------------------------------------------------
 
 Sequence small_sequence() {
-    return {fpp::WhiteBlock{}, fpp::BlackBlock{}, phase(Axis::x, 20, 4), gray(Axis::x, 20, 6, true)};
+    return {fpp::WhiteBlock{}, fpp::BlackBlock{}, phase(Axis::x, 20, 4),
+            gray(Axis::x, 20, 6, true)};
 }
 
 TEST(DecodeApi, PushRejectsBadFrames) {
@@ -638,7 +753,8 @@ TEST(DecodeApi, PushRejectsBadFrames) {
     }
     {
         fpp::StreamingDecoder d(set.manifest.sequence, s.camera, s.projector);
-        for (const auto& f : set.frames) d.push(f);
+        for (const auto& f : set.frames)
+            d.push(f);
         EXPECT_THROW(d.push(set.frames[0]), std::invalid_argument);
         const DecodeResult r = d.finish();
         EXPECT_FALSE(r.proj_x.empty());
@@ -680,7 +796,9 @@ TEST(DecodeApi, OptionsValidation) {
     bad([](DecodeOptions& o) { o.saturation = 1.01; });
     bad([](DecodeOptions& o) { o.max_unwrap_disagreement = 0.0; });
     bad([](DecodeOptions& o) { o.max_unwrap_disagreement = 0.51; });
-    bad([](DecodeOptions& o) { o.max_unwrap_disagreement = std::numeric_limits<double>::infinity(); });
+    bad([](DecodeOptions& o) {
+        o.max_unwrap_disagreement = std::numeric_limits<double>::infinity();
+    });
     bad([](DecodeOptions& o) { o.threads = -1; });
     try {
         DecodeOptions o;

@@ -1,6 +1,7 @@
 // PNG and float TIFF reading/writing: exact round trips, byte order against
 // independently encoded fixtures (tests/data/image_io/make_fixtures.py),
-// rejection of the wrong kinds of image, corrupt files, failed writes.
+// rejection of the wrong kinds of image, corrupt files, failed writes; and the
+// Image container's moved-from state.
 
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
@@ -32,17 +33,21 @@ template <class T> fpp::Image<T> random_image(int w, int h, int c, std::uint32_t
     fpp::Image<T> image(w, h, c);
     std::mt19937 rng(seed);
     std::uniform_int_distribution<int> dist(0, std::numeric_limits<T>::max());
-    for (auto& v : image.storage()) v = static_cast<T>(dist(rng));
+    for (auto& v : image.storage())
+        v = static_cast<T>(dist(rng));
     return image;
 }
 
 std::vector<fs::path> listing(const fs::path& folder) {
     std::vector<fs::path> names;
-    for (const auto& e : fs::directory_iterator(folder)) names.push_back(e.path().filename());
+    for (const auto& e : fs::directory_iterator(folder))
+        names.push_back(e.path().filename());
     return names;
 }
 
-void truncate_file(const fs::path& path, std::uintmax_t size) { fs::resize_file(path, size); }
+void truncate_file(const fs::path& path, std::uintmax_t size) {
+    fs::resize_file(path, size);
+}
 
 // Runs f, expecting InputError whose message names `path`.
 template <class F> void expect_input_error_naming(const fs::path& path, F&& f) {
@@ -55,9 +60,33 @@ template <class F> void expect_input_error_naming(const fs::path& path, F&& f) {
     }
 }
 
-std::uint32_t bits_of(float f) { return std::bit_cast<std::uint32_t>(f); }
+std::uint32_t bits_of(float f) {
+    return std::bit_cast<std::uint32_t>(f);
+}
 
 } // namespace
+
+// A moved-from image is 0x0 and empty, so that code that checks a recycled
+// image's size before reusing it never takes one without pixels.
+TEST(Image, MovedFromImageIsEmptyWithNoSize) {
+    fpp::Image<float> a(5, 4, 3, 1.5f);
+    fpp::Image<float> b(std::move(a));
+    EXPECT_EQ(b.size(), (fpp::Size{5, 4}));
+    EXPECT_EQ(b.channels(), 3);
+    EXPECT_EQ(b.at(4, 3, 2), 1.5f);
+    EXPECT_TRUE(a.empty()); // NOLINT(bugprone-use-after-move): the moved-from state is the subject
+    EXPECT_EQ(a.size(), (fpp::Size{0, 0}));
+    EXPECT_EQ(a.pixel_count(), 0u);
+    fpp::Image<float> c(2, 2);
+    c = std::move(b);
+    EXPECT_EQ(c.size(), (fpp::Size{5, 4}));
+    EXPECT_EQ(b.size(), (fpp::Size{0, 0}));
+    EXPECT_TRUE(b.empty());
+    fpp::Image<float>& same = c;
+    c = std::move(same); // self-move keeps the image
+    EXPECT_EQ(c.size(), (fpp::Size{5, 4}));
+    EXPECT_EQ(c.pixel_count() * 3, c.storage().size());
+}
 
 TEST(ImageIo, Png8BitRoundTripIsExact) {
     TempDir dir;
@@ -118,8 +147,10 @@ TEST(ImageIo, Rgb8PngWritesThreeChannels) {
 
 TEST(ImageIo, UnsupportedChannelCountsAreRefusedBeforeWriting) {
     TempDir dir;
-    EXPECT_THROW(write_png(dir / "x.png", fpp::Image<std::uint8_t>(4, 4, 2)), std::invalid_argument);
-    EXPECT_THROW(write_png(dir / "y.png", fpp::Image<std::uint16_t>(4, 4, 3)), std::invalid_argument);
+    EXPECT_THROW(write_png(dir / "x.png", fpp::Image<std::uint8_t>(4, 4, 2)),
+                 std::invalid_argument);
+    EXPECT_THROW(write_png(dir / "y.png", fpp::Image<std::uint16_t>(4, 4, 3)),
+                 std::invalid_argument);
     EXPECT_THROW(write_png(dir / "z.png", fpp::Image<std::uint8_t>()), std::invalid_argument);
     EXPECT_TRUE(listing(dir.path()).empty());
 }
@@ -147,7 +178,8 @@ TEST(ImageIo, ReadsInterlacedPng) {
     const fpp::Frame frame = fpp::read_png_gray(fixture("gray8_adam7_9x7.png"));
     ASSERT_EQ(frame.u8.size(), (fpp::Size{9, 7}));
     for (int y = 0; y < 7; ++y) {
-        for (int x = 0; x < 9; ++x) EXPECT_EQ(frame.u8.at(x, y), 10 * y + x) << x << "," << y;
+        for (int x = 0; x < 9; ++x)
+            EXPECT_EQ(frame.u8.at(x, y), 10 * y + x) << x << "," << y;
     }
 }
 
@@ -176,7 +208,8 @@ TEST(ImageIo, TruncatedPngIsInputErrorAtEveryLength) {
     const auto full_size = fs::file_size(dir / "full.png");
     // Cuts from an empty file to one byte short of the end (IEND damaged).
     std::vector<std::uintmax_t> cuts;
-    for (std::uintmax_t cut = 0; cut < full_size; cut += (cut < 64 ? 1 : 97)) cuts.push_back(cut);
+    for (std::uintmax_t cut = 0; cut < full_size; cut += (cut < 64 ? 1 : 97))
+        cuts.push_back(cut);
     cuts.push_back(full_size - 12); // exactly the IEND chunk missing
     cuts.push_back(full_size - 1);
     for (const std::uintmax_t cut : cuts) {
@@ -192,12 +225,14 @@ TEST(ImageIo, CorruptPngIsInputError) {
     const auto image = random_image<std::uint8_t>(64, 48, 1, 6);
     write_png(dir / "ok.png", image);
     std::string bytes(fs::file_size(dir / "ok.png"), '\0');
-    std::ifstream(dir / "ok.png", std::ios::binary).read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    std::ifstream(dir / "ok.png", std::ios::binary)
+        .read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     // Flip a byte inside the compressed data: the chunk CRC no longer matches.
     std::string corrupt = bytes;
     corrupt[corrupt.size() / 2] = static_cast<char>(corrupt[corrupt.size() / 2] ^ 0x5a);
     std::ofstream(dir / "corrupt.png", std::ios::binary) << corrupt;
-    expect_input_error_naming(dir / "corrupt.png", [&] { fpp::read_png_gray(dir / "corrupt.png"); });
+    expect_input_error_naming(dir / "corrupt.png",
+                              [&] { fpp::read_png_gray(dir / "corrupt.png"); });
     // Not a PNG at all.
     std::ofstream(dir / "text.png", std::ios::binary) << "format: fpp-capture/1\n";
     expect_input_error_naming(dir / "text.png", [&] { fpp::read_png_gray(dir / "text.png"); });
@@ -217,7 +252,8 @@ TEST(ImageIo, PngWriteIntoMissingFolderFailsCleanly) {
 
 TEST(ImageIo, PngWriteOnFullDiskSaysNoSpace) {
     // /dev/full fails every write with ENOSPC.
-    if (!fs::exists("/dev/full")) GTEST_SKIP() << "/dev/full not available";
+    if (!fs::exists("/dev/full"))
+        GTEST_SKIP() << "/dev/full not available";
     fpp::Frame frame;
     frame.u8 = random_image<std::uint8_t>(256, 256, 1, 8); // incompressible: forces real writes
     try {
@@ -236,7 +272,8 @@ TEST(ImageIo, FloatTiffRoundTripIsBitExactForOneToFourChannels) {
         fpp::Image<float> image(53, 29, channels);
         std::mt19937 rng(static_cast<std::uint32_t>(channels));
         std::uniform_real_distribution<float> dist(-1000.0f, 1000.0f);
-        for (auto& v : image.storage()) v = dist(rng);
+        for (auto& v : image.storage())
+            v = dist(rng);
         // Special values, including NaNs with payloads and signs.
         auto& s = image.storage();
         s[0] = std::numeric_limits<float>::quiet_NaN();
@@ -248,7 +285,8 @@ TEST(ImageIo, FloatTiffRoundTripIsBitExactForOneToFourChannels) {
         s[6] = std::numeric_limits<float>::denorm_min();
         s[7] = 523.123456f;
         // A NaN background, as in truth maps.
-        for (std::size_t i = s.size() / 2; i < s.size(); i += 3) s[i] = std::nanf("");
+        for (std::size_t i = s.size() / 2; i < s.size(); i += 3)
+            s[i] = std::nanf("");
 
         const fs::path path = dir / (std::to_string(channels) + "ch.tiff");
         fpp::write_tiff(path, image);
@@ -303,13 +341,15 @@ TEST(ImageIo, TiffReaderRejectsOtherKindsAndCorruptFiles) {
         SCOPED_TRACE(cut);
         fs::copy_file(dir / "ok.tiff", dir / "cut.tiff", fs::copy_options::overwrite_existing);
         truncate_file(dir / "cut.tiff", cut);
-        expect_input_error_naming(dir / "cut.tiff", [&] { fpp::read_tiff_float(dir / "cut.tiff"); });
+        expect_input_error_naming(dir / "cut.tiff",
+                                  [&] { fpp::read_tiff_float(dir / "cut.tiff"); });
     }
 }
 
 TEST(ImageIo, TiffWriterRefusesUnsupportedImages) {
     TempDir dir;
-    EXPECT_THROW(fpp::write_tiff(dir / "a.tiff", fpp::Image<float>(4, 4, 5)), std::invalid_argument);
+    EXPECT_THROW(fpp::write_tiff(dir / "a.tiff", fpp::Image<float>(4, 4, 5)),
+                 std::invalid_argument);
     EXPECT_THROW(fpp::write_tiff(dir / "b.tiff", fpp::Image<float>()), std::invalid_argument);
     EXPECT_THROW(fpp::write_tiff(dir / "missing" / "c.tiff", fpp::Image<float>(4, 4, 1)),
                  fpp::IoError);

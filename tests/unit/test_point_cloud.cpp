@@ -154,6 +154,39 @@ TEST(PointCloud, WritesAtomicallyAndReadsBack) {
     EXPECT_EQ(p.intensity[2], 7.0f);
 }
 
+// The streamed writer encodes in pieces (65,536 points each): a cloud of
+// several pieces, with holes so that piece ends fall between slots, gives the
+// bytes of encode_ply exactly.
+TEST(PointCloud, StreamedFileHasTheBytesOfEncodePly) {
+    TempDir dir;
+    fpp::PointCloud c;
+    const int width = 401, height = 397; // 159,197 slots
+    c.xyz = fpp::Image<float>(width, height, 3, kNaN);
+    c.quality = fpp::Image<float>(width, height, 1);
+    c.intensity = fpp::Image<float>(width, height, 1);
+    std::size_t expected = 0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            if ((x * 7 + y * 3) % 11 == 0)
+                continue; // a hole
+            c.xyz.at(x, y, 0) = static_cast<float>(x) * 0.5f;
+            c.xyz.at(x, y, 1) = static_cast<float>(y) * -0.25f;
+            c.xyz.at(x, y, 2) = 400.0f + static_cast<float>(x + y) / 8.0f;
+            c.quality.at(x, y) = static_cast<float>(x % 97);
+            c.intensity.at(x, y) = static_cast<float>(y % 89);
+            ++expected;
+        }
+    ASSERT_GT(expected, 2u * 65536u);
+    const std::string encoded = fpp::encode_ply(c, {"streamed"});
+    fpp::write_ply_synced(dir / "streamed.ply", c, {"streamed"});
+    std::ifstream in(dir / "streamed.ply", std::ios::binary);
+    std::ostringstream file;
+    file << in.rdbuf();
+    EXPECT_EQ(file.str().size(), encoded.size());
+    EXPECT_TRUE(file.str() == encoded);
+    EXPECT_EQ(fpp::read_ply(dir / "streamed.ply").size(), expected);
+}
+
 TEST(PointCloud, EmptyCloudIsAValidFile) {
     TempDir dir;
     fpp::PointCloud c;

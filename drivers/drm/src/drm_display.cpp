@@ -4,6 +4,7 @@
 #include <fpp/drivers/drm_display.hpp>
 
 #include <fpp/drivers/device_error.hpp>
+#include <fpp/unique_fd.hpp>
 
 #include <drm_fourcc.h>
 #include <xf86drm.h>
@@ -23,35 +24,10 @@
 namespace fpp::drivers {
 namespace {
 
-class UniqueFd {
-public:
-    UniqueFd() = default;
-    explicit UniqueFd(int fd) : fd_(fd) {}
-    UniqueFd(UniqueFd&& other) noexcept : fd_(other.release()) {}
-    UniqueFd& operator=(UniqueFd&& other) noexcept {
-        reset(other.release());
-        return *this;
-    }
-    ~UniqueFd() { reset(); }
-    int get() const { return fd_; }
-    bool valid() const { return fd_ >= 0; }
-    int release() {
-        const int fd = fd_;
-        fd_ = -1;
-        return fd;
-    }
-    void reset(int fd = -1) {
-        if (fd_ >= 0) close(fd_);
-        fd_ = fd;
-    }
-
-private:
-    int fd_ = -1;
-};
-
 template <class T, void (*Free)(T*)> struct DrmFree {
     void operator()(T* p) const noexcept {
-        if (p != nullptr) Free(p);
+        if (p != nullptr)
+            Free(p);
     }
 };
 using ResourcesPtr = std::unique_ptr<drmModeRes, DrmFree<drmModeRes, drmModeFreeResources>>;
@@ -62,14 +38,17 @@ using CrtcPtr = std::unique_ptr<drmModeCrtc, DrmFree<drmModeCrtc, drmModeFreeCrt
 using PlaneResPtr =
     std::unique_ptr<drmModePlaneRes, DrmFree<drmModePlaneRes, drmModeFreePlaneResources>>;
 using PlanePtr = std::unique_ptr<drmModePlane, DrmFree<drmModePlane, drmModeFreePlane>>;
-using PropertiesPtr = std::unique_ptr<drmModeObjectProperties,
-                                      DrmFree<drmModeObjectProperties, drmModeFreeObjectProperties>>;
+using PropertiesPtr =
+    std::unique_ptr<drmModeObjectProperties,
+                    DrmFree<drmModeObjectProperties, drmModeFreeObjectProperties>>;
 using PropertyPtr =
     std::unique_ptr<drmModePropertyRes, DrmFree<drmModePropertyRes, drmModeFreeProperty>>;
 using AtomicReqPtr =
     std::unique_ptr<drmModeAtomicReq, DrmFree<drmModeAtomicReq, drmModeAtomicFree>>;
 
-std::string errno_text(int error) { return std::strerror(error); }
+std::string errno_text(int error) {
+    return std::strerror(error);
+}
 
 // A dumb buffer, its framebuffer and its CPU mapping; released in reverse.
 class ScanoutBuffer {
@@ -169,10 +148,11 @@ std::uint32_t property_id(int fd, std::uint32_t object, std::uint32_t type, cons
     if (props)
         for (std::uint32_t i = 0; i < props->count_props; ++i) {
             const PropertyPtr prop(drmModeGetProperty(fd, props->props[i]));
-            if (prop && std::strcmp(prop->name, name) == 0) return prop->prop_id;
+            if (prop && std::strcmp(prop->name, name) == 0)
+                return prop->prop_id;
         }
-    throw DeviceError(device, std::string("object ") + std::to_string(object) +
-                                  " has no property " + name);
+    throw DeviceError(device,
+                      std::string("object ") + std::to_string(object) + " has no property " + name);
 }
 
 std::optional<std::uint64_t> property_value(int fd, std::uint32_t object, std::uint32_t type,
@@ -181,18 +161,21 @@ std::optional<std::uint64_t> property_value(int fd, std::uint32_t object, std::u
     if (props)
         for (std::uint32_t i = 0; i < props->count_props; ++i) {
             const PropertyPtr prop(drmModeGetProperty(fd, props->props[i]));
-            if (prop && std::strcmp(prop->name, name) == 0) return props->prop_values[i];
+            if (prop && std::strcmp(prop->name, name) == 0)
+                return props->prop_values[i];
         }
     return std::nullopt;
 }
 
 std::string connector_name(const drmModeConnector& c) {
     const char* type = drmModeGetConnectorTypeName(c.connector_type);
-    return std::string(type != nullptr ? type : "Unknown") + "-" + std::to_string(c.connector_type_id);
+    return std::string(type != nullptr ? type : "Unknown") + "-" +
+           std::to_string(c.connector_type_id);
 }
 
 double refresh_hz(const drmModeModeInfo& mode) {
-    if (mode.htotal == 0 || mode.vtotal == 0) return double(mode.vrefresh);
+    if (mode.htotal == 0 || mode.vtotal == 0)
+        return double(mode.vrefresh);
     return double(mode.clock) * 1000.0 / (double(mode.htotal) * double(mode.vtotal));
 }
 
@@ -215,8 +198,8 @@ struct DrmDisplay::Impl {
     std::unique_ptr<PropertyBlob> mode_blob;
     bool mode_set = false;
     bool restored = false;
-    std::optional<std::size_t> pending;     // index of the flip in flight
-    std::optional<FlipEvent> completed;     // set by the event handler
+    std::optional<std::size_t> pending; // index of the flip in flight
+    std::optional<FlipEvent> completed; // set by the event handler
     std::vector<FlipEvent> log;
 
     struct AtomicIds {
@@ -228,7 +211,8 @@ struct DrmDisplay::Impl {
     static void on_flip(int, unsigned int sequence, unsigned int sec, unsigned int usec,
                         unsigned int /*crtc_id*/, void* user_data) {
         auto* self = static_cast<Impl*>(user_data);
-        if (!self->pending) return;
+        if (!self->pending)
+            return;
         FlipEvent event;
         event.index = *self->pending;
         event.sequence = sequence;
@@ -239,19 +223,22 @@ struct DrmDisplay::Impl {
     void open_card(const std::string& path) {
         name = "display " + path;
         fd.reset(open(path.c_str(), O_RDWR | O_CLOEXEC));
-        if (!fd.valid()) throw DeviceError(name, "cannot open: " + errno_text(errno));
+        if (!fd.valid())
+            throw DeviceError(name, "cannot open: " + errno_text(errno));
     }
 
     void pick_output(const DrmDisplaySettings& settings) {
         const int f = fd.get();
         const ResourcesPtr res(drmModeGetResources(f));
-        if (!res) throw DeviceError(name, "not a KMS device: " + errno_text(errno));
+        if (!res)
+            throw DeviceError(name, "not a KMS device: " + errno_text(errno));
 
         std::vector<ConnectorPtr> connectors;
         std::vector<DrmConnectorInfo> infos;
         for (int i = 0; i < res->count_connectors; ++i) {
             ConnectorPtr c(drmModeGetConnector(f, res->connectors[i]));
-            if (!c) continue;
+            if (!c)
+                continue;
             DrmConnectorInfo info;
             info.name = connector_name(*c);
             info.connected = c->connection == DRM_MODE_CONNECTED;
@@ -271,19 +258,24 @@ struct DrmDisplay::Impl {
         std::optional<int> crtc_index;
         for (int e = 0; e < connector.count_encoders && !crtc_index; ++e) {
             const EncoderPtr encoder(drmModeGetEncoder(f, connector.encoders[e]));
-            if (!encoder) continue;
+            if (!encoder)
+                continue;
             if (encoder->encoder_id == connector.encoder_id && encoder->crtc_id != 0) {
                 for (int c = 0; c < res->count_crtcs; ++c)
-                    if (res->crtcs[c] == encoder->crtc_id) crtc_index = c;
+                    if (res->crtcs[c] == encoder->crtc_id)
+                        crtc_index = c;
             }
             for (int c = 0; c < res->count_crtcs && !crtc_index; ++c)
-                if (encoder->possible_crtcs & (1u << c)) crtc_index = c;
+                if (encoder->possible_crtcs & (1u << c))
+                    crtc_index = c;
         }
-        if (!crtc_index) throw DeviceError(name, "no CRTC can drive " + infos[choice.connector].name);
+        if (!crtc_index)
+            throw DeviceError(name, "no CRTC can drive " + infos[choice.connector].name);
         crtc_id = res->crtcs[*crtc_index];
         saved_crtc.reset(drmModeGetCrtc(f, crtc_id));
 
-        if (atomic) find_primary_plane(*crtc_index);
+        if (atomic)
+            find_primary_plane(*crtc_index);
     }
 
     void find_primary_plane(int crtc_index) {
@@ -291,7 +283,8 @@ struct DrmDisplay::Impl {
         const PlaneResPtr planes(drmModeGetPlaneResources(f));
         for (std::uint32_t i = 0; planes && i < planes->count_planes && plane_id == 0; ++i) {
             const PlanePtr plane(drmModeGetPlane(f, planes->planes[i]));
-            if (!plane || !(plane->possible_crtcs & (1u << crtc_index))) continue;
+            if (!plane || !(plane->possible_crtcs & (1u << crtc_index)))
+                continue;
             if (property_value(f, plane->plane_id, DRM_MODE_OBJECT_PLANE, "type") ==
                 std::optional<std::uint64_t>(DRM_PLANE_TYPE_PRIMARY))
                 plane_id = plane->plane_id;
@@ -300,7 +293,8 @@ struct DrmDisplay::Impl {
             atomic = false; // no primary plane found: fall back to the legacy API
             return;
         }
-        ids.connector_crtc_id = property_id(f, connector_id, DRM_MODE_OBJECT_CONNECTOR, "CRTC_ID", name);
+        ids.connector_crtc_id =
+            property_id(f, connector_id, DRM_MODE_OBJECT_CONNECTOR, "CRTC_ID", name);
         ids.crtc_mode_id = property_id(f, crtc_id, DRM_MODE_OBJECT_CRTC, "MODE_ID", name);
         ids.crtc_active = property_id(f, crtc_id, DRM_MODE_OBJECT_CRTC, "ACTIVE", name);
         const auto plane_prop = [&](const char* prop) {
@@ -322,7 +316,8 @@ struct DrmDisplay::Impl {
         const int f = fd.get();
         mode_blob = std::make_unique<PropertyBlob>(f, &mode, sizeof mode, name);
         const AtomicReqPtr req(drmModeAtomicAlloc());
-        if (!req) throw std::bad_alloc();
+        if (!req)
+            throw std::bad_alloc();
         drmModeAtomicReq* r = req.get();
         drmModeAtomicAddProperty(r, connector_id, ids.connector_crtc_id, crtc_id);
         drmModeAtomicAddProperty(r, crtc_id, ids.crtc_mode_id, mode_blob->id());
@@ -340,7 +335,8 @@ struct DrmDisplay::Impl {
         drmModeAtomicAddProperty(r, plane_id, ids.crtc_h, h);
         if (drmModeAtomicCommit(f, r, DRM_MODE_ATOMIC_TEST_ONLY | DRM_MODE_ATOMIC_ALLOW_MODESET,
                                 nullptr) != 0)
-            throw DeviceError(name, "the card rejects the modeset (test commit): " + errno_text(errno));
+            throw DeviceError(name,
+                              "the card rejects the modeset (test commit): " + errno_text(errno));
         if (drmModeAtomicCommit(f, r, DRM_MODE_ATOMIC_ALLOW_MODESET | DRM_MODE_PAGE_FLIP_EVENT,
                                 this) != 0)
             throw DeviceError(name, "modeset failed: " + errno_text(errno));
@@ -351,7 +347,8 @@ struct DrmDisplay::Impl {
         if (drmModeSetCrtc(f, crtc_id, buffers[index]->fb_id(), 0, 0, &connector_id, 1, &mode) != 0)
             throw DeviceError(name, "modeset failed: " + errno_text(errno));
         // A flip to the same buffer gives the event that marks it on screen.
-        if (drmModePageFlip(f, crtc_id, buffers[index]->fb_id(), DRM_MODE_PAGE_FLIP_EVENT, this) != 0)
+        if (drmModePageFlip(f, crtc_id, buffers[index]->fb_id(), DRM_MODE_PAGE_FLIP_EVENT, this) !=
+            0)
             throw DeviceError(name, "page flip failed: " + errno_text(errno));
     }
 
@@ -359,10 +356,11 @@ struct DrmDisplay::Impl {
         const int f = fd.get();
         if (atomic) {
             const AtomicReqPtr req(drmModeAtomicAlloc());
-            if (!req) throw std::bad_alloc();
+            if (!req)
+                throw std::bad_alloc();
             drmModeAtomicAddProperty(req.get(), plane_id, ids.plane_fb_id, buffers[index]->fb_id());
-            if (drmModeAtomicCommit(f, req.get(), DRM_MODE_ATOMIC_NONBLOCK | DRM_MODE_PAGE_FLIP_EVENT,
-                                    this) != 0)
+            if (drmModeAtomicCommit(f, req.get(),
+                                    DRM_MODE_ATOMIC_NONBLOCK | DRM_MODE_PAGE_FLIP_EVENT, this) != 0)
                 throw DeviceError(name, "page flip to pattern " + std::to_string(index) +
                                             " failed: " + errno_text(errno));
         } else if (drmModePageFlip(f, crtc_id, buffers[index]->fb_id(), DRM_MODE_PAGE_FLIP_EVENT,
@@ -379,9 +377,11 @@ DrmDisplay::DrmDisplay(const DrmDisplaySettings& settings) : impl_(std::make_uni
     if (settings.card == "auto") {
         for (int i = 0; i < 16; ++i) {
             const std::string path = "/dev/dri/card" + std::to_string(i);
-            if (std::filesystem::exists(path)) candidates.push_back(path);
+            if (std::filesystem::exists(path))
+                candidates.push_back(path);
         }
-        if (candidates.empty()) throw DeviceError("display auto", "no DRM card in /dev/dri");
+        if (candidates.empty())
+            throw DeviceError("display auto", "no DRM card in /dev/dri");
     } else {
         candidates.push_back(settings.card);
     }
@@ -395,7 +395,8 @@ DrmDisplay::DrmDisplay(const DrmDisplaySettings& settings) : impl_(std::make_uni
             return;
         } catch (const DeviceError&) {
             d.fd.reset();
-            if (i + 1 == candidates.size()) throw; // the last card's reason
+            if (i + 1 == candidates.size())
+                throw; // the last card's reason
         }
     }
 }
@@ -408,14 +409,23 @@ DrmDisplay::~DrmDisplay() {
     }
 }
 
-Size DrmDisplay::size() const { return {impl_->mode.hdisplay, impl_->mode.vdisplay}; }
-bool DrmDisplay::atomic() const { return impl_->atomic; }
-const std::string& DrmDisplay::name() const { return impl_->name; }
-const std::vector<FlipEvent>& DrmDisplay::flip_log() const { return impl_->log; }
+Size DrmDisplay::size() const {
+    return {impl_->mode.hdisplay, impl_->mode.vdisplay};
+}
+bool DrmDisplay::atomic() const {
+    return impl_->atomic;
+}
+const std::string& DrmDisplay::name() const {
+    return impl_->name;
+}
+const std::vector<FlipEvent>& DrmDisplay::flip_log() const {
+    return impl_->log;
+}
 
 void DrmDisplay::prepare(const std::vector<Image<std::uint8_t>>& patterns) {
     Impl& d = *impl_;
-    if (d.pending) throw DeviceError(d.name, "prepare() while a flip is pending");
+    if (d.pending)
+        throw DeviceError(d.name, "prepare() while a flip is pending");
     for (std::size_t i = 0; i < patterns.size(); ++i)
         if (patterns[i].size() != size() || patterns[i].channels() != 1)
             throw std::invalid_argument("pattern " + std::to_string(i) +
@@ -465,7 +475,8 @@ void DrmDisplay::show(std::size_t index) {
 
 FlipEvent DrmDisplay::wait_flip(std::chrono::milliseconds timeout) {
     Impl& d = *impl_;
-    if (!d.pending) throw DeviceError(d.name, "wait_flip() with no flip pending");
+    if (!d.pending)
+        throw DeviceError(d.name, "wait_flip() with no flip pending");
     drmEventContext context{};
     context.version = 3; // page_flip_handler2: also gets the CRTC
     context.page_flip_handler2 = &Impl::on_flip;
@@ -480,7 +491,8 @@ FlipEvent DrmDisplay::wait_flip(std::chrono::milliseconds timeout) {
         pollfd p{d.fd.get(), POLLIN, 0};
         const int ready = poll(&p, 1, static_cast<int>(left.count()));
         if (ready < 0) {
-            if (errno == EINTR) continue;
+            if (errno == EINTR)
+                continue;
             throw DeviceError(d.name, "poll failed: " + errno_text(errno));
         }
         if (ready > 0 && drmHandleEvent(d.fd.get(), &context) != 0)
@@ -495,7 +507,8 @@ FlipEvent DrmDisplay::wait_flip(std::chrono::milliseconds timeout) {
 
 void DrmDisplay::restore() {
     Impl& d = *impl_;
-    if (d.restored || !d.fd.valid()) return;
+    if (d.restored || !d.fd.valid())
+        return;
     if (d.pending) {
         try {
             (void)wait_flip(std::chrono::milliseconds(500));

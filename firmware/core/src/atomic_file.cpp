@@ -18,30 +18,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Owns a POSIX file descriptor; closes it on destruction (errors ignored there:
-// paths that care about close() errors call close_checked()).
-class UniqueFd {
-public:
-    explicit UniqueFd(int fd) : fd_(fd) {}
-    ~UniqueFd() {
-        if (fd_ >= 0) ::close(fd_);
-    }
-    UniqueFd(const UniqueFd&) = delete;
-    UniqueFd& operator=(const UniqueFd&) = delete;
-    int get() const { return fd_; }
-    bool valid() const { return fd_ >= 0; }
-    // Closes now and reports the error (NFS and some FUSE file systems report
-    // a failed write-back only here).
-    int close_checked() {
-        const int fd = fd_;
-        fd_ = -1;
-        return ::close(fd);
-    }
-
-private:
-    int fd_;
-};
-
 fs::path folder_of(const fs::path& target) {
     fs::path folder = target.parent_path();
     return folder.empty() ? fs::path(".") : folder;
@@ -79,61 +55,54 @@ fs::path create_temp_beside(const fs::path& target) {
             return temp;
         }
         if (errno != EEXIST) {
-            throw IoError(target, describe_errno("cannot create a temporary file in " +
-                                                     folder.string(),
-                                                 errno));
+            throw IoError(
+                target,
+                describe_errno("cannot create a temporary file in " + folder.string(), errno));
         }
     }
     throw IoError(target, "cannot find a free temporary file name in " + folder.string());
-}
-
-void write_all(int fd, const fs::path& path, std::string_view bytes) {
-    const char* p = bytes.data();
-    std::size_t left = bytes.size();
-    while (left > 0) {
-        const ssize_t n = ::write(fd, p, left);
-        if (n < 0) {
-            if (errno == EINTR) continue;
-            throw IoError(path, describe_errno("write failed", errno));
-        }
-        p += n;
-        left -= static_cast<std::size_t>(n);
-    }
 }
 
 } // namespace
 
 std::string describe_errno(const std::string& what, int err) {
     std::string message = what + ": " + std::strerror(err);
-    if (err == ENOSPC) message += " (no space left on the device: the disk is full)";
-    if (err == EDQUOT) message += " (disk quota exceeded)";
+    if (err == ENOSPC)
+        message += " (no space left on the device: the disk is full)";
+    if (err == EDQUOT)
+        message += " (disk quota exceeded)";
     return message;
 }
 
 void fsync_path(const std::filesystem::path& path) {
     // O_RDONLY is enough for fsync on Linux and is the only way to open a directory.
     UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
-    if (!fd.valid()) throw IoError(path, describe_errno("cannot open for fsync", errno));
+    if (!fd.valid())
+        throw IoError(path, describe_errno("cannot open for fsync", errno));
     while (::fsync(fd.get()) != 0) {
-        if (errno == EINTR) continue;
+        if (errno == EINTR)
+            continue;
         // Some file systems cannot fsync a directory; the rename is then as
         // durable as that file system makes it.
-        if (errno == EINVAL && fs::is_directory(path)) break;
+        if (errno == EINVAL && fs::is_directory(path))
+            break;
         throw IoError(path, describe_errno("fsync failed", errno));
     }
-    if (fd.close_checked() != 0) throw IoError(path, describe_errno("close failed", errno));
+    if (fd.close_checked() != 0)
+        throw IoError(path, describe_errno("close failed", errno));
 }
 
 void write_atomically(const std::filesystem::path& target,
                       const std::function<void(const std::filesystem::path& temp)>& write) {
-    if (target.filename().empty()) throw IoError(target, "not a file name");
+    if (target.filename().empty())
+        throw IoError(target, "not a file name");
     const fs::path temp = create_temp_beside(target);
     try {
         write(temp);
         fsync_path(temp);
         if (std::rename(temp.c_str(), target.c_str()) != 0) {
-            throw IoError(target, describe_errno("cannot rename " + temp.string() + " onto it",
-                                                 errno));
+            throw IoError(target,
+                          describe_errno("cannot rename " + temp.string() + " onto it", errno));
         }
     } catch (...) {
         ::unlink(temp.c_str());
@@ -147,19 +116,68 @@ void write_file_atomically(const std::filesystem::path& target, std::string_view
 }
 
 void write_file_synced(const std::filesystem::path& path, std::string_view bytes) {
-    UniqueFd fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666));
-    if (!fd.valid()) throw IoError(path, describe_errno("cannot open for writing", errno));
-    write_all(fd.get(), path, bytes);
-    while (::fsync(fd.get()) != 0) {
-        if (errno == EINTR) continue;
-        throw IoError(path, describe_errno("fsync failed", errno));
+    SyncedFileWriter out(path);
+    out.write(bytes);
+    out.finish();
+}
+
+namespace {
+// Written bytes handed to the write-back at a time: large enough for few
+// calls, small enough that the disk starts early.
+constexpr std::uint64_t kWritebackChunk = std::uint64_t{4} << 20;
+} // namespace
+
+SyncedFileWriter::SyncedFileWriter(std::filesystem::path path)
+    : path_(std::move(path)),
+      fd_(::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)) {
+    if (!fd_.valid())
+        throw IoError(path_, describe_errno("cannot open for writing", errno));
+}
+
+void SyncedFileWriter::write(std::string_view bytes) {
+    if (!fd_.valid())
+        throw IoError(path_, "write after finish");
+    const char* p = bytes.data();
+    std::size_t left = bytes.size();
+    while (left > 0) {
+        const ssize_t n = ::write(fd_.get(), p, left);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            throw IoError(path_, describe_errno("write failed", errno));
+        }
+        p += n;
+        left -= static_cast<std::size_t>(n);
+        written_ += static_cast<std::uint64_t>(n);
     }
-    if (fd.close_checked() != 0) throw IoError(path, describe_errno("close failed", errno));
+#ifdef SYNC_FILE_RANGE_WRITE
+    if (written_ - handed_to_writeback_ >= kWritebackChunk) {
+        // Only a hint: a file system that refuses it is fsynced as usual, and
+        // write-back errors are reported by the fsync in finish().
+        (void)::sync_file_range(fd_.get(), static_cast<off_t>(handed_to_writeback_),
+                                static_cast<off_t>(written_ - handed_to_writeback_),
+                                SYNC_FILE_RANGE_WRITE);
+        handed_to_writeback_ = written_;
+    }
+#endif
+}
+
+void SyncedFileWriter::finish() {
+    if (!fd_.valid())
+        throw IoError(path_, "finished twice");
+    while (::fsync(fd_.get()) != 0) {
+        if (errno == EINTR)
+            continue;
+        throw IoError(path_, describe_errno("fsync failed", errno));
+    }
+    if (fd_.close_checked() != 0)
+        throw IoError(path_, describe_errno("close failed", errno));
 }
 
 void write_folder_atomically(const std::filesystem::path& target,
                              const std::function<void(const std::filesystem::path& temp)>& write) {
-    if (target.filename().empty()) throw IoError(target, "not a folder name");
+    if (target.filename().empty())
+        throw IoError(target, "not a folder name");
     std::error_code ec;
     if (fs::symlink_status(target, ec).type() != fs::file_type::not_found) {
         throw IoError(target, "already exists (a capture folder is never overwritten)");
@@ -171,19 +189,19 @@ void write_folder_atomically(const std::filesystem::path& target,
         if (::mkdir(candidate.c_str(), 0777) == 0) {
             temp = candidate;
         } else if (errno != EEXIST) {
-            throw IoError(target, describe_errno("cannot create a temporary folder in " +
-                                                     parent.string(),
-                                                 errno));
+            throw IoError(
+                target,
+                describe_errno("cannot create a temporary folder in " + parent.string(), errno));
         }
     }
-    if (temp.empty()) throw IoError(target, "cannot find a free temporary folder name");
+    if (temp.empty())
+        throw IoError(target, "cannot find a free temporary folder name");
     try {
         write(temp);
         fsync_path(temp);
         // RENAME_NOREPLACE: renaming a folder onto an existing empty folder
         // would otherwise silently replace it.
-        if (::renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, target.c_str(), RENAME_NOREPLACE) !=
-            0) {
+        if (::renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, target.c_str(), RENAME_NOREPLACE) != 0) {
             const int err = errno;
             if (err == EEXIST || err == ENOTEMPTY) {
                 throw IoError(target, "already exists (created while the set was written)");
@@ -197,9 +215,8 @@ void write_folder_atomically(const std::filesystem::path& target,
                 throw IoError(target, "already exists (created while the set was written)");
             }
             if (std::rename(temp.c_str(), target.c_str()) != 0) {
-                throw IoError(target, describe_errno("cannot rename " + temp.string() +
-                                                         " onto it",
-                                                     errno));
+                throw IoError(target,
+                              describe_errno("cannot rename " + temp.string() + " onto it", errno));
             }
         }
     } catch (...) {

@@ -84,6 +84,7 @@
 #include "crc32.hpp"
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
+#include "fpp/unique_fd.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -257,38 +258,6 @@ std::string tile_value_problem(const float* tile, const TableInfo& info, int pla
         }
     }
     return {};
-}
-
-// Owns a POSIX file descriptor.
-class UniqueFd {
-  public:
-    explicit UniqueFd(int fd) : fd_(fd) {}
-    ~UniqueFd() {
-        if (fd_ >= 0)
-            ::close(fd_);
-    }
-    UniqueFd(const UniqueFd&) = delete;
-    UniqueFd& operator=(const UniqueFd&) = delete;
-    int get() const { return fd_; }
-    // Closes now, returning close()'s result (write-back errors show here).
-    int close_checked() { return ::close(std::exchange(fd_, -1)); }
-
-  private:
-    int fd_;
-};
-
-void write_all(int fd, const fs::path& path, const void* data, std::size_t size) {
-    const auto* p = static_cast<const char*>(data);
-    while (size > 0) {
-        const ssize_t n = ::write(fd, p, size);
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            throw IoError(path, describe_errno("write failed", errno));
-        }
-        p += n;
-        size -= static_cast<std::size_t>(n);
-    }
 }
 
 // Reads exactly `size` bytes at `offset`; a short file is an InputError (it
@@ -558,13 +527,10 @@ void write_table(const std::filesystem::path& path, const CoefficientTable& tabl
     const std::size_t data_bytes =
         static_cast<std::size_t>(l.tile_count) * tile_floats * sizeof(float);
     write_atomically(path, [&](const fs::path& temp) {
-        UniqueFd fd(::open(temp.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC));
-        if (fd.get() < 0)
-            throw IoError(temp, describe_errno("cannot open for writing", errno));
-        write_all(fd.get(), temp, prefix.data(), prefix.size());
-        write_all(fd.get(), temp, data, data_bytes);
-        if (fd.close_checked() != 0)
-            throw IoError(temp, describe_errno("close failed", errno));
+        SyncedFileWriter out(temp);
+        out.write({reinterpret_cast<const char*>(prefix.data()), prefix.size()});
+        out.write({reinterpret_cast<const char*>(data), data_bytes});
+        out.finish();
     });
 }
 

@@ -107,16 +107,15 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
             continue;
         PhaseState& ps = phase_state_[b];
         ps.fraction = make_plane(float_store_, full_);
-        if (static_cast<int>(b) == report) {
-            ps.modulation.full = result_.modulation.data();
-            ps.mean.full = result_.mean.data();
-        } else {
+        // The reported block's B and A are the result's images.
+        if (static_cast<int>(b) != report) {
             ps.modulation = make_plane(float_store_, full_);
             ps.mean = make_plane(float_store_, full_);
         }
         if (plan_.phases[b].thresholds)
             ps.threshold = make_plane(u16_store_, full_);
     }
+    bind_report_planes();
     code_.resize(plan_.grays.size());
     for (std::size_t g = 0; g < plan_.grays.size(); ++g)
         code_[g] = make_plane(u16_store_, full_);
@@ -150,17 +149,30 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
                 std::make_unique_for_overwrite<std::byte[]>(local_bytes_ + kAlign));
 
     frame_base_.assign(static_cast<std::size_t>(plan_.frame_count), nullptr);
-    step_begin_.assign(static_cast<std::size_t>(plan_.frame_count), 0);
-    step_end_.assign(static_cast<std::size_t>(plan_.frame_count), 0);
-    for (int t = 0, s = 0; t < plan_.frame_count; ++t) {
-        step_begin_[static_cast<std::size_t>(t)] = s;
-        while (s < static_cast<int>(plan_.steps.size()) &&
-               plan_.steps[static_cast<std::size_t>(s)].trigger == t)
-            ++s;
-        step_end_[static_cast<std::size_t>(t)] = s;
-    }
     if (mode_ == Mode::batch)
         build_batch_groups();
+    else
+        build_streaming_work();
+}
+
+void DecodeEngine::build_streaming_work() {
+    // A phase block's slices run after steps triggered later on some spans;
+    // the results are the same because those steps neither read its planes
+    // (the plan ends its slices before any step that does) nor assign the
+    // saturation bytes (only the first writer assigns, and all OR).
+    const int spans = span_count();
+    work_.assign(static_cast<std::size_t>(plan_.frame_count), {});
+    for (std::size_t i = 0; i < plan_.steps.size(); ++i) {
+        Step& s = plan_.steps[i];
+        const int parts = s.kind == StepKind::phase_block ? s.parts : 1;
+        for (int p = 0; p < parts; ++p)
+            work_[static_cast<std::size_t>(s.trigger + p)].push_back(
+                {static_cast<int>(i), p * spans / parts, (p + 1) * spans / parts});
+        if (parts > 1 && s.sat_first) {
+            s.sat_first = false;
+            clear_sat_at_ = s.trigger;
+        }
+    }
 }
 
 void DecodeEngine::build_batch_groups() {
@@ -223,10 +235,13 @@ std::byte* DecodeEngine::local_buffer(int worker) const {
     return base + ((kAlign - addr % kAlign) % kAlign);
 }
 
+int DecodeEngine::span_count() const {
+    return static_cast<int>((area_ + static_cast<std::size_t>(span_) - 1) /
+                            static_cast<std::size_t>(span_));
+}
+
 template <class F> void DecodeEngine::for_spans(int spans_per_task, F&& fn) {
-    const int count = static_cast<int>((area_ + static_cast<std::size_t>(span_) - 1) /
-                                       static_cast<std::size_t>(span_));
-    pool_.parallel_for(count, spans_per_task, [&](int b, int e, int worker) {
+    pool_.parallel_for(span_count(), spans_per_task, [&](int b, int e, int worker) {
         for (int i = b; i < e; ++i) {
             const std::size_t offset =
                 static_cast<std::size_t>(i) * static_cast<std::size_t>(span_);
@@ -284,6 +299,29 @@ void DecodeEngine::allocate_result(DecodeResult* recycled) {
         proj_[a] = (a == 0 ? result_.proj_x : result_.proj_y).data();
         (a == 0 ? result_.method_x : result_.method_y) = plan_.axes[a].name;
     }
+}
+
+void DecodeEngine::bind_report_planes() {
+    const int report_axis = plan_.axes[0].coded ? 0 : 1;
+    const int report = plan_.axes[report_axis].report_phase;
+    if (report < 0)
+        return;
+    PhaseState& ps = phase_state_[static_cast<std::size_t>(report)];
+    ps.modulation.full = result_.modulation.data();
+    ps.mean.full = result_.mean.data();
+}
+
+void DecodeEngine::restart(DecodeResult* recycled) {
+    if (mode_ != Mode::streaming)
+        throw std::logic_error("restart() on a batch decoder");
+    // An unfinished sequence still holds its result images: they are reused.
+    DecodeResult held = std::move(result_);
+    allocate_result(finished_ ? recycled : &held);
+    bind_report_planes();
+    std::fill(frame_base_.begin(), frame_base_.end(), nullptr);
+    received_ = 0;
+    depth_ = 0;
+    finished_ = false;
 }
 
 void DecodeEngine::check_frame(const Frame& frame, int index) const {
@@ -479,8 +517,8 @@ template <class T> void DecodeEngine::run_batch_span(std::size_t offset, int n, 
     // lets that arithmetic hide their memory latency.
     const std::size_t bytes = static_cast<std::size_t>(n) * sizeof(T);
     for (int f : prefetch_frames_) {
-        const char* p = static_cast<const char*>(frame_base_[static_cast<std::size_t>(f)]) +
-                        offset * sizeof(T);
+        const char* p =
+            static_cast<const char*>(frame_base_[static_cast<std::size_t>(f)]) + offset * sizeof(T);
         for (std::size_t b = 0; b < bytes; b += kCacheLine)
             __builtin_prefetch(p + b, 0, 2); // read, keep in the outer caches
     }
@@ -592,10 +630,7 @@ void DecodeEngine::global_stages() {
 
 int DecodeEngine::spans_per_task() const {
     // About eight tasks per worker: balance without much claiming.
-    const std::size_t spans =
-        (area_ + static_cast<std::size_t>(span_) - 1) / static_cast<std::size_t>(span_);
-    return static_cast<int>(
-        std::max<std::size_t>(1, spans / (8 * static_cast<std::size_t>(pool_.size()))));
+    return std::max(1, span_count() / (8 * pool_.size()));
 }
 
 void DecodeEngine::push(const Frame& frame) {
@@ -609,9 +644,13 @@ void DecodeEngine::push(const Frame& frame) {
     check_frame(frame, received_);
     if (depth_ == 0) {
         set_depth(frame.bit_depth);
-        for (int s = 0; s < plan_.slot_count; ++s)
-            slots_.push_back(std::make_unique_for_overwrite<std::byte[]>(
-                area_ * static_cast<std::size_t>(frame.bit_depth / 8)));
+        const std::size_t bytes = area_ * static_cast<std::size_t>(frame.bit_depth / 8);
+        if (bytes != slot_bytes_) {
+            slots_.clear();
+            for (int s = 0; s < plan_.slot_count; ++s)
+                slots_.push_back(std::make_unique_for_overwrite<std::byte[]>(bytes));
+            slot_bytes_ = bytes;
+        }
     }
     const int t = received_;
     const void* data = frame.bit_depth == 8 ? static_cast<const void*>(frame.u8.data())
@@ -620,30 +659,31 @@ void DecodeEngine::push(const Frame& frame) {
     const int slot = plan_.frame_slot[static_cast<std::size_t>(t)];
     void* slot_data = slot >= 0 ? slots_[static_cast<std::size_t>(slot)].get() : nullptr;
     const std::size_t sample_bytes = static_cast<std::size_t>(frame.bit_depth / 8);
-    const int begin = step_begin_[static_cast<std::size_t>(t)];
-    const int end = step_end_[static_cast<std::size_t>(t)];
-    if (slot_data != nullptr || begin < end) {
+    const std::vector<SpanWork>& work = work_[static_cast<std::size_t>(t)];
+    const bool clear_sat = t == clear_sat_at_;
+    if (slot_data != nullptr || !work.empty() || clear_sat) {
         for_spans(spans_per_task(), [&](std::size_t offset, int n, int worker) {
             if (slot_data != nullptr)
                 std::memcpy(static_cast<std::byte*>(slot_data) + offset * sample_bytes,
                             static_cast<const std::byte*>(data) + offset * sample_bytes,
                             static_cast<std::size_t>(n) * sample_bytes);
+            if (clear_sat)
+                std::memset(sat_.full + offset, 0, static_cast<std::size_t>(n));
+            const int span = static_cast<int>(offset / static_cast<std::size_t>(span_));
             std::byte* local = local_buffer(worker);
-            if (depth_ == 8)
-                run_steps<std::uint8_t>(begin, end, offset, n, local);
-            else
-                run_steps<std::uint16_t>(begin, end, offset, n, local);
+            for (const SpanWork& w : work) {
+                if (span < w.first_span || span >= w.end_span)
+                    continue;
+                const Step& step = plan_.steps[static_cast<std::size_t>(w.step)];
+                if (depth_ == 8)
+                    run_step<std::uint8_t>(step, offset, n, local);
+                else
+                    run_step<std::uint16_t>(step, offset, n, local);
+            }
         });
     }
     frame_base_[static_cast<std::size_t>(t)] = slot_data;
     ++received_;
-}
-
-template <class T>
-void DecodeEngine::run_steps(int begin, int end, std::size_t offset, int n,
-                             std::byte* local) const {
-    for (int s = begin; s < end; ++s)
-        run_step<T>(plan_.steps[static_cast<std::size_t>(s)], offset, n, local);
 }
 
 DecodeResult DecodeEngine::finish() {

@@ -1,8 +1,9 @@
 #pragma once
 // The decoder's state and its execution of a plan (decode_plan.hpp), shared by
 // the streaming form (frames pushed one by one; each step runs once the frames
-// it reads are there, a phase block at its last frame with the earlier ones
-// kept in slots; state in full-size planes) and the batch form (all frames at
+// it reads are there, a phase block in slices of its spans from its last frame
+// on (Step::parts) with its frames kept in slots; state in full-size planes)
+// and the batch form (all frames at
 // hand). Work is done on spans: runs of consecutive pixels in row-major order
 // (a span may cross rows; no per-pixel kernel looks at a neighbour). The batch
 // form takes one span at a time through every step and the unwrapping while
@@ -41,7 +42,7 @@ struct AxisConstants {
 };
 
 class DecodeEngine {
-  public:
+public:
     enum class Mode { streaming, batch };
     // `recycled`: a previous result whose images are reused when their size
     // fits (may be null).
@@ -53,9 +54,11 @@ class DecodeEngine {
 
     void push(const Frame& frame);
     DecodeResult finish();
+    // Streaming: back to the first frame, keeping the state planes and slots.
+    void restart(DecodeResult* recycled);
     DecodeResult run_batch(const std::vector<Frame>& frames);
 
-  private:
+private:
     struct PhaseState {
         PlaneRef<float> fraction;   // cos sum, then wrapped fraction
         PlaneRef<float> modulation; // sin sum, then B
@@ -91,13 +94,13 @@ class DecodeEngine {
     std::byte* local_buffer(int worker) const;
 
     void allocate_result(DecodeResult* recycled);
+    void bind_report_planes();
     void build_batch_groups();
+    void build_streaming_work();
     void check_frame(const Frame& frame, int index) const;
     void set_depth(int bit_depth);
     template <class T>
     void run_step(const Step& step, std::size_t offset, int n, std::byte* local) const;
-    template <class T>
-    void run_steps(int begin, int end, std::size_t offset, int n, std::byte* local) const;
     template <class T>
     void run_phase_block(const Step& step, std::size_t offset, int n, std::byte* local) const;
     template <class T>
@@ -109,6 +112,7 @@ class DecodeEngine {
     void global_stages();
     // Calls fn(offset, n, worker) on every span of the image, in parallel.
     template <class F> void for_spans(int spans_per_task, F&& fn);
+    int span_count() const;
     int spans_per_task() const;
 
     Plan plan_;
@@ -157,10 +161,20 @@ class DecodeEngine {
     // Streaming: frames read after their arrival (a phase block's frames wait
     // for its last), allocated at the first frame for its sample size.
     std::vector<std::unique_ptr<std::byte[]>> slots_;
+    std::size_t slot_bytes_ = 0; // bytes of each slot
     std::vector<BatchGroup> batch_groups_;
     std::vector<int> prefetch_frames_; // batch: frames asked for at the start of a span
-    std::vector<int> step_begin_; // per trigger frame: range in plan_.steps
-    std::vector<int> step_end_;
+    // Streaming: what each pushed frame runs, in plan order: a step on the
+    // spans [first_span, end_span) (all spans, but for a phase block's slice).
+    struct SpanWork {
+        int step = 0; // index in plan_.steps
+        int first_span = 0;
+        int end_span = 0;
+    };
+    std::vector<std::vector<SpanWork>> work_; // per frame index
+    // Frame at which the saturation bytes are cleared: the first step that
+    // writes them is a sliced phase block, whose slices OR into them.
+    int clear_sat_at_ = -1;
     int received_ = 0;
     bool finished_ = false;
 };

@@ -21,28 +21,38 @@ std::string block_name(const char* pattern, int index, int axis) {
            (axis == 0 ? "x" : "y") + ")";
 }
 
-bool same_period(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(a, b); }
+bool same_period(double a, double b) {
+    return std::abs(a - b) <= 1e-9 * std::max(a, b);
+}
 
 void check_phase(const PhaseBlock& b, int index) {
     const std::string name = block_name("phase", index, b.axis == Axis::x ? 0 : 1);
-    if (b.steps < 3) fail(name + ": steps must be >= 3, got " + std::to_string(b.steps));
-    if (!(std::isfinite(b.period) && b.period > 0)) fail(name + ": period must be > 0");
-    if (b.shift_sign != 1 && b.shift_sign != -1) fail(name + ": shift_sign must be +1 or -1");
-    if (!std::isfinite(b.phase_offset)) fail(name + ": phase_offset must be finite");
+    if (b.steps < 3)
+        fail(name + ": steps must be >= 3, got " + std::to_string(b.steps));
+    if (!(std::isfinite(b.period) && b.period > 0))
+        fail(name + ": period must be > 0");
+    if (b.shift_sign != 1 && b.shift_sign != -1)
+        fail(name + ": shift_sign must be +1 or -1");
+    if (!std::isfinite(b.phase_offset))
+        fail(name + ": phase_offset must be finite");
 }
 
 void check_gray(const GrayBlock& b, int index) {
     const std::string name = block_name("gray", index, b.axis == Axis::x ? 0 : 1);
-    if (b.bits < 1) fail(name + ": bits must be >= 1");
+    if (b.bits < 1)
+        fail(name + ": bits must be >= 1");
     if (b.bits + (b.complementary ? 1 : 0) > 16)
         fail(name + ": at most 16 bit planes are supported");
-    if (!(std::isfinite(b.period) && b.period > 0)) fail(name + ": period must be > 0");
+    if (!(std::isfinite(b.period) && b.period > 0))
+        fail(name + ": period must be > 0");
 }
 
 void check_centerline(const CenterlineBlock& b, int index) {
     const std::string name = block_name("centerline", index, b.axis == Axis::x ? 0 : 1);
-    if (!std::isfinite(b.position)) fail(name + ": position must be finite");
-    if (!(std::isfinite(b.width) && b.width > 0)) fail(name + ": width must be > 0");
+    if (!std::isfinite(b.position))
+        fail(name + ": position must be finite");
+    if (!(std::isfinite(b.width) && b.width > 0))
+        fail(name + ": width must be > 0");
 }
 
 // Heterodyne levels over phase blocks sorted by period (ascending): the root is
@@ -55,42 +65,49 @@ std::vector<HeterodyneLevel> heterodyne_levels(const std::vector<double>& period
     if (n == 2) {
         coefs = {{1, 0, 0}, {0, 1, 0}, {1, -1, 0}};
     } else {
-        coefs = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {1, -1, 0},
-                 {0, 1, -1}, {1, 0, -1}, {1, -2, 1}};
+        coefs = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, -1, 0}, {0, 1, -1}, {1, 0, -1}, {1, -2, 1}};
     }
     std::vector<HeterodyneLevel> levels;
     for (const auto& c : coefs) {
         double inv = 0;
-        for (int j = 0; j < n; ++j) inv += c[static_cast<std::size_t>(j)] / periods[static_cast<std::size_t>(j)];
-        if (std::abs(inv) < 1e-12) continue;
+        for (int j = 0; j < n; ++j)
+            inv += c[static_cast<std::size_t>(j)] / periods[static_cast<std::size_t>(j)];
+        if (std::abs(inv) < 1e-12)
+            continue;
         const int sign = inv < 0 ? -1 : 1;
         HeterodyneLevel level;
         level.period = 1.0 / std::abs(inv);
         int nonzero = 0;
         for (int j = 0; j < n; ++j) {
             level.coef[j] = sign * c[static_cast<std::size_t>(j)];
-            if (level.coef[j] != 0) ++nonzero;
+            if (level.coef[j] != 0)
+                ++nonzero;
         }
         if (nonzero == 1) {
             for (int j = 0; j < n; ++j)
-                if (level.coef[j] != 0) level.single = j;
+                if (level.coef[j] != 0)
+                    level.single = j;
         }
         levels.push_back(level);
     }
     auto noise = [](const HeterodyneLevel& l) {
         double s = 0;
-        for (int c : l.coef) s += double(c) * double(c);
+        for (int c : l.coef)
+            s += double(c) * double(c);
         return l.period * std::sqrt(s);
     };
     int root = -1;
     for (int i = 0; i < static_cast<int>(levels.size()); ++i) {
         const auto& l = levels[static_cast<std::size_t>(i)];
-        if (l.period + 1e-9 < extent) continue;
-        if (root < 0 || noise(l) < noise(levels[static_cast<std::size_t>(root)])) root = i;
+        if (l.period + 1e-9 < extent)
+            continue;
+        if (root < 0 || noise(l) < noise(levels[static_cast<std::size_t>(root)]))
+            root = i;
     }
     if (root < 0) {
         double widest = 0;
-        for (const auto& l : levels) widest = std::max(widest, l.period);
+        for (const auto& l : levels)
+            widest = std::max(widest, l.period);
         fail("phase blocks on axis " + axis_name + " form a heterodyne set whose widest beat (" +
              std::to_string(widest) + " px) does not cover the projector extent (" +
              std::to_string(extent) + " px)");
@@ -100,9 +117,9 @@ std::vector<HeterodyneLevel> heterodyne_levels(const std::vector<double>& period
     for (int i = 0; i < static_cast<int>(levels.size()); ++i)
         if (i != root && levels[static_cast<std::size_t>(i)].period < chain[0].period)
             rest.push_back(levels[static_cast<std::size_t>(i)]);
-    std::stable_sort(rest.begin(), rest.end(), [](const HeterodyneLevel& a, const HeterodyneLevel& b) {
-        return a.period > b.period;
-    });
+    std::stable_sort(
+        rest.begin(), rest.end(),
+        [](const HeterodyneLevel& a, const HeterodyneLevel& b) { return a.period > b.period; });
     chain.insert(chain.end(), rest.begin(), rest.end());
     return chain;
 }
@@ -113,19 +130,24 @@ void plan_axis(Plan& plan, int axis) {
     ap.extent = axis == 0 ? plan.projector.width : plan.projector.height;
     std::vector<int> phases, grays, centerlines;
     for (int i = 0; i < static_cast<int>(plan.phases.size()); ++i)
-        if (plan.phases[static_cast<std::size_t>(i)].axis == axis) phases.push_back(i);
+        if (plan.phases[static_cast<std::size_t>(i)].axis == axis)
+            phases.push_back(i);
     for (int i = 0; i < static_cast<int>(plan.grays.size()); ++i)
-        if (plan.grays[static_cast<std::size_t>(i)].axis == axis) grays.push_back(i);
+        if (plan.grays[static_cast<std::size_t>(i)].axis == axis)
+            grays.push_back(i);
     for (int i = 0; i < static_cast<int>(plan.centerlines.size()); ++i)
-        if (plan.centerlines[static_cast<std::size_t>(i)].axis == axis) centerlines.push_back(i);
+        if (plan.centerlines[static_cast<std::size_t>(i)].axis == axis)
+            centerlines.push_back(i);
 
     if (phases.empty()) {
         if (!grays.empty() || !centerlines.empty())
             fail("axis " + axis_name + " has a gray or centerline block but no phase block");
         return;
     }
-    if (grays.size() > 1) fail("axis " + axis_name + " has more than one gray block");
-    if (centerlines.size() > 1) fail("axis " + axis_name + " has more than one centerline block");
+    if (grays.size() > 1)
+        fail("axis " + axis_name + " has more than one gray block");
+    if (centerlines.size() > 1)
+        fail("axis " + axis_name + " has more than one centerline block");
     ap.coded = true;
     auto period_of = [&](int p) { return plan.phases[static_cast<std::size_t>(p)].block.period; };
 
@@ -165,7 +187,8 @@ void plan_axis(Plan& plan, int axis) {
                 fail("axis " + axis_name +
                      " has more than three phase blocks and none covers the projector extent");
             std::vector<double> periods;
-            for (int p : sorted) periods.push_back(period_of(p));
+            for (int p : sorted)
+                periods.push_back(period_of(p));
             ap.levels = heterodyne_levels(periods, ap.extent, axis_name);
             ap.method = UnwrapMethod::heterodyne;
             ap.name = "heterodyne";
@@ -190,15 +213,19 @@ void plan_axis(Plan& plan, int axis) {
     // Finest block: smallest period among those used.
     ap.report_phase = ap.phases[0];
     for (int p : ap.phases)
-        if (period_of(p) < period_of(ap.report_phase)) ap.report_phase = p;
-    for (int p : ap.phases) plan.phases[static_cast<std::size_t>(p)].used = true;
+        if (period_of(p) < period_of(ap.report_phase))
+            ap.report_phase = p;
+    for (int p : ap.phases)
+        plan.phases[static_cast<std::size_t>(p)].used = true;
 }
 
 } // namespace
 
 Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
-    if (camera.width <= 0 || camera.height <= 0) fail("camera size must be positive");
-    if (projector.width <= 0 || projector.height <= 0) fail("projector size must be positive");
+    if (camera.width <= 0 || camera.height <= 0)
+        fail("camera size must be positive");
+    if (projector.width <= 0 || projector.height <= 0)
+        fail("projector size must be positive");
     Plan plan;
     plan.camera = camera;
     plan.projector = projector;
@@ -244,18 +271,22 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
             info.axis = c->axis == Axis::x ? 0 : 1;
             plan.centerlines.push_back(info);
         } else if (std::holds_alternative<WhiteBlock>(block)) {
-            if (plan.white_frame < 0) plan.white_frame = frame;
+            if (plan.white_frame < 0)
+                plan.white_frame = frame;
         } else if (std::holds_alternative<BlackBlock>(block)) {
-            if (plan.black_frame < 0) plan.black_frame = frame;
+            if (plan.black_frame < 0)
+                plan.black_frame = frame;
         }
         frame += frame_count(block);
     }
     plan.frame_count = frame;
-    if (plan.phases.empty()) fail("the sequence has no phase block, so no axis can be decoded");
+    if (plan.phases.empty())
+        fail("the sequence has no phase block, so no axis can be decoded");
 
     plan_axis(plan, 0);
     plan_axis(plan, 1);
-    if (!plan.axes[0].coded && !plan.axes[1].coded) fail("no axis can be decoded");
+    if (!plan.axes[0].coded && !plan.axes[1].coded)
+        fail("no axis can be decoded");
 
     const bool have_white_black = plan.white_frame >= 0 && plan.black_frame >= 0;
     for (auto& g : plan.grays) {
@@ -269,13 +300,15 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
             plan.phases[static_cast<std::size_t>(g.phase)].thresholds = true;
     }
     for (const auto& c : plan.centerlines)
-        if (c.phase >= 0) plan.phases[static_cast<std::size_t>(c.phase)].thresholds = true;
+        if (c.phase >= 0)
+            plan.phases[static_cast<std::size_t>(c.phase)].thresholds = true;
 
     // Steps.
     std::vector<Step> steps;
     for (int b = 0; b < static_cast<int>(plan.phases.size()); ++b) {
         const PhaseInfo& p = plan.phases[static_cast<std::size_t>(b)];
-        if (!p.used) continue;
+        if (!p.used)
+            continue;
         // The whole block once its last frame is there: the earlier frames
         // wait in slots, and batch and streaming run the same kernel.
         Step s;
@@ -331,7 +364,8 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
     }
     for (int ci = 0; ci < static_cast<int>(plan.centerlines.size()); ++ci) {
         const CenterlineInfo& c = plan.centerlines[static_cast<std::size_t>(ci)];
-        if (c.phase < 0) continue; // not used (the axis is decoded otherwise)
+        if (c.phase < 0)
+            continue; // not used (the axis is decoded otherwise)
         Step s;
         s.kind = StepKind::centerline_bit;
         s.frame = c.frame;
@@ -349,6 +383,30 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
             s.sat_first = true;
             break;
         }
+    // A phase block is spread over the frames after its last one, up to the
+    // first step that reads its result while frames still arrive (a gray or
+    // centerline block thresholded against its mean); a block whose result
+    // only the final unwrapping reads is spread up to the sequence's last
+    // frame. kMaxPhaseParts slices bring the block's frame down to about a
+    // quarter of its work; more would hold its frames longer for little gain.
+    constexpr int kMaxPhaseParts = 4;
+    for (auto& s : steps) {
+        if (s.kind != StepKind::phase_block)
+            continue;
+        int deadline = plan.frame_count;
+        for (const auto& reader : steps) {
+            const bool reads_mean =
+                (reader.kind == StepKind::gray_threshold &&
+                 plan.grays[static_cast<std::size_t>(reader.index)].threshold ==
+                     GrayThreshold::phase_mean &&
+                 plan.grays[static_cast<std::size_t>(reader.index)].phase == s.index) ||
+                (reader.kind == StepKind::centerline_bit &&
+                 plan.centerlines[static_cast<std::size_t>(reader.index)].phase == s.index);
+            if (reads_mean)
+                deadline = std::min(deadline, reader.trigger);
+        }
+        s.parts = std::clamp(deadline - s.trigger, 1, kMaxPhaseParts);
+    }
     plan.steps = std::move(steps);
 
     // Frames read after they arrive wait in a slot; slots are reused once free.
@@ -360,13 +418,16 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
                 std::max(keep_until[static_cast<std::size_t>(fr)], until);
     };
     for (const auto& s : plan.steps) {
-        for (int f = 0; f < s.frames; ++f) keep(s.frame < 0 ? -1 : s.frame + f, s.trigger);
-        keep(s.frame2, s.trigger);
+        const int last_read = s.trigger + s.parts - 1;
+        for (int f = 0; f < s.frames; ++f)
+            keep(s.frame < 0 ? -1 : s.frame + f, last_read);
+        keep(s.frame2, last_read);
     }
     std::vector<int> slot_free_after; // per slot: last frame index that reads it
     for (int fr = 0; fr < plan.frame_count; ++fr) {
         const int until = keep_until[static_cast<std::size_t>(fr)];
-        if (until < 0) continue;
+        if (until < 0)
+            continue;
         int slot = -1;
         for (int s = 0; s < static_cast<int>(slot_free_after.size()); ++s)
             if (slot_free_after[static_cast<std::size_t>(s)] < fr) {
@@ -383,8 +444,10 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
     plan.slot_count = static_cast<int>(slot_free_after.size());
 
     for (const auto& ap : plan.axes) {
-        if (!ap.coded) continue;
-        if (ap.method == UnwrapMethod::centerline) plan.needs_full_storage = true;
+        if (!ap.coded)
+            continue;
+        if (ap.method == UnwrapMethod::centerline)
+            plan.needs_full_storage = true;
         if (ap.method == UnwrapMethod::gray &&
             !plan.grays[static_cast<std::size_t>(ap.gray)].block.complementary)
             plan.needs_full_storage = true;

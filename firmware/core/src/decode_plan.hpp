@@ -20,12 +20,13 @@ struct PhaseInfo {
     int first_frame = 0;
     int axis = 0;             // 0 = x, 1 = y
     std::vector<float> cos_w; // cos(delta_k)
-    std::vector<float> sin_w; // -shift_sign * sin(delta_k), so theta = atan2(sum sin_w I, sum cos_w I)
+    std::vector<float>
+        sin_w; // -shift_sign * sin(delta_k), so theta = atan2(sum sin_w I, sum cos_w I)
     // Blocks of at most kMaxClassSteps steps sum by weight class
     // (decode_weights.hpp) with these class weights instead of cos_w, sin_w.
     std::vector<float> class_cos_w; // cos(2 pi j / N)
     std::vector<float> class_sin_w; // -shift_sign * sin(2 pi (j + 1) / N)
-    float offset_fraction = 0; // phase_offset / (2 pi)
+    float offset_fraction = 0;      // phase_offset / (2 pi)
     bool used = false;
     bool thresholds = false; // a gray or centerline block is thresholded against its mean
     int last_frame() const { return first_frame + block.steps - 1; }
@@ -80,16 +81,21 @@ enum class StepKind {
 
 struct Step {
     StepKind kind = StepKind::phase_block;
-    int trigger = 0; // run once frame `trigger` has arrived
-    int stage = 0;   // order among steps with the same trigger
-    int frame = -1;  // frame read (-1: none); phase_block: its first frame
-    int frames = 1;  // frames read from `frame` on (phase_block: the block's steps)
-    int frame2 = -1; // inverse frame (gray_inverse)
-    int index = -1;  // phase, gray or centerline index
-    int k = 0;       // gray plane (0 = MSB)
-    bool first = false;     // first write of its accumulator or code: assign, not add
-    bool sat_first = false; // first step reading a frame: assigns the saturation byte
+    int trigger = 0;           // run once frame `trigger` has arrived
+    int stage = 0;             // order among steps with the same trigger
+    int frame = -1;            // frame read (-1: none); phase_block: its first frame
+    int frames = 1;            // frames read from `frame` on (phase_block: the block's steps)
+    int frame2 = -1;           // inverse frame (gray_inverse)
+    int index = -1;            // phase, gray or centerline index
+    int k = 0;                 // gray plane (0 = MSB)
+    bool first = false;        // first write of its accumulator or code: assign, not add
+    bool sat_first = false;    // first step reading a frame: assigns the saturation byte
     std::uint8_t sat_bits = 0; // axis bits (1 = x, 2 = y) of the frames read
+    // Streaming: a phase block's spans are decoded in `parts` slices, one at
+    // each of the frames trigger .. trigger + parts - 1, so that no single
+    // frame carries the whole block; its frames wait in slots until then.
+    // Batch decoding ignores it.
+    int parts = 1;
 };
 
 struct Plan {

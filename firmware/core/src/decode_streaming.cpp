@@ -22,7 +22,8 @@ void DecodeOptions::validate() const {
     if (!(std::isfinite(max_unwrap_disagreement) && max_unwrap_disagreement > 0 &&
           max_unwrap_disagreement <= 0.5))
         reject("max_unwrap_disagreement", "in (0, 0.5]", max_unwrap_disagreement);
-    if (threads < 0 || threads > 1024) reject("threads", "in [0, 1024]", threads);
+    if (threads < 0 || threads > 1024)
+        reject("threads", "in [0, 1024]", threads);
 }
 
 struct StreamingDecoder::Impl {
@@ -53,34 +54,46 @@ StreamingDecoder::StreamingDecoder(StreamingDecoder&&) noexcept = default;
 StreamingDecoder& StreamingDecoder::operator=(StreamingDecoder&&) noexcept = default;
 
 void StreamingDecoder::push(const Frame& frame) {
-    if (!impl_) throw std::logic_error("StreamingDecoder: use after move");
+    if (!impl_)
+        throw std::logic_error("StreamingDecoder: use after move");
     impl_->engine.push(frame);
 }
 
-int StreamingDecoder::frames_received() const { return impl_ ? impl_->engine.frames_received() : 0; }
+void StreamingDecoder::restart(DecodeResult&& recycled) {
+    if (!impl_)
+        throw std::logic_error("StreamingDecoder: use after move");
+    impl_->engine.restart(&recycled);
+}
 
-int StreamingDecoder::frames_expected() const { return impl_ ? impl_->engine.frames_expected() : 0; }
+int StreamingDecoder::frames_received() const {
+    return impl_ ? impl_->engine.frames_received() : 0;
+}
+
+int StreamingDecoder::frames_expected() const {
+    return impl_ ? impl_->engine.frames_expected() : 0;
+}
 
 DecodeResult StreamingDecoder::finish() {
-    if (!impl_) throw std::logic_error("StreamingDecoder: use after move");
+    if (!impl_)
+        throw std::logic_error("StreamingDecoder: use after move");
     return impl_->engine.finish();
 }
 
 DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options) {
     options.validate();
-    detail::DecodeEngine engine(
-        detail::make_plan(capture.manifest.sequence, capture.manifest.camera,
-                          capture.manifest.projector),
-        options, detail::DecodeEngine::Mode::batch);
+    detail::DecodeEngine engine(detail::make_plan(capture.manifest.sequence,
+                                                  capture.manifest.camera,
+                                                  capture.manifest.projector),
+                                options, detail::DecodeEngine::Mode::batch);
     return engine.run_batch(capture.frames);
 }
 
 void decode(const CaptureSet& capture, DecodeResult& result, const DecodeOptions& options) {
     options.validate();
-    detail::DecodeEngine engine(
-        detail::make_plan(capture.manifest.sequence, capture.manifest.camera,
-                          capture.manifest.projector),
-        options, detail::DecodeEngine::Mode::batch, &result);
+    detail::DecodeEngine engine(detail::make_plan(capture.manifest.sequence,
+                                                  capture.manifest.camera,
+                                                  capture.manifest.projector),
+                                options, detail::DecodeEngine::Mode::batch, &result);
     result = engine.run_batch(capture.frames);
 }
 

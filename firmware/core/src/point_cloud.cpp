@@ -74,9 +74,10 @@ std::size_t PointCloud::count_points() const {
     return n;
 }
 
-std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& comments) {
-    check_cloud(cloud);
-    const std::size_t points = cloud.count_points();
+namespace {
+
+std::string ply_header(const PointCloud& cloud, const std::vector<std::string>& comments,
+                       std::size_t points) {
     std::ostringstream header;
     header << "ply\nformat binary_little_endian 1.0\n";
     for (const auto& c : comments)
@@ -87,16 +88,21 @@ std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& 
            << "property float x\nproperty float y\nproperty float z\n"
            << "property float quality\nproperty float intensity\nproperty uint pixel\n"
            << "end_header\n";
-    std::string bytes = header.str();
-    const std::size_t body = bytes.size();
-    bytes.resize(body + points * kRecordBytes);
+    return header.str();
+}
 
+// Encodes the records of the slots with a point from slot `pixel` on, at most
+// `max_points` of them, into `out`; advances `pixel` past the last slot read
+// and returns the number of records.
+std::size_t encode_records(const PointCloud& cloud, std::size_t& pixel, char* out,
+                           std::size_t max_points) {
     constexpr float nan = std::numeric_limits<float>::quiet_NaN();
     const float* xyz = cloud.xyz.data();
     const float* quality = cloud.quality.empty() ? nullptr : cloud.quality.data();
     const float* intensity = cloud.intensity.empty() ? nullptr : cloud.intensity.data();
-    char* out = bytes.data() + body;
-    for (std::size_t i = 0, count = cloud.xyz.pixel_count(); i < count; ++i) {
+    std::size_t done = 0;
+    std::size_t i = pixel;
+    for (const std::size_t count = cloud.xyz.pixel_count(); i < count && done < max_points; ++i) {
         const float* p = xyz + 3 * i;
         if (!has_point(p))
             continue;
@@ -107,13 +113,50 @@ std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& 
         put_f32(out + 16, intensity ? intensity[i] : nan);
         put_u32(out + 20, static_cast<std::uint32_t>(i));
         out += kRecordBytes;
+        ++done;
     }
+    pixel = i;
+    return done;
+}
+
+// Records encoded at a time by write_ply_synced: 1.5 MiB, so the buffer
+// stays small and reused while the file is written.
+constexpr std::size_t kChunkPoints = 65536;
+
+} // namespace
+
+std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& comments) {
+    check_cloud(cloud);
+    const std::size_t points = cloud.count_points();
+    std::string bytes = ply_header(cloud, comments, points);
+    const std::size_t body = bytes.size();
+    bytes.resize(body + points * kRecordBytes);
+    std::size_t pixel = 0;
+    encode_records(cloud, pixel, bytes.data() + body, points);
     return bytes;
+}
+
+void write_ply_synced(const std::filesystem::path& path, const PointCloud& cloud,
+                      const std::vector<std::string>& comments) {
+    check_cloud(cloud);
+    const std::size_t points = cloud.count_points();
+    SyncedFileWriter out(path);
+    out.write(ply_header(cloud, comments, points));
+    std::vector<char> chunk(kChunkPoints * kRecordBytes);
+    std::size_t pixel = 0;
+    for (std::size_t left = points; left > 0;) {
+        const std::size_t n = encode_records(cloud, pixel, chunk.data(), kChunkPoints);
+        out.write({chunk.data(), n * kRecordBytes});
+        left -= n;
+    }
+    out.finish();
 }
 
 void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
                const std::vector<std::string>& comments) {
-    write_file_atomically(path, encode_ply(cloud, comments));
+    check_cloud(cloud);
+    write_atomically(
+        path, [&](const std::filesystem::path& temp) { write_ply_synced(temp, cloud, comments); });
 }
 
 namespace {

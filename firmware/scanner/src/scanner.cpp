@@ -33,7 +33,8 @@ double wall_ms() {
 std::string json_string(const std::string& s) {
     std::string out = "\"";
     for (char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
+        if (c == '"' || c == '\\')
+            out += '\\';
         if (static_cast<unsigned char>(c) < 0x20) {
             char buf[8];
             std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
@@ -54,7 +55,8 @@ std::string hex64(std::uint64_t v) {
 std::uint64_t hash_file(const fs::path& path) {
     std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
                                                          &std::fclose);
-    if (!file) throw IoError(path, "cannot open for hashing");
+    if (!file)
+        throw IoError(path, "cannot open for hashing");
     std::string bytes(static_cast<std::size_t>(fs::file_size(path)), '\0');
     if (std::fread(bytes.data(), 1, bytes.size(), file.get()) != bytes.size())
         throw IoError(path, "short read while hashing");
@@ -99,14 +101,13 @@ Scanner::Scanner(const BoardConfig& board, Devices devices, const Logger& log)
                                  " projector, the display is " + std::to_string(projector.width) +
                                  "x" + std::to_string(projector.height));
         table_file_hash_ = hash_file(*board_.table);
-        log_.info("table " + board_.table->string() + " loaded (" +
-                  to_string(table_.info().model) + ", hash " + hex64(table_file_hash_) + ")");
+        log_.info("table " + board_.table->string() + " loaded (" + to_string(table_.info().model) +
+                  ", hash " + hex64(table_file_hash_) + ")");
     }
     const auto patterns = render_sequence(sequence_, projector);
     patterns_ = patterns.size();
-    // Checked now so that a scan never starts on a sequence the decoder rejects.
-    StreamingDecoder probe(sequence_, dev_.camera.size(), projector);
-    (void)probe;
+    // Made now, so that a scan never starts on a sequence the decoder rejects.
+    decoder_.emplace(sequence_, dev_.camera.size(), projector);
     dev_.display.prepare(patterns);
     log_.info("board " + board_.name + ": " + std::to_string(patterns_) + " patterns at " +
               std::to_string(projector.width) + "x" + std::to_string(projector.height) +
@@ -162,8 +163,8 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
     ScanOutcome outcome;
     Captured captured;
     captured.started_utc = utc_now();
-    StreamingDecoder decoder(sequence_, camera, dev_.display.size(), DecodeOptions{},
-                             std::move(recycled_));
+    StreamingDecoder& decoder = *decoder_;
+    decoder.restart(std::move(recycled_));
     double push_total = 0;
 
     dev_.camera.start();
@@ -176,8 +177,10 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
             throw PatternMismatch("flip event for pattern " + std::to_string(flip.index) +
                                   ", expected " + std::to_string(i));
         clock.sleep_until_ns(flip.timestamp_ns + settle_ns);
-        if (software) dev_.camera.software_trigger();
-        else dev_.trigger.pulse(board_.timing.trigger_pulse);
+        if (software)
+            dev_.camera.software_trigger();
+        else
+            dev_.trigger.pulse(board_.timing.trigger_pulse);
         drivers::CapturedFrame frame = dev_.camera.next_frame(board_.camera.settings.frame_timeout);
         if (i > 0 && frame.frame_id != previous_id + 1)
             throw drivers::DeviceError("camera", "frame id " + std::to_string(frame.frame_id) +
@@ -194,14 +197,17 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
             throw drivers::DeviceError("camera", "frame of the wrong size");
         captured.records.push_back({flip, frame.frame_id, frame.timestamp_ns});
         // The next pattern flips while this frame is decoded.
-        if (i + 1 < patterns_) dev_.display.show(i + 1);
+        if (i + 1 < patterns_)
+            dev_.display.show(i + 1);
         const double t0 = wall_ms();
         decoder.push(frame.frame);
         const double dt = wall_ms() - t0;
         push_total += dt;
         outcome.timings.push_max_ms = std::max(outcome.timings.push_max_ms, dt);
-        if (mode == ScanMode::capture) captured.frames.push_back(std::move(frame.frame));
-        if (stop && stop->load()) throw ScanAborted();
+        if (mode == ScanMode::capture)
+            captured.frames.push_back(std::move(frame.frame));
+        if (stop && stop->load())
+            throw ScanAborted();
     }
     dev_.camera.stop();
     const double last_frame = wall_ms();
@@ -225,7 +231,8 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
     recycled_ = std::move(decoded);
 
     const auto removed = prune_store(board_.store.directory, board_.store.max_bytes, folder);
-    for (const auto& r : removed) log_.info("store full: removed " + r.filename().string());
+    for (const auto& r : removed)
+        log_.info("store full: removed " + r.filename().string());
     char line[200];
     std::snprintf(line, sizeof line,
                   "scan written: %zu points, %d frames, streaming %.2f ms/frame (max %.2f), "
@@ -237,7 +244,7 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
 }
 
 void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captured,
-                            const DecodeResult& decoded, ScanOutcome& outcome) {
+                            DecodeResult& decoded, ScanOutcome& outcome) {
     const Size camera = dev_.camera.size();
     const Size projector = dev_.display.size();
     if (!table_.empty()) {
@@ -253,10 +260,14 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
         const TableApplyStats stats = apply_table(table_, phase, cloud_);
         outcome.points = stats.points;
         outcome.timings.apply_ms = wall_ms() - t;
-        cloud_.quality = decoded.modulation;
-        cloud_.intensity = decoded.mean;
-        write_ply(temp / "cloud.ply", cloud_,
-                  {"fpp-scanner board " + board_.name, "scan " + captured.started_utc});
+        // The cloud borrows the decoder's B and A images for the PLY rather
+        // than copying 15 MB (at 1600x1200); they go back to be recycled.
+        cloud_.quality = std::move(decoded.modulation);
+        cloud_.intensity = std::move(decoded.mean);
+        write_ply_synced(temp / "cloud.ply", cloud_,
+                         {"fpp-scanner board " + board_.name, "scan " + captured.started_utc});
+        decoded.modulation = std::move(cloud_.quality);
+        decoded.mean = std::move(cloud_.intensity);
     }
     if (mode == ScanMode::capture) {
         CaptureManifest manifest;
@@ -286,15 +297,15 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
       << (s.trigger == drivers::TriggerMode::line ? "line" : "software") << "\"},\n"
       << "  \"projector\": {\"width\": " << projector.width << ", \"height\": " << projector.height
       << "},\n"
-      << "  \"sequence\": " << json_string(board_.sequence_name.empty() ? "blocks" : board_.sequence_name)
+      << "  \"sequence\": "
+      << json_string(board_.sequence_name.empty() ? "blocks" : board_.sequence_name)
       << ",\n  \"frames\": " << outcome.frames << ",\n"
       << "  \"timing_settings_us\": {\"settle\": " << board_.timing.settle.count()
       << ", \"trigger_pulse\": " << board_.timing.trigger_pulse.count() << "},\n";
     if (!table_.empty())
-        j << "  \"table\": {\"path\": " << json_string(board_.table->string())
-          << ", \"model\": \"" << to_string(table_.info().model) << "\", \"file_fnv1a64\": \""
-          << hex64(table_file_hash_) << "\", \"calibration_fnv1a64\": \""
-          << hex64(table_.info().calibration_hash) << "\"},\n";
+        j << "  \"table\": {\"path\": " << json_string(board_.table->string()) << ", \"model\": \""
+          << to_string(table_.info().model) << "\", \"file_fnv1a64\": \"" << hex64(table_file_hash_)
+          << "\", \"calibration_fnv1a64\": \"" << hex64(table_.info().calibration_hash) << "\"},\n";
     j << "  \"decode\": {\"method_x\": " << json_string(decoded.method_x)
       << ", \"method_y\": " << json_string(decoded.method_y) << "},\n"
       << "  \"points\": " << outcome.points << ",\n"
@@ -318,7 +329,8 @@ void Scanner::run(ScanMode mode, const std::atomic<bool>& stop) {
     dev_.led.set(LedState::ready);
     log_.info("idle: waiting for the button");
     while (!stop.load()) {
-        if (!dev_.button.wait_press(std::chrono::milliseconds(100))) continue;
+        if (!dev_.button.wait_press(std::chrono::milliseconds(100)))
+            continue;
         try {
             scan(mode, &stop);
         } catch (const ScanAborted&) {

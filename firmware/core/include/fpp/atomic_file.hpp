@@ -3,12 +3,36 @@
 // rename it over the target, fsync the directory. A reader never sees a
 // half-written file.
 
+#include "fpp/unique_fd.hpp"
+
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <string>
 #include <string_view>
 
 namespace fpp {
+
+// A file written in pieces, then fsynced. Each few MiB written are handed to
+// the kernel's write-back at once (Linux sync_file_range), so that the disk
+// works while the caller makes the next pieces and finish() waits only for
+// the last ones rather than for the whole file.
+class SyncedFileWriter {
+public:
+    // Creates or truncates `path`. Throws IoError.
+    explicit SyncedFileWriter(std::filesystem::path path);
+    // Throws IoError (a full disk is named as such).
+    void write(std::string_view bytes);
+    // fsync, then close (both checked). Throws IoError. A writer destroyed
+    // without finish() just closes its file.
+    void finish();
+
+private:
+    std::filesystem::path path_;
+    UniqueFd fd_;
+    std::uint64_t written_ = 0;
+    std::uint64_t handed_to_writeback_ = 0;
+};
 
 // Calls `write` with the path of a fresh temporary file in the target's
 // folder, then fsyncs and renames it to `target`. On any exception the

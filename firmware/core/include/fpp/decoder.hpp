@@ -77,12 +77,12 @@ enum DecodeFlag : std::uint8_t {
 
 struct DecodeResult {
     Size camera;
-    Image<float> proj_x;     // empty if the sequence codes no x
-    Image<float> proj_y;     // empty if the sequence codes no y
-    Image<float> modulation; // B of the finest phase block (first coded axis), DN
-    Image<float> mean;       // A of the same block, DN
+    Image<float> proj_x;      // empty if the sequence codes no x
+    Image<float> proj_y;      // empty if the sequence codes no y
+    Image<float> modulation;  // B of the finest phase block (first coded axis), DN
+    Image<float> mean;        // A of the same block, DN
     Image<std::uint8_t> mask; // DecodeFlag bits; kDecodeValid set where every coded axis is valid
-    std::string method_x;    // how x was unwrapped, e.g. "complementary-gray"
+    std::string method_x;     // how x was unwrapped, e.g. "complementary-gray"
     std::string method_y;
 };
 
@@ -106,8 +106,14 @@ public:
     int frames_received() const;
     int frames_expected() const;
     // Completes decoding; throws std::logic_error if frames are missing or
-    // if called twice. The decoder is spent afterwards.
+    // if called twice. The decoder is spent afterwards, until restart().
     DecodeResult finish();
+    // Starts over at the first frame of the sequence (after finish(), or to
+    // abandon a sequence part-way), keeping the decoder's own memory (state
+    // planes, frame slots) and reusing the images of `recycled`, a result of
+    // finish(), when their size fits (of an abandoned sequence: its own). Scan
+    // after scan, decoding then touches no fresh memory: no page faults.
+    void restart(DecodeResult&& recycled = {});
 
 private:
     struct Impl;

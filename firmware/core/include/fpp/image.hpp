@@ -5,6 +5,7 @@
 #include <cassert>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace fpp {
@@ -24,6 +25,24 @@ public:
           data_(std::size_t(width) * std::size_t(height) * std::size_t(channels), fill) {}
     Image(Size size, int channels = 1, T fill = T{})
         : Image(size.width, size.height, channels, fill) {}
+    Image(const Image&) = default;
+    Image& operator=(const Image&) = default;
+    // A moved-from image is empty with size 0x0, not a size without pixels.
+    Image(Image&& other) noexcept
+        : width_(std::exchange(other.width_, 0)), height_(std::exchange(other.height_, 0)),
+          channels_(std::exchange(other.channels_, 1)), data_(std::move(other.data_)) {
+        other.data_.clear();
+    }
+    Image& operator=(Image&& other) noexcept {
+        if (this == &other)
+            return *this;
+        width_ = std::exchange(other.width_, 0);
+        height_ = std::exchange(other.height_, 0);
+        channels_ = std::exchange(other.channels_, 1);
+        data_ = std::move(other.data_);
+        other.data_.clear();
+        return *this;
+    }
 
     int width() const { return width_; }
     int height() const { return height_; }

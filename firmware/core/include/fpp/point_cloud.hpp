@@ -57,10 +57,19 @@ struct PointCloud {
 // than 2^32 pixels.
 std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& comments = {});
 
-// Writes encode_ply(...) atomically (temporary file, fsync, rename). Throws
-// IoError on operating-system failures, std::invalid_argument as encode_ply.
+// Writes the bytes of encode_ply(...) atomically (temporary file, fsync,
+// rename). Throws IoError on operating-system failures, std::invalid_argument
+// as encode_ply.
 void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
                const std::vector<std::string>& comments = {});
+
+// The same bytes written straight to `path` (created or truncated) and
+// fsynced, with no temporary file: for a file in a folder published whole by
+// write_folder_atomically. The body is encoded piece by piece into a small
+// buffer as it is written, so no copy of the whole file is ever held and the
+// disk works while the rest is encoded. Throws as write_ply.
+void write_ply_synced(const std::filesystem::path& path, const PointCloud& cloud,
+                      const std::vector<std::string>& comments = {});
 
 // A PLY point set read back: the vertex element's x, y, z and, when present,
 // quality, intensity and pixel (empty vectors when absent).

@@ -16,11 +16,11 @@
 
 #include <fpp/coefficient_table.hpp>
 #include <fpp/decoder.hpp>
-#include <fpp/point_cloud.hpp>
 #include <fpp/drivers/camera.hpp>
 #include <fpp/drivers/clock.hpp>
 #include <fpp/drivers/display.hpp>
 #include <fpp/drivers/gpio.hpp>
+#include <fpp/point_cloud.hpp>
 #include <fpp/scanner/board_config.hpp>
 #include <fpp/scanner/log.hpp>
 
@@ -50,12 +50,12 @@ public:
 };
 
 struct ScanTimings {
-    double capture_ms = 0;             // first show() to last frame received (scan clock)
-    double push_mean_ms = 0;           // streaming decoder work per frame (wall clock)
+    double capture_ms = 0;   // first show() to last frame received (scan clock)
+    double push_mean_ms = 0; // streaming decoder work per frame (wall clock)
     double push_max_ms = 0;
-    double finish_ms = 0;              // last decode step
-    double apply_ms = 0;               // table kernel
-    double write_ms = 0;               // outputs on disk (fsynced)
+    double finish_ms = 0; // last decode step
+    double apply_ms = 0;  // table kernel
+    double write_ms = 0;  // outputs on disk (fsynced)
     double last_frame_to_written_ms = 0;
 };
 
@@ -94,7 +94,7 @@ private:
     struct Captured;
     ScanOutcome attempt(ScanMode mode, const std::atomic<bool>* stop);
     void write_outputs(const std::filesystem::path& temp, ScanMode mode, Captured& captured,
-                       const DecodeResult& decoded, ScanOutcome& outcome);
+                       DecodeResult& decoded, ScanOutcome& outcome);
 
     const BoardConfig& board_;
     Devices dev_;
@@ -103,8 +103,11 @@ private:
     std::size_t patterns_ = 0;
     CoefficientTable table_;
     std::uint64_t table_file_hash_ = 0;
-    DecodeResult recycled_; // image memory reused scan after scan
-    PointCloud cloud_;      // likewise
+    // Memory reused scan after scan: a fresh decoder, result or cloud costs
+    // page faults on every scan (tens of ms at 1600x1200).
+    std::optional<StreamingDecoder> decoder_;
+    DecodeResult recycled_;
+    PointCloud cloud_;
     std::atomic<int> scans_completed_{0};
 };
 
