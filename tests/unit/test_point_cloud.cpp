@@ -9,11 +9,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
+
+#include <sys/resource.h>
 
 namespace {
 
@@ -157,26 +160,37 @@ TEST(PointCloud, WritesAtomicallyAndReadsBack) {
 // The streamed writer encodes in pieces (65,536 points each): a cloud of
 // several pieces, with holes so that piece ends fall between slots, gives the
 // bytes of encode_ply exactly.
-TEST(PointCloud, StreamedFileHasTheBytesOfEncodePly) {
-    TempDir dir;
+// A cloud of 401 x 397 slots (159,197) with a hole at every 11th slot of a
+// diagonal pattern, so that the writer's 65,536-point pieces end between
+// slots; `points` gets the number of points.
+fpp::PointCloud large_cloud(std::size_t& points) {
     fpp::PointCloud c;
-    const int width = 401, height = 397; // 159,197 slots
+    const int width = 401, height = 397;
     c.xyz = fpp::Image<float>(width, height, 3, kNaN);
     c.quality = fpp::Image<float>(width, height, 1);
     c.intensity = fpp::Image<float>(width, height, 1);
-    std::size_t expected = 0;
+    points = 0;
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
             if ((x * 7 + y * 3) % 11 == 0)
-                continue; // a hole
+                continue;
             c.xyz.at(x, y, 0) = static_cast<float>(x) * 0.5f;
             c.xyz.at(x, y, 1) = static_cast<float>(y) * -0.25f;
             c.xyz.at(x, y, 2) = 400.0f + static_cast<float>(x + y) / 8.0f;
             c.quality.at(x, y) = static_cast<float>(x % 97);
             c.intensity.at(x, y) = static_cast<float>(y % 89);
-            ++expected;
+            ++points;
         }
-    ASSERT_GT(expected, 2u * 65536u);
+    return c;
+}
+
+// The streamed writer (pieces encoded while earlier ones are written) gives
+// the bytes of encode_ply exactly.
+TEST(PointCloud, StreamedFileHasTheBytesOfEncodePly) {
+    TempDir dir;
+    std::size_t points = 0;
+    const fpp::PointCloud c = large_cloud(points);
+    ASSERT_GT(points, 2u * 65536u);
     const std::string encoded = fpp::encode_ply(c, {"streamed"});
     fpp::write_ply_synced(dir / "streamed.ply", c, {"streamed"});
     std::ifstream in(dir / "streamed.ply", std::ios::binary);
@@ -184,7 +198,43 @@ TEST(PointCloud, StreamedFileHasTheBytesOfEncodePly) {
     file << in.rdbuf();
     EXPECT_EQ(file.str().size(), encoded.size());
     EXPECT_TRUE(file.str() == encoded);
-    EXPECT_EQ(fpp::read_ply(dir / "streamed.ply").size(), expected);
+    EXPECT_EQ(fpp::read_ply(dir / "streamed.ply").size(), points);
+}
+
+// A write that fails part-way (here the file-size limit, EFBIG, after the
+// header and the first MiB) is an IoError naming the file, from the thread
+// that writes in the background too; write_ply leaves nothing behind.
+TEST(PointCloud, WriteFailingPartWayIsAnIoErrorNamingTheFile) {
+    TempDir dir;
+    std::size_t points = 0;
+    const fpp::PointCloud c = large_cloud(points);
+    rlimit old{};
+    ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old), 0);
+    rlimit limited = old;
+    limited.rlim_cur = 1u << 20;
+    const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+    ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &limited), 0);
+    std::string streamed_error, atomic_error;
+    try {
+        fpp::write_ply_synced(dir / "streamed.ply", c);
+    } catch (const fpp::IoError& e) {
+        streamed_error = e.what();
+    }
+    try {
+        fpp::write_ply(dir / "atomic.ply", c);
+    } catch (const fpp::IoError& e) {
+        atomic_error = e.what();
+    }
+    ::setrlimit(RLIMIT_FSIZE, &old);
+    std::signal(SIGXFSZ, old_handler);
+    EXPECT_NE(streamed_error.find("streamed.ply"), std::string::npos) << streamed_error;
+    EXPECT_NE(streamed_error.find("write failed"), std::string::npos) << streamed_error;
+    EXPECT_NE(atomic_error.find("atomic.ply"), std::string::npos) << atomic_error;
+    EXPECT_FALSE(fs::exists(dir / "atomic.ply"));
+    int files = 0;
+    for (const auto& e : fs::directory_iterator(dir.path()))
+        files += e.path().filename() == "streamed.ply" ? 0 : 1;
+    EXPECT_EQ(files, 0); // no temporary file left by write_ply
 }
 
 TEST(PointCloud, EmptyCloudIsAValidFile) {

@@ -4,12 +4,17 @@
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"
 
+#include <array>
 #include <bit>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 #include <type_traits>
 
 namespace fpp {
@@ -119,9 +124,94 @@ std::size_t encode_records(const PointCloud& cloud, std::size_t& pixel, char* ou
     return done;
 }
 
-// Records encoded at a time by write_ply_synced: 1.5 MiB, so the buffer
-// stays small and reused while the file is written.
+// Records encoded at a time by write_ply_synced: 1.5 MiB pieces, so that
+// its buffers stay small and reused while the file is written.
 constexpr std::size_t kChunkPoints = 65536;
+
+// Writes pieces to a file, in order, on a thread of its own, from a ring of
+// buffers the caller fills: the caller encodes the next pieces while the
+// previous ones are copied into the page cache by write().
+class BackgroundWriter {
+public:
+    BackgroundWriter(SyncedFileWriter& out, std::size_t buffer_bytes) : out_(out) {
+        for (auto& b : buffers_)
+            b.resize(buffer_bytes);
+        thread_ = std::thread([this] { run(); });
+    }
+    // Abandons the pieces not yet written (after drain(): none).
+    ~BackgroundWriter() {
+        {
+            const std::lock_guard lock(mutex_);
+            stop_ = true;
+        }
+        changed_.notify_all();
+        thread_.join();
+    }
+    BackgroundWriter(const BackgroundWriter&) = delete;
+    BackgroundWriter& operator=(const BackgroundWriter&) = delete;
+
+    // The buffer to fill next, once one is free. Rethrows a write error.
+    char* next_buffer() {
+        std::unique_lock lock(mutex_);
+        changed_.wait(lock, [&] { return error_ || queued_ < kBuffers; });
+        if (error_)
+            std::rethrow_exception(error_);
+        return buffers_[(first_ + queued_) % kBuffers].data();
+    }
+    // Queues the buffer returned by next_buffer(), filled with `bytes`.
+    void submit(std::size_t bytes) {
+        {
+            const std::lock_guard lock(mutex_);
+            sizes_[(first_ + queued_) % kBuffers] = bytes;
+            ++queued_;
+        }
+        changed_.notify_all();
+    }
+    // Waits until every queued piece is written. Rethrows a write error.
+    void drain() {
+        std::unique_lock lock(mutex_);
+        changed_.wait(lock, [&] { return error_ || queued_ == 0; });
+        if (error_)
+            std::rethrow_exception(error_);
+    }
+
+private:
+    static constexpr std::size_t kBuffers = 3;
+
+    void run() {
+        std::unique_lock lock(mutex_);
+        for (;;) {
+            changed_.wait(lock, [&] { return stop_ || queued_ > 0; });
+            if (stop_)
+                return;
+            const std::size_t i = first_;
+            lock.unlock();
+            try {
+                out_.write({buffers_[i].data(), sizes_[i]});
+            } catch (...) {
+                lock.lock();
+                error_ = std::current_exception();
+                changed_.notify_all();
+                return;
+            }
+            lock.lock();
+            first_ = (first_ + 1) % kBuffers;
+            --queued_;
+            changed_.notify_all();
+        }
+    }
+
+    SyncedFileWriter& out_;
+    std::array<std::vector<char>, kBuffers> buffers_;
+    std::array<std::size_t, kBuffers> sizes_{};
+    std::mutex mutex_;
+    std::condition_variable changed_;
+    std::size_t first_ = 0;  // oldest queued buffer
+    std::size_t queued_ = 0; // buffers queued or being written
+    bool stop_ = false;
+    std::exception_ptr error_;
+    std::thread thread_; // last: started once the rest is built
+};
 
 } // namespace
 
@@ -142,12 +232,15 @@ void write_ply_synced(const std::filesystem::path& path, const PointCloud& cloud
     const std::size_t points = cloud.count_points();
     SyncedFileWriter out(path);
     out.write(ply_header(cloud, comments, points));
-    std::vector<char> chunk(kChunkPoints * kRecordBytes);
-    std::size_t pixel = 0;
-    for (std::size_t left = points; left > 0;) {
-        const std::size_t n = encode_records(cloud, pixel, chunk.data(), kChunkPoints);
-        out.write({chunk.data(), n * kRecordBytes});
-        left -= n;
+    {
+        BackgroundWriter writer(out, kChunkPoints * kRecordBytes);
+        std::size_t pixel = 0;
+        for (std::size_t left = points; left > 0;) {
+            const std::size_t n = encode_records(cloud, pixel, writer.next_buffer(), kChunkPoints);
+            writer.submit(n * kRecordBytes);
+            left -= n;
+        }
+        writer.drain();
     }
     out.finish();
 }
