@@ -350,8 +350,8 @@ void push_per_frame(benchmark::State& state) {
         *std::min_element(g_push_samples_ms[slowest].begin(), g_push_samples_ms[slowest].end());
 }
 
-// The CPU part of writing the PLY: the decoded scan's cloud encoded to bytes.
-void encode_ply_bytes(benchmark::State& state) {
+// The cloud of the decoded scan, with its B and A, as the scanner writes it.
+fpp::PointCloud scan_cloud() {
     Frames& fx = Frames::get();
     const fpp::Size camera = g_context->sim->camera().size();
     const fpp::CoefficientTable table = fpp::load_table(g_context->board.table_file, &camera);
@@ -359,6 +359,12 @@ void encode_ply_bytes(benchmark::State& state) {
     fpp::apply_table(table, fx.decoded.proj_x, cloud);
     cloud.quality = fx.decoded.modulation;
     cloud.intensity = fx.decoded.mean;
+    return cloud;
+}
+
+// The CPU part of writing the PLY: the decoded scan's cloud encoded to bytes.
+void encode_ply_bytes(benchmark::State& state) {
+    const fpp::PointCloud cloud = scan_cloud();
     std::size_t bytes = 0;
     for (auto _ : state) {
         const std::string ply = fpp::encode_ply(cloud, {"bench"});
@@ -373,13 +379,7 @@ void encode_ply_bytes(benchmark::State& state) {
 // written piece by piece to a new file in the store's folder, fsynced (the
 // file is removed outside the timing).
 void write_ply_file(benchmark::State& state) {
-    Frames& fx = Frames::get();
-    const fpp::Size camera = g_context->sim->camera().size();
-    const fpp::CoefficientTable table = fpp::load_table(g_context->board.table_file, &camera);
-    fpp::PointCloud cloud;
-    fpp::apply_table(table, fx.decoded.proj_x, cloud);
-    cloud.quality = fx.decoded.modulation;
-    cloud.intensity = fx.decoded.mean;
+    const fpp::PointCloud cloud = scan_cloud();
     const fs::path path = g_context->board.dir / "part.ply";
     for (auto _ : state) {
         fpp::write_ply_synced(path, cloud, {"bench"});
