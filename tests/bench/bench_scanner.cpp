@@ -10,7 +10,9 @@
 //   finish, apply, write    last decode step, table kernel, outputs fsynced
 //   last_frame_to_disk      last frame received to PLY on disk (target < 50 ms)
 // Baselines measured in the same run: a memcpy of one frame, and a memcpy
-// plus an fsynced write of a new file of the scan's PLY size. Parts: the
+// plus an fsynced write of a new file of the scan's PLY size (the summary
+// sets the spread of its runs beside that of the scans' last frame to disk:
+// a slow disk write shows in both). Parts: the
 // streaming decoder frame by frame on the scan's frames (which frame costs
 // what), encode_ply alone (the PLY encoded into one buffer) and
 // write_ply_synced alone (encoded piece by piece as it is written, fsynced:
@@ -242,6 +244,11 @@ void memcpy_frame(benchmark::State& state) {
                             static_cast<std::int64_t>(bytes));
 }
 
+// Every iteration of write_fsync_ply_size, over all its runs (ms): the spread
+// of the file baseline, to set beside the spread of the scans' last frame to
+// disk measured in the same run.
+std::vector<double> g_file_baseline_ms;
+
 // The PLY's bytes copied into a buffer, then written to a new file in the
 // store's folder and fsynced (the file is removed outside the timing).
 void write_fsync_ply_size(benchmark::State& state) {
@@ -249,6 +256,7 @@ void write_fsync_ply_size(benchmark::State& state) {
     std::vector<char> src(bytes, 'x'), dst(bytes, 0);
     const fs::path path = g_context->board.dir / "baseline.bin";
     for (auto _ : state) {
+        const auto t0 = std::chrono::steady_clock::now();
         std::memcpy(dst.data(), src.data(), bytes);
         const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
         if (fd < 0) {
@@ -264,6 +272,9 @@ void write_fsync_ply_size(benchmark::State& state) {
         }
         const bool ok = done == bytes && ::fsync(fd) == 0;
         ::close(fd);
+        g_file_baseline_ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
         state.PauseTiming();
         ::unlink(path.c_str());
         state.ResumeTiming();
@@ -466,6 +477,18 @@ int frames_held(const fpp::Sequence& sequence) {
     return steps;
 }
 
+// Best, median and worst of a series of times (ms), and how many are over
+// the 50 ms target.
+void print_spread(const char* label, const std::vector<double>& ms) {
+    if (ms.empty())
+        return;
+    const auto over = std::count_if(ms.begin(), ms.end(), [](double t) { return t >= 50.0; });
+    std::printf("  %s over %zu runs: best %.1f, median %.1f, worst %.1f ms; %td of %zu at "
+                "50 ms or more\n",
+                label, ms.size(), *std::min_element(ms.begin(), ms.end()), median(ms),
+                *std::max_element(ms.begin(), ms.end()), over, ms.size());
+}
+
 void print_row(const char* label, const ScanRecord& r) {
     std::printf("  %-8s push mean %5.2f max %5.2f | finish %6.2f apply %6.2f write %6.2f | "
                 "last frame to disk %6.1f ms | %zu points, PLY %.1f MB | RSS %.0f MiB, peak +%.1f "
@@ -606,6 +629,11 @@ int run(int argc, char** argv) {
                 g_ply_bytes / 1e6, file, file > 0 ? write / file : 0.0,
                 file > 0 ? to_disk / file : 0.0, encode, write_ply,
                 file > 0 ? write_ply / file : 0.0);
+    std::vector<double> to_disk_ms;
+    for (const ScanRecord& r : context.scans)
+        to_disk_ms.push_back(r.timings.last_frame_to_written_ms);
+    print_spread("last frame to disk", to_disk_ms);
+    print_spread("baseline write", g_file_baseline_ms);
     std::printf("  apply_table alone: into a fresh cloud (as the scanner) %.1f ms when the "
                 "allocator hands back warm memory, %.1f ms from the OS; into a reused one "
                 "%.1f ms\n",
