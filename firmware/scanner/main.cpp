@@ -105,7 +105,18 @@ int main(int argc, char** argv) {
         std::unique_ptr<SimBoard> sim;
         std::unique_ptr<HardwareBoard> hardware;
         if (board.sim) sim = std::make_unique<SimBoard>(board);
-        else hardware = std::make_unique<HardwareBoard>(board);
+        else {
+            hardware = std::make_unique<HardwareBoard>(board);
+            // As a service the scanner waits for a camera that does not
+            // answer yet (LED in error); --once and --scans fail at once.
+            if (once || scans > 0) hardware->open_camera();
+            else if (!hardware->wait_for_camera(log, g_stop)) {
+                hardware->led().set(fpp::drivers::LedState::off);
+                hardware->display().restore();
+                log.info("stopped while waiting for the camera");
+                return 0;
+            }
+        }
         Devices devices = sim ? sim->devices() : hardware->devices();
         // Lines and display are released by the destructors, on every path.
         try {

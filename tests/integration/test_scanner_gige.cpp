@@ -12,6 +12,7 @@
 #include "fpp/error.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/scanner/board_config.hpp"
+#include "fpp/scanner/camera_wait.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
@@ -19,10 +20,19 @@
 #include "rig_truth_table.hpp"
 #include "sim_board_yaml.hpp"
 
+#include <fpp/drivers/aravis_camera.hpp>
+#include <fpp/drivers/aravis_fake_camera.hpp>
+#include <fpp/drivers/device_error.hpp>
+#include <fpp/sim/sim_gpio.hpp>
+
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 using namespace fpp;
@@ -131,6 +141,84 @@ TEST(ScannerGige, ScannerBinaryScansThroughTheLink) {
     ASSERT_EQ(scans.size(), 1u);
     EXPECT_TRUE(fs::exists(scans[0] / "cloud.ply"));
     EXPECT_NE(run.output.find(scans[0].string()), std::string::npos) << run.output;
+}
+
+// What a scanner service logs while it waits for its camera.
+struct LogLines {
+    std::vector<std::pair<LogLevel, std::string>> lines;
+    Logger logger() {
+        return Logger(
+            [this](LogLevel level, const std::string& m) { lines.emplace_back(level, m); });
+    }
+    int count(LogLevel level) const {
+        int n = 0;
+        for (const auto& line : lines)
+            n += line.first == level ? 1 : 0;
+        return n;
+    }
+};
+
+TEST(ScannerGige, ServiceWaitsForACameraThatDoesNotAnswerYet) {
+    // Nothing answers at 127.0.0.1 at the first attempt (the real Aravis
+    // driver looks for it); the fake camera starts before the second, as a
+    // GigE camera still booting when the service starts.
+    GigeFixture f;
+    std::optional<drivers::AravisFakeCamera> fake;
+    int attempts = 0;
+    const CameraOpener open = [&]() -> std::unique_ptr<drivers::Camera> {
+        if (++attempts == 2)
+            fake.emplace(Size{64, 48}, f.board.camera.device);
+        return std::make_unique<drivers::AravisCamera>(f.board.camera.device,
+                                                       f.board.camera.settings);
+    };
+    sim::SimLed led;
+    LogLines log;
+    const std::atomic<bool> stop{false};
+    CameraWaitOptions options;
+    options.retry = std::chrono::milliseconds(100);
+    const CameraWaitResult result = wait_for_camera(open, led, log.logger(), stop, options);
+    ASSERT_NE(result.camera, nullptr);
+    EXPECT_EQ(result.camera->size(), (Size{64, 48}));
+    EXPECT_EQ(result.failed_attempts, 1);
+    EXPECT_EQ(attempts, 2);
+    EXPECT_EQ(led.history(),
+              (std::vector<drivers::LedState>{drivers::LedState::off, drivers::LedState::error}));
+    ASSERT_EQ(log.count(LogLevel::error), 1);
+    EXPECT_NE(log.lines[0].second.find("camera 127.0.0.1"), std::string::npos)
+        << log.lines[0].second;
+    EXPECT_NE(log.lines[0].second.find("waiting for it"), std::string::npos) << log.lines[0].second;
+    ASSERT_EQ(log.count(LogLevel::info), 1);
+    EXPECT_NE(log.lines[1].second.find("answered after 1 failed attempt"), std::string::npos)
+        << log.lines[1].second;
+}
+
+TEST(ScannerGige, StopWhileWaitingForTheCameraReturnsNoCamera) {
+    // A SIGTERM while no camera answers: the wait ends after the attempt in
+    // progress, with no camera and the LED still showing the error.
+    GigeFixture f;
+    int attempts = 0;
+    const CameraOpener open = [&]() -> std::unique_ptr<drivers::Camera> {
+        ++attempts;
+        return std::make_unique<drivers::AravisCamera>(f.board.camera.device,
+                                                       f.board.camera.settings);
+    };
+    sim::SimLed led;
+    std::atomic<bool> stop{false};
+    const Logger log([&](LogLevel, const std::string&) { stop.store(true); });
+    CameraWaitOptions options;
+    options.retry = std::chrono::hours(1); // only the stop request can end the pause
+    options.reminder = options.retry;
+    const CameraWaitResult result = wait_for_camera(open, led, log, stop, options);
+    EXPECT_EQ(result.camera, nullptr);
+    EXPECT_EQ(result.failed_attempts, 1);
+    EXPECT_EQ(attempts, 1);
+    EXPECT_EQ(led.state(), drivers::LedState::error);
+
+    options.retry = std::chrono::milliseconds(0);
+    EXPECT_THROW(wait_for_camera(open, led, log, stop, options), std::invalid_argument);
+    options.retry = std::chrono::milliseconds(100);
+    options.reminder = std::chrono::milliseconds(10);
+    EXPECT_THROW(wait_for_camera(open, led, log, stop, options), std::invalid_argument);
 }
 
 TEST(ScannerGige, HardwareBoardWithoutTheHardwareFailsNamingTheDevice) {

@@ -12,11 +12,14 @@
 # board whose button is line 3, active high (e.g. tests/vm/vm-hardware.yaml).
 #
 # Usage: tests/vm/run_vm_scan.sh [--build DIR] [--board FILE] [--mode capture|scan]
-#          [--table FILE] [--button] [--fake-camera] [--keep DIR] [--timeout S]
+#          [--table FILE] [--button] [--fake-camera | --late-camera S] [--keep DIR]
+#          [--timeout S]
 #   --build DIR     the AArch64 build folder (default: build/aarch64 of this tree)
 #   --board FILE    board file, used as is; its whole folder goes into the guest
 #   --table FILE    coefficient table for scan mode (passed as --table)
 #   --fake-camera   start Aravis's fake GigE camera on the guest's 127.0.0.1 first
+#   --late-camera S start it S seconds after the scanner (with --button: the
+#                   scanner must wait for it, log why, then scan)
 #   --keep DIR      keep the results there (console.log, scans/)
 # Exit status: 0 passed, 1 failed, 77 skipped (no qemu-system-aarch64, no
 # kernel cache from toolchain/vm/fetch-deps.sh, or no cross-built fpp-scanner).
@@ -24,7 +27,7 @@ set -euo pipefail
 
 source_dir=$(cd "$(dirname "$0")/../.." && pwd)
 build="$source_dir/build/aarch64"
-board="" table="" mode=capture button=0 fake_camera=0 keep="" timeout_s=240
+board="" table="" mode=capture button=0 fake_camera=0 camera_delay=0 keep="" timeout_s=240
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
@@ -33,6 +36,7 @@ while [ $# -gt 0 ]; do
     --mode) mode="$2"; shift 2 ;;
     --button) button=1; shift ;;
     --fake-camera) fake_camera=1; shift ;;
+    --late-camera) fake_camera=1; camera_delay="$2"; shift 2 ;;
     --keep) keep="$2"; shift 2 ;;
     --timeout) timeout_s="$2"; shift 2 ;;
     -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
@@ -83,16 +87,23 @@ fi
 if [ "$fake_camera" -eq 1 ]; then
   # The camera answers on UDP port 3956 (GVCP) once it is up.
   cat > "$files/with-fake-camera.sh" << 'EOF'
-arv-fake-gv-camera-0.8 -i 127.0.0.1 &
-camera=$!
-i=0
-while ! netstat -uln | grep -q ':3956 ' && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
+delay=$1
+shift
+if [ "$delay" -gt 0 ]; then
+  (sleep "$delay" && exec arv-fake-gv-camera-0.8 -i 127.0.0.1) &
+  camera=$!
+else
+  arv-fake-gv-camera-0.8 -i 127.0.0.1 &
+  camera=$!
+  i=0
+  while ! netstat -uln | grep -q ':3956 ' && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
+fi
 "$@"
 status=$?
 kill $camera
 exit $status
 EOF
-  guest=(sh with-fake-camera.sh "${guest[@]}")
+  guest=(sh with-fake-camera.sh "$camera_delay" "${guest[@]}")
 fi
 
 echo "run_vm_scan: guest command: ${guest[*]}"
@@ -123,6 +134,12 @@ if [ "$mode" = capture ]; then
 fi
 if [ "$button" -eq 1 ]; then
   grep -q '^run-vm: button pressed' "$out/console.log" || fail "the button was never pressed"
+fi
+if [ "$camera_delay" -gt 0 ]; then
+  grep -q 'camera 127.0.0.1.*waiting for it' "$out/console.log" ||
+    { show_console; fail "the scanner did not say it was waiting for the camera"; }
+  grep -q 'camera answered after' "$out/console.log" ||
+    { show_console; fail "the scanner did not say the camera answered"; }
 fi
 total=$(awk -v a="$t_start" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.1f", b - a }')
 echo "run_vm_scan: PASSED: $(basename "$scan") ($mode${frames:+, $frames frames}) in ${total} s"

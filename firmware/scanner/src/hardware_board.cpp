@@ -34,9 +34,18 @@ drivers::GpioLineConfig line(const GpioConfig& gpio, int offset, bool active_low
 }
 #endif
 
+// The LED set to error while another device's error is on its way out: a
+// failure of the LED itself must not replace that error.
+void show_error(drivers::StatusLed& led) noexcept {
+    try {
+        led.set(drivers::LedState::error);
+    } catch (...) {
+    }
+}
+
 } // namespace
 
-HardwareBoard::HardwareBoard(const BoardConfig& board, bool with_camera) {
+HardwareBoard::HardwareBoard(const BoardConfig& board) : camera_config_(board.camera) {
     if (board.sim && !board.sim->camera_only)
         throw std::logic_error("HardwareBoard on a simulated board");
     const GpioConfig& gpio = board.gpio;
@@ -46,43 +55,67 @@ HardwareBoard::HardwareBoard(const BoardConfig& board, bool with_camera) {
 #else
     not_built(gpio.chip, "libgpiod");
 #endif
+    try {
 #if FPP_HAVE_DRM
-    drivers::DrmDisplaySettings display;
-    display.card = board.display.card;
-    // "auto" in the board file is the driver's empty request (first
-    // connected connector, preferred mode).
-    display.output.connector = board.display.connector == "auto" ? "" : board.display.connector;
-    display.output.mode = board.display.mode == "auto" ? "" : board.display.mode;
-    display_ = std::make_unique<drivers::DrmDisplay>(display);
+        drivers::DrmDisplaySettings display;
+        display.card = board.display.card;
+        // "auto" in the board file is the driver's empty request (first
+        // connected connector, preferred mode).
+        display.output.connector = board.display.connector == "auto" ? "" : board.display.connector;
+        display.output.mode = board.display.mode == "auto" ? "" : board.display.mode;
+        display_ = std::make_unique<drivers::DrmDisplay>(display);
 #else
-    not_built("display " + board.display.card, "libdrm");
+        not_built("display " + board.display.card, "libdrm");
 #endif
 #if FPP_HAVE_GPIOD
-    trigger_ = std::make_unique<drivers::GpiodTriggerOutput>(
-        line(gpio, gpio.trigger_line, gpio.trigger_active_low));
-    button_ = std::make_unique<drivers::GpiodButtonInput>(
-        line(gpio, gpio.button_line, gpio.button_active_low), gpio.debounce);
+        trigger_ = std::make_unique<drivers::GpiodTriggerOutput>(
+            line(gpio, gpio.trigger_line, gpio.trigger_active_low));
+        button_ = std::make_unique<drivers::GpiodButtonInput>(
+            line(gpio, gpio.button_line, gpio.button_active_low), gpio.debounce);
 #endif
-    if (!with_camera)
-        return;
-    if (!with_camera)
-        return;
-    if (board.camera.driver != CameraDriver::aravis)
-        throw std::logic_error("HardwareBoard: camera.driver sim without a sim section");
-#if FPP_HAVE_ARAVIS
-    camera_ = std::make_unique<drivers::AravisCamera>(board.camera.device, board.camera.settings);
-#else
-    not_built("camera " + board.camera.device, "aravis-0.8");
-#endif
+    } catch (...) {
+        // The line is released with the board; most GPIO controllers keep
+        // its level, so the error stays shown while the service restarts.
+        show_error(*led_);
+        throw;
+    }
 }
 
 HardwareBoard::~HardwareBoard() = default;
 
+std::unique_ptr<drivers::Camera> HardwareBoard::make_camera() const {
+    if (camera_config_.driver != CameraDriver::aravis)
+        throw std::logic_error("HardwareBoard: camera.driver sim without a sim section");
+#if FPP_HAVE_ARAVIS
+    return std::make_unique<drivers::AravisCamera>(camera_config_.device, camera_config_.settings);
+#else
+    not_built("camera " + camera_config_.device, "aravis-0.8");
+#endif
+}
+
+void HardwareBoard::open_camera() {
+    if (camera_)
+        throw std::logic_error("HardwareBoard::open_camera: the camera is already open");
+    try {
+        camera_ = make_camera();
+    } catch (const drivers::DeviceError&) {
+        show_error(*led_);
+        throw;
+    }
+}
+
+bool HardwareBoard::wait_for_camera(const Logger& log, const std::atomic<bool>& stop,
+                                    const CameraWaitOptions& options) {
+    if (camera_)
+        throw std::logic_error("HardwareBoard::wait_for_camera: the camera is already open");
+    camera_ = scanner::wait_for_camera([this] { return make_camera(); }, *led_, log, stop, options)
+                  .camera;
+    return camera_ != nullptr;
+}
+
 Devices HardwareBoard::devices() {
     if (!camera_)
-        throw std::logic_error("HardwareBoard::devices: opened without its camera");
-    if (!camera_)
-        throw std::logic_error("HardwareBoard::devices: opened without its camera");
+        throw std::logic_error("HardwareBoard::devices: the camera is not open");
     return Devices{*display_, *trigger_, *button_, *led_, *camera_, clock_};
 }
 

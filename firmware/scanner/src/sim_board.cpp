@@ -76,7 +76,7 @@ SimBoard::SimBoard(const BoardConfig& board) {
     if (s.camera_only) {
         // The board's own display and lines; the camera sees what the display
         // has really flipped to.
-        hardware_ = std::make_unique<HardwareBoard>(board, false);
+        hardware_ = std::make_unique<HardwareBoard>(board);
         if (!(hardware_->display().size() == rig_.projector_size))
             throw InputError(board.file, "sim.rig",
                              "the rig's projector is " + std::to_string(rig_.projector_size.width) +

@@ -3,6 +3,7 @@
 // through DRM/KMS, trigger, button and LED lines through libgpiod, the camera
 // through Aravis, on the steady clock. Each device is opened once and held
 // for the life of the board.
+#include <atomic>
 #include <memory>
 
 #include <fpp/drivers/camera.hpp>
@@ -10,23 +11,32 @@
 #include <fpp/drivers/display.hpp>
 #include <fpp/drivers/gpio.hpp>
 #include <fpp/scanner/board_config.hpp>
+#include <fpp/scanner/camera_wait.hpp>
 #include <fpp/scanner/scanner.hpp>
 
 namespace fpp::scanner {
 
 class HardwareBoard {
 public:
-    // Opens the LED line first (so that a later failure can be shown), then
-    // the display, the trigger and button lines and, with `with_camera`, the
-    // camera. Throws DeviceError naming the device that cannot be had, or a
-    // driver that is not built into this binary; std::logic_error for a sim
-    // board other than a camera_only one.
-    explicit HardwareBoard(const BoardConfig& board, bool with_camera = true);
+    // Opens the LED line first (so that a later failure can be shown: the
+    // LED is set to error before the exception leaves), then the display,
+    // the trigger and the button lines. Throws DeviceError naming the device
+    // that cannot be had, or a driver that is not built into this binary;
+    // std::logic_error for a sim board other than a camera_only one.
+    explicit HardwareBoard(const BoardConfig& board);
     ~HardwareBoard();
     HardwareBoard(const HardwareBoard&) = delete;
     HardwareBoard& operator=(const HardwareBoard&) = delete;
 
-    // All devices; only for a board opened with its camera.
+    // Opens the board's camera, once. Throws DeviceError as the constructor
+    // (the LED set to error).
+    void open_camera();
+    // Opens the board's camera, waiting for it while it does not answer
+    // (wait_for_camera): false if `stop` was set first.
+    bool wait_for_camera(const Logger& log, const std::atomic<bool>& stop,
+                         const CameraWaitOptions& options = {});
+
+    // All devices; only once the camera is open.
     Devices devices();
     drivers::Display& display() { return *display_; }
     drivers::TriggerOutput& trigger() { return *trigger_; }
@@ -35,6 +45,9 @@ public:
     drivers::Clock& clock() { return clock_; }
 
 private:
+    std::unique_ptr<drivers::Camera> make_camera() const;
+
+    CameraConfig camera_config_;
     drivers::SteadyClock clock_;
     std::unique_ptr<drivers::StatusLed> led_;
     std::unique_ptr<drivers::Display> display_;
