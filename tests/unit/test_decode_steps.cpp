@@ -5,6 +5,9 @@
 
 #include "fpp/capture_set.hpp"
 #include "fpp/decoder.hpp"
+#include "fpp/sequences.hpp"
+
+#include "../../firmware/core/src/decode_plan.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,6 +15,7 @@
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <set>
 #include <vector>
 
 namespace {
@@ -137,3 +141,70 @@ TEST(DecodeSteps, SaturationInAnyFrameOfTheBlockIsFlagged) {
 }
 
 } // namespace
+
+// The streaming decoder spreads a phase block's work over the frames after
+// its last one (up to 4), but never past a step that thresholds against the
+// block's mean; its frames stay in slots of their own until the last slice.
+TEST(DecodePlan, PhaseBlockIsSlicedUntilItsMeanIsRead) {
+    const fpp::Size camera{64, 40};
+    const fpp::Size projector{1280, 800};
+    auto phase_step = [](const fpp::detail::Plan& plan) {
+        for (const auto& s : plan.steps)
+            if (s.kind == fpp::detail::StepKind::phase_block)
+                return s;
+        ADD_FAILURE() << "no phase step";
+        return fpp::detail::Step{};
+    };
+
+    // inverse-gray-x: 8 phase frames (0-7), then Gray planes each followed by
+    // its inverse (a plane waits in a slot for its inverse): sliced over
+    // frames 7-10, and the planes that wait meanwhile take other slots.
+    const auto inverse = fpp::detail::make_plan(fpp::standard_sequence("inverse-gray-x", projector),
+                                                camera, projector);
+    const fpp::detail::Step sliced = phase_step(inverse);
+    EXPECT_EQ(sliced.trigger, 7);
+    EXPECT_EQ(sliced.parts, 4);
+    std::set<int> block_slots;
+    for (int f = 0; f <= 7; ++f) {
+        const int slot = inverse.frame_slot[static_cast<std::size_t>(f)];
+        EXPECT_GE(slot, 0) << "frame " << f;
+        block_slots.insert(slot);
+    }
+    EXPECT_EQ(block_slots.size(), 8u); // one slot per frame of the block
+    int waiting = 0;
+    for (int f = 8; f <= 10; ++f) {
+        const int slot = inverse.frame_slot[static_cast<std::size_t>(f)];
+        waiting += slot >= 0 ? 1 : 0;
+        EXPECT_EQ(block_slots.count(slot), 0u)
+            << "frame " << f << " overwrites a frame of the block before its last slice";
+    }
+    EXPECT_GT(waiting, 0);
+
+    // gray-x (white, black, phase frames 2-9, Gray planes against white and
+    // black): sliced over frames 9-12.
+    const auto gray_x =
+        fpp::detail::make_plan(fpp::standard_sequence("gray-x", projector), camera, projector);
+    EXPECT_EQ(phase_step(gray_x).trigger, 9);
+    EXPECT_EQ(phase_step(gray_x).parts, 4);
+
+    // No white and black frames: the Gray planes (frames 8 on) are
+    // thresholded against the phase mean, so the block is decoded whole at
+    // its last frame.
+    fpp::PhaseBlock phase;
+    phase.axis = fpp::Axis::x;
+    phase.period = 20;
+    phase.steps = 8;
+    fpp::GrayBlock gray;
+    gray.axis = fpp::Axis::x;
+    gray.period = 20;
+    gray.bits = fpp::gray_bits_needed(20, projector.width);
+    gray.complementary = true;
+    const auto mean_read = fpp::detail::make_plan({phase, gray}, camera, projector);
+    EXPECT_EQ(phase_step(mean_read).trigger, 7);
+    EXPECT_EQ(phase_step(mean_read).parts, 1);
+
+    // A block at the end of the sequence has no frames after it.
+    phase.period = 1280;
+    const auto last = fpp::detail::make_plan({phase}, camera, projector);
+    EXPECT_EQ(phase_step(last).parts, 1);
+}

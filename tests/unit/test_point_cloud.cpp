@@ -157,9 +157,6 @@ TEST(PointCloud, WritesAtomicallyAndReadsBack) {
     EXPECT_EQ(p.intensity[2], 7.0f);
 }
 
-// The streamed writer encodes in pieces (65,536 points each): a cloud of
-// several pieces, with holes so that piece ends fall between slots, gives the
-// bytes of encode_ply exactly.
 // A cloud of 401 x 397 slots (159,197) with a hole at every 11th slot of a
 // diagonal pattern, so that the writer's 65,536-point pieces end between
 // slots; `points` gets the number of points.

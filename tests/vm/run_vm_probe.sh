@@ -37,7 +37,7 @@ trap 'rm -rf "$work"' EXIT
 out="${keep:-$work/out}"
 mkdir -p "$out"
 aarch64-linux-gnu-g++ -std=c++20 -O2 -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wold-style-cast \
-  -Wdouble-promotion -Werror -I/usr/include/libdrm "$here/vm_probe.cpp" -o "$work/vm-probe" -ldrm -lgpiod ||
+  -Wdouble-promotion -Werror -I/usr/include/libdrm -I"$source_dir/firmware/core/include" "$here/vm_probe.cpp" -o "$work/vm-probe" -ldrm -lgpiod ||
   fail "cannot cross-compile vm_probe.cpp"
 
 status=0

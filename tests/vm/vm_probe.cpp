@@ -7,9 +7,12 @@
 //      harness presses the button when it reads "vm-probe: waiting for the
 //      button" on the console).
 // Built by tests/vm/run_vm_probe.sh with the cross compiler; not part of the
-// CMake build. Usage: vm-probe [--card PATH] [--chip NAME] [--button N]
-//                              [--output N] [--flips N] [--wait-ms N]
+// CMake build (of the project it uses only the header-only fpp::UniqueFd).
+// Usage: vm-probe [--card PATH] [--chip NAME] [--button N] [--output N]
+//                 [--flips N] [--wait-ms N]
 // Exit status: 0 when every check passed, 1 otherwise.
+#include <fpp/unique_fd.hpp>
+
 #include <gpiod.h>
 #include <xf86drm.h>
 #include <xf86drmMode.h>
@@ -47,20 +50,6 @@ using ConnectorPtr = std::unique_ptr<drmModeConnector, Deleter<drmModeConnector,
 using EncoderPtr = std::unique_ptr<drmModeEncoder, Deleter<drmModeEncoder, drmModeFreeEncoder>>;
 using ChipPtr = std::unique_ptr<gpiod_chip, Deleter<gpiod_chip, gpiod_chip_close>>;
 using LinePtr = std::unique_ptr<gpiod_line, Deleter<gpiod_line, gpiod_line_release>>;
-
-class Fd {
-public:
-    explicit Fd(int fd) : fd_(fd) {}
-    ~Fd() {
-        if (fd_ >= 0) close(fd_);
-    }
-    Fd(const Fd&) = delete;
-    Fd& operator=(const Fd&) = delete;
-    int get() const { return fd_; }
-
-private:
-    int fd_;
-};
 
 // A dumb buffer with its framebuffer object, filled with one grey level.
 class DumbFramebuffer {
@@ -108,7 +97,7 @@ extern "C" void on_flip(int, unsigned int, unsigned int, unsigned int, void* pen
 }
 
 bool check_display(const Options& opt) {
-    const Fd fd(open(opt.card.c_str(), O_RDWR | O_CLOEXEC));
+    const fpp::UniqueFd fd(open(opt.card.c_str(), O_RDWR | O_CLOEXEC));
     if (fd.get() < 0) {
         std::printf("vm-probe: FAIL display: cannot open %s: %s\n", opt.card.c_str(), std::strerror(errno));
         return false;

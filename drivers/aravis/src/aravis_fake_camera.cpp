@@ -2,6 +2,7 @@
 #include <fpp/drivers/aravis_fake_camera.hpp>
 
 #include <fpp/drivers/device_error.hpp>
+#include <fpp/unique_fd.hpp>
 
 #include "glib_handles.hpp"
 
@@ -121,16 +122,15 @@ const std::string& AravisFakeCamera::address() const { return impl_->address; }
 bool enter_private_network_namespace() {
     if (unshare(CLONE_NEWNET) != 0) return false;
     // A new namespace has only a loopback interface, and it is down.
-    const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    if (fd < 0) return false;
+    const UniqueFd fd(socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
+    if (!fd.valid()) return false;
     ifreq request{};
     std::strncpy(request.ifr_name, "lo", IFNAMSIZ - 1);
-    bool up = ioctl(fd, SIOCGIFFLAGS, &request) == 0;
+    bool up = ioctl(fd.get(), SIOCGIFFLAGS, &request) == 0;
     if (up) {
         request.ifr_flags = static_cast<short>(request.ifr_flags | IFF_UP | IFF_RUNNING);
-        up = ioctl(fd, SIOCSIFFLAGS, &request) == 0;
+        up = ioctl(fd.get(), SIOCSIFFLAGS, &request) == 0;
     }
-    close(fd);
     return up;
 }
 

@@ -3,9 +3,9 @@
 // the streaming form (frames pushed one by one; each step runs once the frames
 // it reads are there, a phase block in slices of its spans from its last frame
 // on (Step::parts) with its frames kept in slots; state in full-size planes)
-// and the batch form (all frames at
-// hand). Work is done on spans: runs of consecutive pixels in row-major order
-// (a span may cross rows; no per-pixel kernel looks at a neighbour). The batch
+// and the batch form (all frames at hand). Work is done on spans: runs of
+// consecutive pixels in row-major order (a span may cross rows; no per-pixel
+// kernel looks at a neighbour). The batch
 // form takes one span at a time through every step and the unwrapping while
 // the span is in cache, with its state in one span-sized buffer per worker
 // unless a neighbourhood stage needs whole images; so each input sample is

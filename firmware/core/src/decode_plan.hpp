@@ -19,9 +19,10 @@ struct PhaseInfo {
     PhaseBlock block;
     int first_frame = 0;
     int axis = 0;             // 0 = x, 1 = y
-    std::vector<float> cos_w; // cos(delta_k)
-    std::vector<float>
-        sin_w; // -shift_sign * sin(delta_k), so theta = atan2(sum sin_w I, sum cos_w I)
+    // cos(delta_k) and -shift_sign * sin(delta_k), so that
+    // theta = atan2(sum sin_w I, sum cos_w I).
+    std::vector<float> cos_w;
+    std::vector<float> sin_w;
     // Blocks of at most kMaxClassSteps steps sum by weight class
     // (decode_weights.hpp) with these class weights instead of cos_w, sin_w.
     std::vector<float> class_cos_w; // cos(2 pi j / N)

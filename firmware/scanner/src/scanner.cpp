@@ -261,13 +261,22 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
         outcome.points = stats.points;
         outcome.timings.apply_ms = wall_ms() - t;
         // The cloud borrows the decoder's B and A images for the PLY rather
-        // than copying 15 MB (at 1600x1200); they go back to be recycled.
+        // than copying 15 MB (at 1600x1200); they go back to be recycled,
+        // also when the write fails.
         cloud_.quality = std::move(decoded.modulation);
         cloud_.intensity = std::move(decoded.mean);
-        write_ply_synced(temp / "cloud.ply", cloud_,
-                         {"fpp-scanner board " + board_.name, "scan " + captured.started_utc});
-        decoded.modulation = std::move(cloud_.quality);
-        decoded.mean = std::move(cloud_.intensity);
+        const auto give_back = [&] {
+            decoded.modulation = std::move(cloud_.quality);
+            decoded.mean = std::move(cloud_.intensity);
+        };
+        try {
+            write_ply_synced(temp / "cloud.ply", cloud_,
+                             {"fpp-scanner board " + board_.name, "scan " + captured.started_utc});
+        } catch (...) {
+            give_back();
+            throw;
+        }
+        give_back();
     }
     if (mode == ScanMode::capture) {
         CaptureManifest manifest;
