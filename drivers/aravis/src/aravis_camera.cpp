@@ -11,15 +11,45 @@
 
 #include <arv.h>
 
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <algorithm>
 #include <atomic>
 #include <bit>
+#include <charconv>
 #include <cstring>
+#include <filesystem>
 #include <ctime>
 #include <optional>
 #include <string>
 
 namespace fpp::drivers {
 namespace {
+
+// Sets SO_RCVBUF on this process's IPv4 UDP socket bound to `port` (Aravis
+// does not hand out its stream socket). Best effort: the buffer only guards
+// against packet loss, so a socket not found is left as it is.
+void size_receive_buffer(unsigned port, int bytes) {
+    std::error_code ec;
+    for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+        int fd = -1;
+        const std::string name = entry.path().filename().string();
+        const auto [end, parse_error] = std::from_chars(name.data(), name.data() + name.size(), fd);
+        if (parse_error != std::errc{} || end != name.data() + name.size())
+            continue;
+        sockaddr_in address{};
+        socklen_t length = sizeof address;
+        int type = 0;
+        socklen_t type_length = sizeof type;
+        // reinterpret_cast: the sockets API takes the generic address type.
+        if (getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0 ||
+            address.sin_family != AF_INET || ntohs(address.sin_port) != port ||
+            getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &type_length) != 0 || type != SOCK_DGRAM)
+            continue;
+        setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
+    }
+}
 
 constexpr const char* kSettings = "camera settings";
 
@@ -175,6 +205,20 @@ struct AravisCamera::Impl {
         glib::Error error;
         stream.reset(arv_camera_create_stream(camera.get(), nullptr, nullptr, error.out()));
         if (!stream) throw DeviceError(name, "cannot open the stream: " + error.message());
+        if (ARV_IS_GV_STREAM(stream.get())) {
+            // Room in the UDP receive buffer for as many frames as the pool
+            // holds (the kernel caps it at net.core.rmem_max), so that a
+            // receiving thread that falls behind (a loaded board) loses no
+            // packet. Aravis would size it to one frame, and only at the
+            // first frame's leader: until then the kernel default
+            // (net.core.rmem_default, 208 KiB) holds less than one frame, and
+            // the first frame of every stream start could lose its tail.
+            const auto bytes = static_cast<int>(
+                std::min<std::size_t>(payload * std::size_t(settings.buffer_count), 1u << 30));
+            g_object_set(stream.get(), "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
+                         "socket-buffer-size", bytes, nullptr);
+            size_receive_buffer(arv_gv_stream_get_port(ARV_GV_STREAM(stream.get())), bytes);
+        }
         for (int i = 0; i < settings.buffer_count; ++i) {
             // The stream owns the buffers pushed to it and frees them with itself.
             arv_stream_push_buffer(stream.get(), arv_buffer_new_allocate(payload));
