@@ -49,6 +49,7 @@
 // give it a point or its normal equations are ill-conditioned (samples
 // bunched at one phase).
 
+#include "fpp/calib/pixel_fit.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/coefficient_table.hpp"
@@ -63,11 +64,6 @@
 #include <vector>
 
 namespace fpp::calib {
-
-struct BoardPlane {
-    Vec3 normal{0, 0, 1}; // unit, n_z > 0
-    double d = 0;         // n . X = d (mm); the plane's distance from the camera centre
-};
 
 struct HybridOptions {
     TableModel model = TableModel::rational;
@@ -112,9 +108,10 @@ struct HybridResult {
     CoefficientTable table;
     std::vector<HybridPose> poses;
     int usable_poses = 0;
-    // Per camera pixel: fit RMS of X, Y, Z (mm; NaN without a model) and the
-    // number of poses that gave it a sample.
-    Image<float> rms_x, rms_y, rms_z;
+    // Per camera pixel: fit RMS of X, Y, Z and the predicted depth sigma (mm;
+    // NaN without a model; see PixelFit) and the number of poses that gave it
+    // a sample.
+    Image<float> rms_x, rms_y, rms_z, sigma_z;
     Image<std::uint16_t> pose_count;
     std::size_t pixels_modelled = 0;
     std::size_t pixels_too_few_poses = 0;
