@@ -1,8 +1,9 @@
-// Stereo calibration: OpenCV initialisation, then a joint Levenberg-Marquardt
-// bundle adjustment over both devices' intrinsics (with skew), distortion,
-// the camera-to-projector transform and every board pose.
+// Stereo calibration: OpenCV initialisation, then the bundle adjustment of
+// the chosen procedure (camera first, or joint).
 
 #include "fpp/calib/stereo_calibrate.hpp"
+
+#include "bundle_adjustment.hpp"
 
 #include <Eigen/Dense>
 #include <opencv2/calib3d.hpp>
@@ -20,277 +21,12 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Lens parameters in the state: fu fv cu cv skew k1 k2 p1 p2 k3.
-constexpr int kLens = 10;
-constexpr int kSkew = 4;
-constexpr int kGlobal = 2 * kLens + 6; // camera, projector, stereo rotation and translation
-constexpr int kPerPose = 6;
-using LensParams = std::array<double, kLens>;
-
-LensParams to_params(const LensModel& l) {
-    return {l.fu, l.fv, l.cu, l.cv, l.skew, l.k1, l.k2, l.p1, l.p2, l.k3};
-}
-
-LensModel to_lens(const LensParams& p) {
-    LensModel l;
-    l.fu = p[0];
-    l.fv = p[1];
-    l.cu = p[2];
-    l.cv = p[3];
-    l.skew = p[4];
-    l.k1 = p[5];
-    l.k2 = p[6];
-    l.p1 = p[7];
-    l.p2 = p[8];
-    l.k3 = p[9];
-    return l;
-}
-
-// Central-difference steps per lens parameter (pixels for the linear part,
-// unitless for distortion).
-constexpr double kLensStep[kLens] = {1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-6, 1e-6, 1e-7, 1e-7, 1e-6};
-constexpr double kRotationStep = 1e-7;    // rad
-constexpr double kTranslationStep = 1e-5; // mm
-
-struct State {
-    LensParams camera{};
-    LensParams projector{};
-    Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
-    Vec3 T{0, 0, 0};
-    std::vector<RigidPose> poses;
-};
-
 Vec3 add(const Vec3& a, const Vec3& b) {
     return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
 }
 
-// R <- exp([w]x) R
-Mat3 rotate(const Mat3& R, const Vec3& w) {
-    return mul(rotation_from_vector(w), R);
-}
-
-// Adds component `index` of a full increment (layout: camera lens, projector
-// lens, stereo rotation, stereo translation, then per pose rotation and
-// translation) scaled by `amount`.
-void perturb(State& s, int index, double amount) {
-    if (index < kLens) {
-        s.camera[static_cast<std::size_t>(index)] += amount;
-    } else if (index < 2 * kLens) {
-        s.projector[static_cast<std::size_t>(index - kLens)] += amount;
-    } else if (index < 2 * kLens + 3) {
-        Vec3 w{0, 0, 0};
-        w[static_cast<std::size_t>(index - 2 * kLens)] = amount;
-        s.R = rotate(s.R, w);
-    } else if (index < kGlobal) {
-        s.T[static_cast<std::size_t>(index - 2 * kLens - 3)] += amount;
-    } else {
-        const int pose = (index - kGlobal) / kPerPose, c = (index - kGlobal) % kPerPose;
-        RigidPose& p = s.poses[static_cast<std::size_t>(pose)];
-        if (c < 3) {
-            Vec3 w{0, 0, 0};
-            w[static_cast<std::size_t>(c)] = amount;
-            p.R = rotate(p.R, w);
-        } else {
-            p.t[static_cast<std::size_t>(c - 3)] += amount;
-        }
-    }
-}
-
-double step_for(int index) {
-    if (index < 2 * kLens)
-        return kLensStep[index % kLens];
-    if (index < 2 * kLens + 3)
-        return kRotationStep;
-    if (index < kGlobal)
-        return kTranslationStep;
-    return ((index - kGlobal) % kPerPose) < 3 ? kRotationStep : kTranslationStep;
-}
-
-class Problem {
-  public:
-    Problem(const std::vector<PoseObservations>& obs, const std::vector<bool>& used, bool skew)
-        : obs_(obs), used_(used) {
-        const int n = static_cast<int>(obs.size());
-        row_offset_.assign(obs.size() + 1, 0);
-        for (int i = 0; i < n; ++i) {
-            int rows = 0;
-            if (used[static_cast<std::size_t>(i)]) {
-                const PoseObservations& o = obs[static_cast<std::size_t>(i)];
-                for (std::size_t k = 0; k < o.board.size(); ++k)
-                    rows += 2 + (projector_valid(o, k) ? 2 : 0);
-            }
-            row_offset_[static_cast<std::size_t>(i) + 1] =
-                row_offset_[static_cast<std::size_t>(i)] + rows;
-        }
-        // Free parameters: everything but fixed skew and the poses left out.
-        for (int p = 0; p < kGlobal + kPerPose * n; ++p) {
-            if (!skew && (p == kSkew || p == kLens + kSkew))
-                continue;
-            if (p >= kGlobal && !used[static_cast<std::size_t>((p - kGlobal) / kPerPose)])
-                continue;
-            free_.push_back(p);
-        }
-    }
-
-    static bool projector_valid(const PoseObservations& o, std::size_t k) {
-        return std::isfinite(o.projector[k][0]) && std::isfinite(o.projector[k][1]);
-    }
-
-    int rows() const { return row_offset_.back(); }
-    int cols() const { return static_cast<int>(free_.size()); }
-    const std::vector<int>& free() const { return free_; }
-
-    // Residuals (predicted - measured) of pose i into r[row_offset(i) ...].
-    void pose_residuals(const State& s, int i, double* r) const {
-        const PoseObservations& o = obs_[static_cast<std::size_t>(i)];
-        const RigidPose& pose = s.poses[static_cast<std::size_t>(i)];
-        const LensModel cam = to_lens(s.camera), proj = to_lens(s.projector);
-        double* out = r + row_offset_[static_cast<std::size_t>(i)];
-        for (std::size_t k = 0; k < o.board.size(); ++k) {
-            const Vec3 xc = add(mul(pose.R, o.board[k]), pose.t);
-            const Vec2 uc = cam.project(xc);
-            *out++ = uc[0] - o.camera[k][0];
-            *out++ = uc[1] - o.camera[k][1];
-            if (projector_valid(o, k)) {
-                const Vec2 up = proj.project(add(mul(s.R, xc), s.T));
-                *out++ = up[0] - o.projector[k][0];
-                *out++ = up[1] - o.projector[k][1];
-            }
-        }
-    }
-
-    void residuals(const State& s, Eigen::VectorXd& r) const {
-        r.resize(rows());
-        for (std::size_t i = 0; i < obs_.size(); ++i)
-            if (used_[i])
-                pose_residuals(s, static_cast<int>(i), r.data());
-    }
-
-    // Central-difference Jacobian over the free parameters; pose parameters
-    // touch their own pose's rows only.
-    void jacobian(const State& s, Eigen::MatrixXd& J) const {
-        J.setZero(rows(), cols());
-        Eigen::VectorXd rp(rows()), rm(rows());
-        for (int c = 0; c < cols(); ++c) {
-            const int p = free_[static_cast<std::size_t>(c)];
-            const double h = step_for(p);
-            State sp = s, sm = s;
-            perturb(sp, p, h);
-            perturb(sm, p, -h);
-            if (p < kGlobal) {
-                residuals(sp, rp);
-                residuals(sm, rm);
-                J.col(c) = (rp - rm) / (2 * h);
-            } else {
-                const int i = (p - kGlobal) / kPerPose;
-                pose_residuals(sp, i, rp.data());
-                pose_residuals(sm, i, rm.data());
-                const int r0 = row_offset_[static_cast<std::size_t>(i)];
-                const int nr = row_offset_[static_cast<std::size_t>(i) + 1] - r0;
-                J.col(c).segment(r0, nr) = (rp.segment(r0, nr) - rm.segment(r0, nr)) / (2 * h);
-            }
-        }
-    }
-
-    void apply(State& s, const Eigen::VectorXd& delta) const {
-        // Global and pose blocks: rotations as one rotation vector each.
-        std::vector<double> full(
-            static_cast<std::size_t>(kGlobal + kPerPose * static_cast<int>(obs_.size())), 0.0);
-        for (int c = 0; c < cols(); ++c)
-            full[static_cast<std::size_t>(free_[static_cast<std::size_t>(c)])] = delta(c);
-        for (int k = 0; k < kLens; ++k) {
-            s.camera[static_cast<std::size_t>(k)] += full[static_cast<std::size_t>(k)];
-            s.projector[static_cast<std::size_t>(k)] += full[static_cast<std::size_t>(kLens + k)];
-        }
-        s.R = rotate(s.R, {full[2 * kLens], full[2 * kLens + 1], full[2 * kLens + 2]});
-        s.T = add(s.T, {full[2 * kLens + 3], full[2 * kLens + 4], full[2 * kLens + 5]});
-        for (std::size_t i = 0; i < obs_.size(); ++i) {
-            const std::size_t b = static_cast<std::size_t>(kGlobal) + kPerPose * i;
-            s.poses[i].R = rotate(s.poses[i].R, {full[b], full[b + 1], full[b + 2]});
-            s.poses[i].t = add(s.poses[i].t, {full[b + 3], full[b + 4], full[b + 5]});
-        }
-    }
-
-  private:
-    const std::vector<PoseObservations>& obs_;
-    std::vector<bool> used_;
-    std::vector<int> row_offset_;
-    std::vector<int> free_;
-};
-
-struct LmOutcome {
-    int iterations = 0;
-    Eigen::MatrixXd JtJ; // at the solution, free parameters
-    double cost = 0;     // sum of squared residuals
-};
-
-LmOutcome levenberg_marquardt(const Problem& problem, State& s, int max_iterations,
-                              const std::function<void(const std::string&)>& progress) {
-    LmOutcome out;
-    Eigen::VectorXd r, r_new;
-    Eigen::MatrixXd J;
-    problem.residuals(s, r);
-    double cost = r.squaredNorm();
-    double lambda = 1e-3;
-    const double rows = std::max(1, problem.rows());
-    for (int it = 0; it < max_iterations; ++it) {
-        problem.jacobian(s, J);
-        const Eigen::MatrixXd A = J.transpose() * J;
-        const Eigen::VectorXd g = J.transpose() * r;
-        // Scale to unit diagonal (parameters span focal lengths of thousands
-        // of pixels and distortion terms of 1e-4).
-        Eigen::VectorXd d = A.diagonal().cwiseSqrt();
-        for (Eigen::Index k = 0; k < d.size(); ++k)
-            if (!(d(k) > 0))
-                d(k) = 1;
-        const Eigen::MatrixXd As = d.asDiagonal().inverse() * A * d.asDiagonal().inverse();
-        const Eigen::VectorXd gs = d.asDiagonal().inverse() * g;
-        bool accepted = false;
-        double step_norm = 0;
-        for (int attempt = 0; attempt < 20 && !accepted; ++attempt) {
-            Eigen::MatrixXd M = As;
-            M.diagonal().array() += lambda;
-            const Eigen::LDLT<Eigen::MatrixXd> ldlt(M);
-            const Eigen::VectorXd step_s = -ldlt.solve(gs);
-            const Eigen::VectorXd step = d.asDiagonal().inverse() * step_s;
-            if (!step.allFinite()) {
-                lambda *= 10;
-                continue;
-            }
-            State trial = s;
-            problem.apply(trial, step);
-            problem.residuals(trial, r_new);
-            const double cost_new =
-                r_new.allFinite() ? r_new.squaredNorm() : std::numeric_limits<double>::infinity();
-            if (cost_new < cost) {
-                s = std::move(trial);
-                const double decrease = (cost - cost_new) / cost;
-                cost = cost_new;
-                r = r_new;
-                lambda = std::max(lambda / 3, 1e-12);
-                accepted = true;
-                step_norm = step_s.norm();
-                out.iterations = it + 1;
-                if (progress && (it < 3 || it % 5 == 0)) {
-                    std::ostringstream msg;
-                    msg.precision(4);
-                    msg << "  LM iteration " << it + 1 << ": RMS residual "
-                        << std::sqrt(cost / rows) << " px (per coordinate), lambda " << lambda;
-                    progress(msg.str());
-                }
-                if (decrease < 1e-12 || step_norm < 1e-10)
-                    it = max_iterations; // converged
-            } else {
-                lambda *= 4;
-            }
-        }
-        if (!accepted)
-            break; // no decrease possible: at the minimum to rounding
-    }
-    problem.jacobian(s, J);
-    out.JtJ = J.transpose() * J;
-    out.cost = cost;
-    return out;
+bool projector_valid(const PoseObservations& o, std::size_t k) {
+    return std::isfinite(o.projector[k][0]) && std::isfinite(o.projector[k][1]);
 }
 
 Mat3 from_cv_rotation(const cv::Mat& rvec_or_matrix) {
@@ -379,13 +115,43 @@ Vec3 rotation_to_vector(const Mat3& R) {
     return {w.x(), w.y(), w.z()};
 }
 
+const char* to_string(StereoProcedure procedure) {
+    return procedure == StereoProcedure::joint ? "joint" : "camera-first";
+}
+
+StereoProcedure parse_stereo_procedure(const std::string& name) {
+    if (name == "camera-first")
+        return StereoProcedure::camera_first;
+    if (name == "joint")
+        return StereoProcedure::joint;
+    throw std::invalid_argument("unknown stereo procedure '" + name + "' (camera-first, joint)");
+}
+
+void StereoOptions::validate() const {
+    const auto bad = [](const std::string& field, const std::string& why) {
+        throw std::invalid_argument("stereo option " + field + ": " + why);
+    };
+    for (const auto& [grid, name] : {std::pair{camera_grid, "camera_grid"},
+                                     std::pair{projector_grid, "projector_grid"}})
+        if (!grid.empty() && (grid.columns < 4 || grid.rows < 4 || grid.columns > 64 ||
+                              grid.rows > 64))
+            bad(name, "a correction grid has 4 to 64 control points per axis (0 x 0: none)");
+    if (!(grid_smoothness > 0) || !std::isfinite(grid_smoothness))
+        bad("grid_smoothness", "must be positive");
+    if (!(grid_ridge > 0) || !std::isfinite(grid_ridge))
+        bad("grid_ridge", "must be positive");
+    if (!(outlier_factor > 1))
+        bad("outlier_factor", "must be above 1");
+    if (max_iterations < 1)
+        bad("max_iterations", "must be at least 1");
+}
+
 Vec2 project_camera(const StereoCalibration& c, const RigidPose& pose, const Vec3& board) {
-    return c.camera.project(add(mul(pose.R, board), pose.t));
+    return c.camera_pixel(add(mul(pose.R, board), pose.t));
 }
 
 Vec2 project_projector(const StereoCalibration& c, const RigidPose& pose, const Vec3& board) {
-    const Vec3 xc = add(mul(pose.R, board), pose.t);
-    return c.projector.project(add(mul(c.R, xc), c.T));
+    return c.projector_pixel(add(mul(pose.R, board), pose.t));
 }
 
 StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size camera_size,
@@ -394,15 +160,17 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         if (options.progress)
             options.progress(s);
     };
+    options.validate();
     if (poses.size() < 3)
         throw std::invalid_argument("stereo calibration needs at least 3 poses, got " +
                                     std::to_string(poses.size()));
     for (const PoseObservations& p : poses) {
-        if (p.board.size() != p.camera.size() || p.board.size() != p.projector.size())
+        if (p.board.size() != p.camera.size() || p.board.size() != p.projector.size() ||
+            p.dense_camera.size() != p.dense_projector.size())
             throw std::invalid_argument("pose " + p.name + ": point counts differ");
         int both = 0;
         for (std::size_t k = 0; k < p.board.size(); ++k)
-            both += Problem::projector_valid(p, k) ? 1 : 0;
+            both += projector_valid(p, k) ? 1 : 0;
         if (both < 4)
             throw std::invalid_argument("pose " + p.name +
                                         ": fewer than 4 corners seen by both devices");
@@ -425,7 +193,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                                 static_cast<float>(p.camera[k][1]));
             obj_c.back().push_back(b);
             img_c.back().push_back(c);
-            if (Problem::projector_valid(p, k)) {
+            if (projector_valid(p, k)) {
                 obj_s.back().push_back(b);
                 img_cs.back().push_back(c);
                 img_ps.back().emplace_back(static_cast<float>(p.projector[k][0]),
@@ -463,26 +231,114 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         say(msg.str());
     }
 
-    State s;
-    s.camera = to_params(lens_from_cv(Kc, Dc));
-    s.projector = to_params(lens_from_cv(Kp, Dp));
+    detail::RigState s;
+    s.camera = lens_from_cv(Kc, Dc);
+    s.projector = lens_from_cv(Kp, Dp);
     s.R = from_cv_rotation(Rs);
     s.T = from_cv_vec(Ts);
     for (std::size_t i = 0; i < poses.size(); ++i)
         s.poses.push_back({from_cv_rotation(rvecs[i]), from_cv_vec(tvecs[i])});
+    if (!options.camera_grid.empty())
+        s.camera_grid =
+            CorrectionGrid(camera_size, options.camera_grid.columns, options.camera_grid.rows);
+    if (!options.projector_grid.empty())
+        s.projector_grid = CorrectionGrid(projector_size, options.projector_grid.columns,
+                                          options.projector_grid.rows);
+    const detail::RigState initial = s;
+    result.procedure = options.procedure;
+
+    std::vector<detail::CornerObservation> corners;
+    for (std::size_t i = 0; i < poses.size(); ++i)
+        for (std::size_t k = 0; k < poses[i].board.size(); ++k)
+            corners.push_back({static_cast<int>(i), poses[i].board[k], poses[i].camera[k],
+                               poses[i].projector[k]});
+    const detail::GridRegularisation regularisation{options.grid_smoothness, options.grid_ridge};
+    const bool camera_first = options.procedure == StereoProcedure::camera_first;
+
+    // The dense samples of the used poses, placed on their boards by the
+    // camera (its rays meet the boards' planes). Per sample: pose, index.
+    std::vector<detail::DenseObservation> dense;
+    std::vector<std::pair<int, int>> dense_origin;
+    const auto place_dense_samples = [&](const std::vector<bool>& used) {
+        dense.clear();
+        dense_origin.clear();
+        StereoCalibration camera_model;
+        camera_model.camera = s.camera;
+        camera_model.camera_correction = s.camera_grid;
+        for (std::size_t i = 0; i < poses.size(); ++i) {
+            if (!used[i])
+                continue;
+            const RigidPose& pose = s.poses[i];
+            const Vec3 normal{pose.R[2], pose.R[5], pose.R[8]};
+            const double d = normal[0] * pose.t[0] + normal[1] * pose.t[1] + normal[2] * pose.t[2];
+            const PoseObservations& o = poses[i];
+            for (std::size_t k = 0; k < o.dense_camera.size(); ++k) {
+                Vec2 n{};
+                if (!camera_model.camera_ray(o.dense_camera[k], n))
+                    continue;
+                const double den = normal[0] * n[0] + normal[1] * n[1] + normal[2];
+                const double z = d / den;
+                if (!(std::fabs(den) > 1e-9) || !(z > 0))
+                    continue;
+                dense.push_back({{n[0] * z, n[1] * z, z}, o.dense_projector[k], 1.0});
+                dense_origin.emplace_back(static_cast<int>(i), static_cast<int>(k));
+            }
+        }
+    };
 
     std::vector<bool> used(poses.size(), true);
-    LmOutcome lm;
+    detail::AdjustmentOutcome camera_outcome, projector_outcome;
     for (int round = 0; round < 2; ++round) {
-        say(round == 0 ? "joint bundle adjustment (both devices, skew " +
-                             std::string(options.skew ? "estimated" : "fixed at 0") + ")"
-                       : "bundle adjustment again without the outlying poses");
-        const Problem problem(poses, used, options.skew);
-        lm = levenberg_marquardt(problem, s, options.max_iterations, options.progress);
-        result.iterations += lm.iterations;
+        if (round == 1)
+            s = initial; // again from the start, without the outlying poses
+        if (camera_first) {
+            say(std::string(round == 0 ? "" : "again without the outlying poses: ") +
+                "the camera alone from its corners (intrinsics, skew " +
+                (options.skew ? "estimated" : "fixed at 0") + ", distortion" +
+                (s.camera_grid.empty() ? "" : ", correction grid") + ", board poses)");
+            detail::FreeParameters free;
+            free.camera_lens = free.poses = free.camera_observations = true;
+            free.camera_grid = !s.camera_grid.empty();
+            free.skew = options.skew;
+            camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
+                                            options.max_iterations, options.progress);
+            place_dense_samples(used);
+            say("the projector with the camera and the boards held (intrinsics, distortion" +
+                std::string(s.projector_grid.empty() ? "" : ", correction grid") + ", R, T; " +
+                std::to_string(dense.size()) + " dense samples)");
+            free = {};
+            free.projector_lens = free.stereo = free.projector_observations = true;
+            free.projector_grid = !s.projector_grid.empty();
+            free.skew = options.skew;
+            projector_outcome = detail::adjust(s, corners, dense, used, free, regularisation,
+                                               options.max_iterations, options.progress);
+            result.iterations += camera_outcome.iterations + projector_outcome.iterations;
+        } else {
+            say(round == 0 ? "joint bundle adjustment (both devices, skew " +
+                                 std::string(options.skew ? "estimated" : "fixed at 0") + ")"
+                           : "bundle adjustment again without the outlying poses");
+            detail::FreeParameters free;
+            free.camera_lens = free.projector_lens = free.stereo = free.poses = true;
+            free.camera_grid = !s.camera_grid.empty();
+            free.projector_grid = !s.projector_grid.empty();
+            free.camera_observations = free.projector_observations = true;
+            free.skew = options.skew;
+            camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
+                                            options.max_iterations, options.progress);
+            projector_outcome = camera_outcome;
+            result.iterations += camera_outcome.iterations;
+        }
 
         // Per-pose residuals and outliers among the used poses.
-        const LensModel cam = to_lens(s.camera), proj = to_lens(s.projector);
+        StereoCalibration& c = result.calibration;
+        c.camera_size = camera_size;
+        c.projector_size = projector_size;
+        c.camera = s.camera;
+        c.projector = s.projector;
+        c.camera_correction = s.camera_grid;
+        c.projector_correction = s.projector_grid;
+        c.R = s.R;
+        c.T = s.T;
         result.camera_residuals.assign(poses.size(), {});
         result.projector_residuals.assign(poses.size(), {});
         std::vector<double> combined;
@@ -490,12 +346,11 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         for (std::size_t i = 0; i < poses.size(); ++i) {
             const PoseObservations& o = poses[i];
             for (std::size_t k = 0; k < o.board.size(); ++k) {
-                const Vec3 xc = add(mul(s.poses[i].R, o.board[k]), s.poses[i].t);
-                const Vec2 uc = cam.project(xc);
+                const Vec2 uc = project_camera(c, s.poses[i], o.board[k]);
                 result.camera_residuals[i].push_back(
                     {uc[0] - o.camera[k][0], uc[1] - o.camera[k][1]});
-                if (Problem::projector_valid(o, k)) {
-                    const Vec2 up = proj.project(add(mul(s.R, xc), s.T));
+                if (std::isfinite(o.projector[k][0]) && std::isfinite(o.projector[k][1])) {
+                    const Vec2 up = project_projector(c, s.poses[i], o.board[k]);
                     result.projector_residuals[i].push_back(
                         {up[0] - o.projector[k][0], up[1] - o.projector[k][1]});
                 } else {
@@ -506,6 +361,18 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             if (used[i])
                 combined.push_back(rms[i].combined);
         }
+        result.dense_residuals.assign(poses.size(), {});
+        for (std::size_t i = 0; i < poses.size(); ++i)
+            result.dense_residuals[i].assign(poses[i].dense_camera.size(), {kNaN, kNaN});
+        double dense_sum = 0;
+        for (std::size_t k = 0; k < dense.size(); ++k) {
+            const Vec2 up = c.projector_pixel(dense[k].camera_point);
+            const Vec2 e{up[0] - dense[k].projector[0], up[1] - dense[k].projector[1]};
+            result.dense_residuals[std::size_t(dense_origin[k].first)]
+                                  [std::size_t(dense_origin[k].second)] = e;
+            dense_sum += e[0] * e[0] + e[1] * e[1];
+        }
+        result.dense_rms = dense.empty() ? -1 : std::sqrt(dense_sum / double(dense.size()));
         std::vector<double> sorted = combined;
         std::sort(sorted.begin(), sorted.end());
         const double median = sorted.empty() ? 0 : sorted[sorted.size() / 2];
@@ -514,13 +381,6 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             if (used[i] && rms[i].combined > options.outlier_factor * median)
                 result.outliers.push_back(static_cast<int>(i));
 
-        StereoCalibration& c = result.calibration;
-        c.camera_size = camera_size;
-        c.projector_size = projector_size;
-        c.camera = cam;
-        c.projector = proj;
-        c.R = s.R;
-        c.T = s.T;
         c.poses.clear();
         double sc = 0, sp = 0;
         int nc = 0, np = 0;
@@ -558,27 +418,22 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         c.camera_rms = nc ? std::sqrt(sc / nc) : -1;
         c.projector_rms = np ? std::sqrt(sp / np) : -1;
 
-        // Uncertainties: covariance = (J^T J)^-1 * residual variance.
-        result.camera_sigma = to_lens(LensParams{});
-        result.projector_sigma = result.camera_sigma;
-        const int dof = problem.rows() - problem.cols();
-        if (dof > 0) {
-            const double variance = lm.cost / dof;
-            const Eigen::MatrixXd cov =
-                lm.JtJ.ldlt().solve(Eigen::MatrixXd::Identity(lm.JtJ.rows(), lm.JtJ.cols())) *
-                variance;
-            LensParams sc_params{}, sp_params{};
-            for (int col = 0; col < problem.cols(); ++col) {
-                const int p = problem.free()[static_cast<std::size_t>(col)];
-                const double sigma = std::sqrt(std::max(0.0, cov(col, col)));
-                if (p < kLens)
-                    sc_params[static_cast<std::size_t>(p)] = sigma;
-                else if (p < 2 * kLens)
-                    sp_params[static_cast<std::size_t>(p - kLens)] = sigma;
-            }
-            result.camera_sigma = to_lens(sc_params);
-            result.projector_sigma = to_lens(sp_params);
-        }
+        // Uncertainties: covariance = (J^T J)^-1 * residual variance, per stage.
+        result.camera_sigma = LensModel{};
+        result.projector_sigma = LensModel{};
+        const auto sigmas = [&](const detail::AdjustmentOutcome& o, int device, LensModel& out) {
+            const int dof = o.residuals - o.parameters;
+            if (dof <= 0)
+                return;
+            const double variance = o.data_cost / dof;
+            double sg[detail::kLensParameters];
+            for (int k = 0; k < detail::kLensParameters; ++k)
+                sg[k] = std::sqrt(
+                    o.lens_variance[std::size_t(device * detail::kLensParameters + k)] * variance);
+            out = LensModel{sg[0], sg[1], sg[2], sg[3], sg[4], sg[5], sg[6], sg[9], sg[7], sg[8]};
+        };
+        sigmas(camera_outcome, 0, result.camera_sigma);
+        sigmas(projector_outcome, 1, result.projector_sigma);
 
         if (round == 0 && options.drop_outliers && !result.outliers.empty()) {
             const int remaining = static_cast<int>(combined.size() - result.outliers.size());

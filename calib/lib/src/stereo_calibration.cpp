@@ -23,6 +23,20 @@ Vec3 StereoCalibration::projector_centre() const {
     return {-rt[0], -rt[1], -rt[2]};
 }
 
+Vec2 StereoCalibration::camera_pixel(const Vec3& camera_point) const {
+    return camera_correction.apply(camera.project(camera_point));
+}
+
+Vec2 StereoCalibration::projector_pixel(const Vec3& camera_point) const {
+    const Vec3 p = mul(R, camera_point);
+    return projector_correction.apply(projector.project({p[0] + T[0], p[1] + T[1], p[2] + T[2]}));
+}
+
+bool StereoCalibration::camera_ray(Vec2 pixel, Vec2& normalised) const {
+    Vec2 model{};
+    return camera_correction.remove(pixel, model) && camera.pixel_to_normalised(model, normalised);
+}
+
 bool StereoCalibration::sizes_known() const {
     return camera_size.width > 0 && camera_size.height > 0 && projector_size.width > 0 &&
            projector_size.height > 0;
@@ -259,6 +273,30 @@ class Reader {
         c.T = vector3(keys.T);
     }
 
+    // An optional correction grid over an image of `image` pixels, from the
+    // matrices <prefix>_du and <prefix>_dv.
+    CorrectionGrid correction(const std::string& prefix, Size image) const {
+        const std::string du = prefix + "_du", dv = prefix + "_dv";
+        if (!has(du.c_str()) && !has(dv.c_str()))
+            return {};
+        const cv::Mat mu = matrix(du), mv = matrix(dv);
+        if (mu.rows < 4 || mu.cols < 4)
+            fail(du, "a correction grid needs at least 4 x 4 control points");
+        if (mv.rows != mu.rows || mv.cols != mu.cols)
+            fail(dv, "expected the shape of " + du + " (" + std::to_string(mu.rows) + "x" +
+                         std::to_string(mu.cols) + ")");
+        CorrectionGrid grid(image, mu.cols, mu.rows);
+        for (int j = 0; j < mu.rows; ++j)
+            for (int i = 0; i < mu.cols; ++i) {
+                const double a = mu.at<double>(j, i), b = mv.at<double>(j, i);
+                if (std::fabs(a) > 1000 || std::fabs(b) > 1000)
+                    fail(std::fabs(a) > 1000 ? du : dv,
+                         "a control point moves the image by more than 1000 px");
+                grid.at(i, j) = {a, b};
+            }
+        return grid;
+    }
+
     const cv::FileNode& root() const { return root_; }
 
   private:
@@ -276,6 +314,13 @@ StereoCalibration read_fpp(const Reader& in) {
     c.camera_size = in.size("camera_size");
     c.projector_size = in.size("projector_size");
     in.geometry(kFppKeys, c);
+    c.camera_correction = in.correction("camera_correction", c.camera_size);
+    c.projector_correction = in.correction("projector_correction", c.projector_size);
+    if (in.has("board_square_size")) {
+        c.board_square_size = in.number("board_square_size");
+        if (!(c.board_square_size > 0))
+            in.fail("board_square_size", "must be positive (mm)");
+    }
     c.camera_rms = in.number("camera_rms");
     c.projector_rms = in.number("projector_rms");
     const cv::FileNode poses = in.require("poses");
@@ -414,6 +459,25 @@ cv::Mat distortion(const LensModel& l) {
     return (cv::Mat_<double>(1, 5) << l.k1, l.k2, l.p1, l.p2, l.k3);
 }
 
+void write_correction(cv::FileStorage& out, const std::string& prefix, const CorrectionGrid& grid,
+                      Size image) {
+    if (grid.empty())
+        return;
+    if (!(grid.image() == image))
+        throw std::invalid_argument("calibration: the " + prefix +
+                                    " grid is not over the device's image");
+    cv::Mat du(grid.rows(), grid.columns(), CV_64F), dv(grid.rows(), grid.columns(), CV_64F);
+    for (int j = 0; j < grid.rows(); ++j)
+        for (int i = 0; i < grid.columns(); ++i) {
+            require_finite(grid.at(i, j)[0], "a correction control point");
+            require_finite(grid.at(i, j)[1], "a correction control point");
+            du.at<double>(j, i) = grid.at(i, j)[0];
+            dv.at<double>(j, i) = grid.at(i, j)[1];
+        }
+    out << prefix + "_du" << du;
+    out << prefix + "_dv" << dv;
+}
+
 } // namespace
 
 std::string calibration_to_yaml(const StereoCalibration& c) {
@@ -443,6 +507,10 @@ std::string calibration_to_yaml(const StereoCalibration& c) {
     out << "projector_distortion" << distortion(c.projector);
     out << "R" << cv::Mat(3, 3, CV_64F, const_cast<double*>(c.R.data())).clone();
     out << "T" << cv::Mat(3, 1, CV_64F, const_cast<double*>(c.T.data())).clone();
+    write_correction(out, "camera_correction", c.camera_correction, c.camera_size);
+    write_correction(out, "projector_correction", c.projector_correction, c.projector_size);
+    if (c.board_square_size > 0)
+        out << "board_square_size" << c.board_square_size;
     out << "camera_rms" << c.camera_rms;
     out << "projector_rms" << c.projector_rms;
     out << "poses"

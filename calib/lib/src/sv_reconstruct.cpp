@@ -95,6 +95,7 @@ enum class Outcome { point, rejected, outside_projector, not_converged };
 struct Geometry {
     LensModel projector;
     Distortion dist;
+    const CorrectionGrid* correction; // the projector's, empty when none
     double R[9];                       // camera -> projector rotation
     double T[3];                       // mm
     double Rt[9];                      // projector -> camera rotation
@@ -106,7 +107,8 @@ struct Geometry {
     double max_gap_mm;
 
     Geometry(const StereoCalibration& c, const SvOptions& o)
-        : projector(c.projector), dist(c.projector), tolerance_px(o.tolerance_px),
+        : projector(c.projector), dist(c.projector), correction(&c.projector_correction),
+          tolerance_px(o.tolerance_px),
           max_iterations(o.max_iterations), solver(o.solver), max_gap_mm(o.max_ray_gap_mm) {
         const Mat3 rt = transpose(c.R);
         const Vec3 centre = c.projector_centre();
@@ -130,15 +132,32 @@ struct Geometry {
         }
     }
 
-    // Projector column of the normalised undistorted point (w, y) and the
-    // distorted normalised row; optionally d(column)/dw along y = a + b w.
-    double column(double w, double y, double b, double& yd, double* dcol_dw) const {
-        double xd;
+    // Projector column of the normalised undistorted point (w, y) and its
+    // row (projector px, correction included); optionally d(column)/dw along
+    // y = a + b w.
+    double column(double w, double y, double b, double& row, double* dcol_dw) const {
+        double xd, yd;
         double J[4];
         dist.apply(w, y, xd, yd, dcol_dw ? J : nullptr);
+        const double u = projector.fu * xd + projector.skew * yd + projector.cu;
+        const double v = projector.fv * yd + projector.cv;
+        double du_dw = 0;
         if (dcol_dw)
-            *dcol_dw = projector.fu * (J[0] + J[1] * b) + projector.skew * (J[2] + J[3] * b);
-        return projector.fu * xd + projector.skew * yd + projector.cu;
+            du_dw = projector.fu * (J[0] + J[1] * b) + projector.skew * (J[2] + J[3] * b);
+        if (correction->empty()) {
+            row = v;
+            if (dcol_dw)
+                *dcol_dw = du_dw;
+            return u;
+        }
+        const Vec2 d = correction->displacement({u, v});
+        row = v + d[1];
+        if (dcol_dw) {
+            const double dv_dw = projector.fv * (J[2] + J[3] * b);
+            const Mat2 G = correction->jacobian({u, v});
+            *dcol_dw = (1 + G[0]) * du_dw + G[1] * dv_dw;
+        }
+        return u + d[0];
     }
 
     // x only: camera ray (xn, yn, 1), projector column xp.
@@ -162,12 +181,12 @@ struct Geometry {
         const LensModel& p = projector;
         // Start: the distortion-free plane of column xp.
         double w = (xp - p.cu - p.skew * a) / (p.fu + p.skew * b);
-        double yd = 0;
+        double row = 0;
         bool converged = false;
         if (solver == XOnlySolver::newton) {
             for (int it = 0;; ++it) {
                 double slope = 0;
-                const double g = column(w, a + b * w, b, yd, &slope) - xp;
+                const double g = column(w, a + b * w, b, row, &slope) - xp;
                 if (std::fabs(g) <= tolerance_px) {
                     // A root where the column does not grow with w lies in a
                     // folded part of the distortion (outside the lens's field).
@@ -185,15 +204,15 @@ struct Geometry {
             // The paper's iteration: project the guess, undistort (xp, its
             // distorted row) to get the plane of constant undistorted x, intersect.
             for (int it = 0;; ++it) {
-                const double g = column(w, a + b * w, b, yd, nullptr) - xp;
+                const double g = column(w, a + b * w, b, row, nullptr) - xp;
                 if (std::fabs(g) <= tolerance_px) {
                     converged = true;
                     iterations = it;
                     break;
                 }
-                Vec2 n{};
+                Vec2 n{}, model{};
                 if (it >= max_iterations || !std::isfinite(g) ||
-                    !p.pixel_to_normalised({xp, p.fv * yd + p.cv}, n)) {
+                    !correction->remove({xp, row}, model) || !p.pixel_to_normalised(model, n)) {
                     iterations = it;
                     break;
                 }
@@ -202,7 +221,6 @@ struct Geometry {
         }
         if (!converged)
             return Outcome::not_converged;
-        const double row = p.fv * yd + p.cv;
         if (!(row >= v_min && row <= v_max))
             return Outcome::outside_projector;
         // Depth along the camera ray: (s qx + Tx) / (s qz + Tz) = w.
@@ -220,6 +238,13 @@ struct Geometry {
     // steps to a residual of 1e-13, ~1e-10 px), with LensModel's safeguarded
     // solver as the fallback.
     bool undistort_projector(double up, double vp, double& xn, double& yn) const {
+        if (!correction->empty()) {
+            Vec2 model{};
+            if (!correction->remove({up, vp}, model))
+                return false;
+            up = model[0];
+            vp = model[1];
+        }
         const LensModel& p = projector;
         const double yd = (vp - p.cv) / p.fv;
         const double xd = (up - p.cu - p.skew * yd) / p.fu;
@@ -313,6 +338,7 @@ SvReconstructor::SvReconstructor(const StereoCalibration& calibration, const SvO
     const Size size = calibration_.camera_size;
     rays_ = Image<float>(size, 2);
     const LensModel camera = calibration_.camera;
+    const CorrectionGrid& correction = calibration_.camera_correction;
     const Distortion dist(camera);
     float* rays = rays_.data();
     pool_->parallel_for(size.height, 4, [&](int begin, int end, int) {
@@ -322,7 +348,13 @@ SvReconstructor::SvReconstructor(const StereoCalibration& calibration, const SvO
             bool have_previous = false;
             double x = 0, y = 0;
             for (int u = 0; u < size.width; ++u) {
-                const Vec2 d = camera.pixel_to_distorted({double(u), double(v)});
+                Vec2 model{double(u), double(v)};
+                if (!correction.remove({double(u), double(v)}, model)) {
+                    have_previous = false;
+                    out[2 * u] = out[2 * u + 1] = nan;
+                    continue;
+                }
+                const Vec2 d = camera.pixel_to_distorted(model);
                 if (!have_previous) {
                     x = d[0];
                     y = d[1];
@@ -345,7 +377,7 @@ SvReconstructor::SvReconstructor(const StereoCalibration& calibration, const SvO
                 }
                 if (!ok) {
                     Vec2 n{};
-                    ok = camera.pixel_to_normalised({double(u), double(v)}, n);
+                    ok = camera.pixel_to_normalised(model, n);
                     x = n[0];
                     y = n[1];
                 }
@@ -366,7 +398,7 @@ bool SvReconstructor::triangulate_x(double u, double v, double proj_x, Vec3& poi
     Vec2 n{};
     int it = 0;
     bool ok = false;
-    if (calibration_.camera.pixel_to_normalised({u, v}, n)) {
+    if (calibration_.camera_ray({u, v}, n)) {
         const Geometry g(calibration_, options_);
         ok = g.solve_x(n[0], n[1], proj_x, point.data(), it) == Outcome::point;
     }
@@ -380,7 +412,7 @@ bool SvReconstructor::triangulate_xy(double u, double v, double proj_x, double p
     Vec2 n{};
     double gap = 0;
     bool ok = false;
-    if (calibration_.camera.pixel_to_normalised({u, v}, n)) {
+    if (calibration_.camera_ray({u, v}, n)) {
         const Geometry g(calibration_, options_);
         ok = g.solve_xy(n[0], n[1], proj_x, proj_y, point.data(), gap) == Outcome::point;
     }

@@ -8,15 +8,26 @@
 //
 // Method: OpenCV initialises each device (cv::calibrateCamera, skew 0) and the
 // camera-to-projector transform (cv::stereoCalibrate with the intrinsics
-// fixed); then one Levenberg-Marquardt bundle adjustment refines everything
-// together (both devices' intrinsics with skew, distortion, R, T and every
-// board pose), minimising camera and projector reprojection errors in pixels
-// through LensModel's skew-aware projection. Rotations are updated
-// multiplicatively (R <- exp([w]x) R), the normal equations are scaled to
-// unit diagonal, the Jacobian is by central differences, block-sparse in the
-// board poses.
+// fixed); then a Levenberg-Marquardt bundle adjustment (analytic Jacobians,
+// normal equations scaled to unit diagonal, rotations updated
+// multiplicatively, R <- exp([w]x) R) refines, by `procedure`:
+//   camera_first  (default) the camera alone from its corners (intrinsics
+//                 with skew, distortion, correction grid, every board pose),
+//                 then the projector with the camera and the poses held:
+//                 its intrinsics, distortion, correction grid, R and T, from
+//                 the corners' projector coordinates and the dense samples.
+//                 Nothing the projector does can move the camera or the
+//                 boards: the board poses are the camera's alone, right in
+//                 absolute terms whatever defect the projector lens has.
+//   joint         the paper's: both devices, R, T and the poses together,
+//                 minimising camera and projector reprojection errors (dense
+//                 samples unused). A projector defect outside the model then
+//                 pulls the camera and the poses (depth, scale, tilt).
+// Correction grids (correction_grid.hpp) are estimated when their size is
+// given, regularised by second differences and a small ridge.
 //
-// RMS: sqrt(mean over points of |reprojection error|^2), px (OpenCV's figure).
+// RMS: sqrt(mean over points of |reprojection error|^2), px (OpenCV's figure),
+// of the corners.
 
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/image.hpp"
@@ -33,6 +44,11 @@ struct PoseObservations {
     std::vector<Vec3> board;     // board frame, mm (z = 0 for a flat board)
     std::vector<Vec2> camera;    // camera px
     std::vector<Vec2> projector; // projector px; NaN where the projector coordinate failed
+    // Dense samples of the board's flat white parts (camera_first only): a
+    // camera pixel and the projector pixel decoded there. The board point
+    // is where the pixel's camera ray meets the board's plane.
+    std::vector<Vec2> dense_camera;
+    std::vector<Vec2> dense_projector;
 };
 
 // Board frame -> camera frame: X_c = R X_b + t.
@@ -41,13 +57,32 @@ struct RigidPose {
     Vec3 t{0, 0, 0};
 };
 
+enum class StereoProcedure { camera_first, joint };
+// "camera-first", "joint"; parse throws std::invalid_argument otherwise.
+const char* to_string(StereoProcedure procedure);
+StereoProcedure parse_stereo_procedure(const std::string& name);
+
+// Control points of a correction grid (0 x 0: none).
+struct GridSize {
+    int columns = 0, rows = 0;
+    bool empty() const { return columns == 0 && rows == 0; }
+};
+
 struct StereoOptions {
+    StereoProcedure procedure = StereoProcedure::joint;
+    GridSize camera_grid{};
+    GridSize projector_grid{};
+    double grid_smoothness = 0.01; // weight of each squared second difference of a grid (px^2)
+    double grid_ridge = 1e-4;      // weight of each squared control value (px^2)
     bool skew = true;           // estimate skew for both devices (else fixed at 0)
     bool drop_outliers = false; // drop outlying poses and refine again
     // A pose is an outlier when its RMS (camera and projector together)
     // exceeds this multiple of the median pose RMS.
     double outlier_factor = 2.5;
     int max_iterations = 100;
+
+    // Throws std::invalid_argument naming the first bad field.
+    void validate() const;
     // Progress lines (stderr in the tool); may be empty.
     std::function<void(const std::string&)> progress;
 };
@@ -63,8 +98,13 @@ struct StereoResult {
     std::vector<int> outliers;      // input indices of poses flagged as outliers
     double initial_camera_rms = -1; // after OpenCV's initialisation (skew 0)
     double initial_projector_rms = -1;
+    // Dense samples (camera_first): per input pose, predicted - measured
+    // projector px of each sample (NaN where unused), and their RMS.
+    std::vector<std::vector<Vec2>> dense_residuals;
+    double dense_rms = -1;
     int iterations = 0;
     bool skew_estimated = true;
+    StereoProcedure procedure = StereoProcedure::camera_first;
     // One-sigma uncertainties of the lens parameters (from the normal
     // equations and the residual variance); 0 for fixed parameters.
     LensModel camera_sigma;

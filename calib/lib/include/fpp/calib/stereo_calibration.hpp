@@ -13,6 +13,13 @@
 //   camera_distortion, projector_distortion   1x5: k1 k2 p1 p2 k3 (OpenCV order)
 //   R (3x3), T (3x1, mm)               X_p = R X_c + T
 //   camera_rms, projector_rms          reprojection RMS, px (-1 = unknown)
+//   camera_correction_du, camera_correction_dv       optional (both or neither):
+//   projector_correction_du, projector_correction_dv  a dense correction of
+//                                      the lens model (correction_grid.hpp):
+//                                      rows x columns control points, px, over
+//                                      the device's image
+//   board_square_size                  optional: mm, the square size of the
+//                                      checkerboard session calibrated from
 //   poses                              per-pose names, RMS and whether used:
 //                                      a list of maps {name, camera_rms,
 //                                      projector_rms, corners, used, note}
@@ -33,6 +40,7 @@
 //     user supplies them (fpp-calib reconstruct takes them from the capture).
 // All three use OpenCV's pixel convention (centres on integers), as we do.
 
+#include "fpp/calib/correction_grid.hpp"
 #include "fpp/image.hpp"
 #include "fpp/lens_model.hpp"
 
@@ -70,8 +78,12 @@ struct StereoCalibration {
     Size projector_size;
     LensModel camera;
     LensModel projector;
+    // Dense corrections of the lens models (empty: none).
+    CorrectionGrid camera_correction;
+    CorrectionGrid projector_correction;
     Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
     Vec3 T{0, 0, 0};
+    double board_square_size = 0; // mm; 0 = unknown
     double camera_rms = -1;    // px, < 0 if unknown
     double projector_rms = -1; // px, < 0 if unknown
     std::vector<PoseResidual> poses;
@@ -79,6 +91,13 @@ struct StereoCalibration {
     CalibrationFormat format = CalibrationFormat::fpp; // the format it was read from
 
     Vec3 projector_centre() const; // in the camera frame, mm: -R^T T
+    // Through the whole model (lens, then correction): a camera-frame point
+    // (mm, Z > 0) to its camera pixel, and to its projector pixel.
+    Vec2 camera_pixel(const Vec3& camera_point) const;
+    Vec2 projector_pixel(const Vec3& camera_point) const;
+    // A camera pixel's undistorted ray (xn, yn, 1); false where the model
+    // cannot be inverted.
+    bool camera_ray(Vec2 pixel, Vec2& normalised) const;
     // Both sizes set (foreign formats may lack them).
     bool sizes_known() const;
 };

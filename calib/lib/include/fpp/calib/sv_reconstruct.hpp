@@ -5,7 +5,10 @@
 // hybrid model is compared with).
 //
 // Per camera pixel (u, v) the undistorted camera ray is d = (xn, yn, 1)
-// (LensModel::pixel_to_normalised, skew included); the point is s d, s = Z.
+// (StereoCalibration::camera_ray: the camera's correction grid removed, then
+// LensModel::pixel_to_normalised, skew included); the point is s d, s = Z.
+// The projector's pixel of a point is its lens model's projection plus its
+// correction grid, when the calibration has one.
 //
 // x only (vertical fringes): the point must project to projector column x_p.
 //   The projector's distortion makes the set of points with column x_p a

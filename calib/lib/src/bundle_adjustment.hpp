@@ -1,0 +1,97 @@
+#pragma once
+// The stereo bundle adjustment behind stereo_calibrate (internal): a
+// Levenberg-Marquardt over any subset of the camera's and projector's lens
+// parameters, their correction grids, the camera-to-projector transform and
+// the board poses, with analytic Jacobians accumulated straight into the
+// normal equations (a correction grid touches 16 control points per
+// observation, a pose its own observations).
+//
+// Conventions as stereo_calibrate.hpp: X_c = R_i X_b + t_i per board pose i,
+// X_p = R X_c + T; rotations updated as R <- exp([w]x) R; residuals are
+// predicted - measured, px.
+
+#include "fpp/calib/correction_grid.hpp"
+#include "fpp/calib/stereo_calibrate.hpp"
+
+#include <Eigen/Dense>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace fpp::calib::detail {
+
+constexpr int kLensParameters = 10; // fu fv cu cv skew k1 k2 p1 p2 k3
+
+struct RigState {
+    LensModel camera, projector;
+    CorrectionGrid camera_grid, projector_grid; // empty: none
+    Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    Vec3 T{0, 0, 0};
+    std::vector<RigidPose> poses;
+};
+
+// A checkerboard corner seen by the camera (and by the projector, when
+// `projector` is finite).
+struct CornerObservation {
+    int pose = 0;
+    Vec3 board{};
+    Vec2 camera{};
+    Vec2 projector{};
+};
+
+// A point of the board at a known camera-frame position (placed by the
+// camera: its ray meets the board's plane) and the projector pixel decoded
+// there. Used only while the camera and the poses are held fixed.
+struct DenseObservation {
+    Vec3 camera_point{};
+    Vec2 projector{};
+    double weight = 1;
+};
+
+struct FreeParameters {
+    bool camera_lens = false, camera_grid = false;
+    bool projector_lens = false, projector_grid = false;
+    bool skew = true; // the skew of each free lens
+    bool stereo = false; // R, T
+    bool poses = false;
+    bool camera_observations = false, projector_observations = false;
+};
+
+struct GridRegularisation {
+    double smoothness = 0.01; // weight of each squared second difference (px^2 per px^2)
+    double ridge = 1e-4;      // weight of each squared control value
+};
+
+struct AdjustmentOutcome {
+    int iterations = 0;
+    double data_cost = 0; // sum of weighted squared residuals at the solution
+    int residuals = 0;    // residual rows (2 per observation)
+    int parameters = 0;   // free parameters
+    // Covariance of the free lens parameters per unit residual variance:
+    // camera then projector, kLensParameters each (0 where fixed).
+    std::array<double, 2 * kLensParameters> lens_variance{};
+};
+
+// Adjusts the free parameters of `state` in place. `pose_used[i]` false
+// leaves pose i's observations out. Throws std::runtime_error if the normal
+// equations cannot be solved at the start.
+AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& corners,
+                         const std::vector<DenseObservation>& dense,
+                         const std::vector<bool>& pose_used, const FreeParameters& free,
+                         const GridRegularisation& regularisation, int max_iterations,
+                         const std::function<void(const std::string&)>& progress);
+
+// Projection through a lens and its correction grid, with derivatives.
+struct Projection {
+    Vec2 pixel{};
+    double d_point[2][3]{};                // d pixel / d point (device frame, mm)
+    double d_lens[2][kLensParameters]{};   // d pixel / d lens parameters
+    int grid_index[CorrectionGrid::kSupport]{};
+    double grid_weight[CorrectionGrid::kSupport]{}; // d pixel_u / d du_k = d pixel_v / d dv_k
+};
+// False for a point not in front of the device (Z <= 0).
+bool project_with_derivatives(const LensModel& lens, const CorrectionGrid& grid, const Vec3& point,
+                              Projection& out);
+
+} // namespace fpp::calib::detail
