@@ -1,5 +1,6 @@
 // Lens model: distortion, its Jacobian, Newton undistortion over the whole
-// image for the paper's camera (strong k3 = 5.08) and projector, skew and the
+// image for the paper's camera (strong k3 = 5.08) and projector and for the
+// lenses of the rigs with defects, the decentred element, skew and the
 // Euler-angle convention.
 
 #include "fpp/lens_model.hpp"
@@ -70,6 +71,19 @@ LensModel lens_with_every_term() {
     l.s4 = 1e-4;
     l.t1 = 1e-3;
     l.t2 = 5e-4;
+    l.dc_k1 = 0.02;
+    l.dc_k2 = 0.15;
+    l.dc_x = 0.05;
+    l.dc_y = -0.45;
+    return l;
+}
+
+LensModel decentred_only() {
+    LensModel l;
+    l.dc_k1 = 0.03;
+    l.dc_k2 = -0.2;
+    l.dc_x = 0.12;
+    l.dc_y = -0.3;
     return l;
 }
 
@@ -120,6 +134,104 @@ TEST(LensModel, JacobianMatchesFiniteDifferences) {
     }
 }
 
+TEST(LensModel, DecentredElementMatchesTheFormula) {
+    const LensModel l = decentred_only();
+    const double x = 0.3, y = -0.2;
+    // Radial distortion about (0.12, -0.3), minus its value on the axis.
+    const double dx = x - 0.12, dy = y + 0.3, rho2 = dx * dx + dy * dy;
+    const double g = 0.03 * rho2 - 0.2 * rho2 * rho2;
+    const double rho2_axis = 0.12 * 0.12 + 0.3 * 0.3;
+    const double g_axis = 0.03 * rho2_axis - 0.2 * rho2_axis * rho2_axis;
+    const Vec2 d = l.distort({x, y});
+    EXPECT_NEAR(d[0], x + dx * g - (-0.12) * g_axis, 1e-15);
+    EXPECT_NEAR(d[1], y + dy * g - 0.3 * g_axis, 1e-15);
+    // The axis stays where it is; the element's centre moves by the axis offset only.
+    const Vec2 axis = l.distort({0, 0});
+    EXPECT_EQ(axis[0], 0);
+    EXPECT_EQ(axis[1], 0);
+    const Vec2 centre = l.distort({0.12, -0.3});
+    EXPECT_NEAR(centre[0], 0.12 + 0.12 * g_axis, 1e-15);
+    EXPECT_NEAR(centre[1], -0.3 - 0.3 * g_axis, 1e-15);
+    // Without dc_k1 and dc_k2 the centre alone changes nothing.
+    LensModel centre_only;
+    centre_only.dc_x = 0.2;
+    centre_only.dc_y = -0.1;
+    const Vec2 same = centre_only.distort({x, y});
+    EXPECT_EQ(same[0], x);
+    EXPECT_EQ(same[1], y);
+}
+
+// The header's claim: with dc_k2 = 0 the element is exactly k1 = dc_k1,
+// p1 = -dc_k1 dc_y, p2 = -dc_k1 dc_x plus dc_k1 (|e|^2 I + 2 e e^T) applied
+// to (x, y), e = (dc_x, dc_y): a linear map that the pinhole and the pose take.
+TEST(LensModel, DecentredSecondOrderPartIsRadialTangentialAndLinear) {
+    LensModel decentred;
+    decentred.dc_k1 = 0.05;
+    decentred.dc_x = 0.1;
+    decentred.dc_y = -0.25;
+    LensModel modelled;
+    modelled.k1 = 0.05;
+    modelled.p1 = -0.05 * -0.25;
+    modelled.p2 = -0.05 * 0.1;
+    const double ex = 0.1, ey = -0.25, e2 = ex * ex + ey * ey;
+    for (const Vec2 n : {Vec2{0.3, -0.2}, Vec2{-0.31, -0.41}, Vec2{0.12, 0.25}}) {
+        const Vec2 a = decentred.distort(n), b = modelled.distort(n);
+        const double lx = 0.05 * ((e2 + 2 * ex * ex) * n[0] + 2 * ex * ey * n[1]);
+        const double ly = 0.05 * (2 * ex * ey * n[0] + (e2 + 2 * ey * ey) * n[1]);
+        EXPECT_NEAR(a[0], b[0] + lx, 1e-15);
+        EXPECT_NEAR(a[1], b[1] + ly, 1e-15);
+    }
+}
+
+TEST(LensModel, DecentredJacobianMatchesCentralDifferences) {
+    const LensModel l = decentred_only();
+    // Including the element's centre (rho = 0) and points far from it.
+    for (const Vec2 n : {Vec2{0.0, 0.0}, Vec2{0.12, -0.3}, Vec2{0.3, -0.2}, Vec2{-0.33, -0.41},
+                         Vec2{0.33, 0.0}, Vec2{-0.2, 0.15}}) {
+        const fpp::Mat2 J = l.distortion_jacobian(n);
+        const double h = 1e-6;
+        const Vec2 xp = l.distort({n[0] + h, n[1]}), xm = l.distort({n[0] - h, n[1]});
+        const Vec2 yp = l.distort({n[0], n[1] + h}), ym = l.distort({n[0], n[1] - h});
+        EXPECT_NEAR(J[0], (xp[0] - xm[0]) / (2 * h), 1e-9) << n[0] << " " << n[1];
+        EXPECT_NEAR(J[1], (yp[0] - ym[0]) / (2 * h), 1e-9) << n[0] << " " << n[1];
+        EXPECT_NEAR(J[2], (xp[1] - xm[1]) / (2 * h), 1e-9) << n[0] << " " << n[1];
+        EXPECT_NEAR(J[3], (yp[1] - ym[1]) / (2 * h), 1e-9) << n[0] << " " << n[1];
+    }
+}
+
+TEST(LensModel, UnmodelledTermsAreReportedAndDropped) {
+    EXPECT_FALSE(fpp::sim::Rig::paper().projector.has_unmodelled_terms());
+    auto with = [](auto set) {
+        LensModel l = fpp::sim::Rig::paper().projector;
+        set(l);
+        return l;
+    };
+    const LensModel lenses[] = {with([](LensModel& l) { l.k4 = 0.01; }),
+                                with([](LensModel& l) { l.s2 = 1e-4; }),
+                                with([](LensModel& l) { l.t1 = 1e-4; }),
+                                with([](LensModel& l) { l.t2 = -1e-4; }),
+                                with([](LensModel& l) { l.dc_k1 = 0.01; }),
+                                with([](LensModel& l) { l.dc_k2 = -0.01; }),
+                                lens_with_every_term()};
+    for (LensModel l : lenses) {
+        EXPECT_TRUE(l.has_unmodelled_terms());
+        l.drop_unmodelled_terms();
+        EXPECT_FALSE(l.has_unmodelled_terms());
+        EXPECT_EQ(l.dc_x, 0);
+        EXPECT_EQ(l.dc_y, 0);
+        // What is left is the 5-coefficient lens.
+        const Vec2 a = l.distort({0.2, -0.3});
+        const Vec2 b = fpp::sim::Rig::paper().projector.distort({0.2, -0.3});
+        EXPECT_EQ(a[0], b[0]);
+        EXPECT_EQ(a[1], b[1]);
+    }
+    // The element's centre alone is no term: it distorts nothing.
+    LensModel centre_only;
+    centre_only.dc_x = 0.1;
+    centre_only.dc_y = -0.2;
+    EXPECT_FALSE(centre_only.has_unmodelled_terms());
+}
+
 TEST(LensModel, SkewEntersAsInTheHeader) {
     LensModel l;
     l.fu = 2000;
@@ -166,6 +278,25 @@ TEST(LensModel, RoundTripWithTermsOutsideTheCalibratedModel) {
     const RoundTrip r = round_trip_over_image(lens_with_every_term(), rig.projector_size, 8.0);
     EXPECT_EQ(r.failures, 0);
     EXPECT_LT(r.max_normalised, 1e-9);
+}
+
+// The camera and projector lenses of every rig with a lens defect, at full size.
+TEST(LensModel, DefectRigLensesRoundTripOverTheWholeImage) {
+    for (const auto& path :
+         {fpp::sim::lens_defects_rig_path(), fpp::sim::prism_projector_rig_path(),
+          fpp::sim::camera_defect_rig_path(), fpp::sim::decentred_projector_rig_path()}) {
+        const fpp::sim::Rig rig = fpp::sim::load_rig(path);
+        const RoundTrip camera = round_trip_over_image(rig.camera, rig.camera_size, 8.0);
+        const RoundTrip projector = round_trip_over_image(rig.projector, rig.projector_size, 8.0);
+        EXPECT_EQ(camera.failures, 0) << path;
+        EXPECT_LT(camera.max_normalised, 1e-9) << path;
+        EXPECT_LT(camera.max_pixel, 1e-9) << path;
+        EXPECT_EQ(projector.failures, 0) << path;
+        EXPECT_LT(projector.max_normalised, 1e-9) << path;
+        EXPECT_LT(projector.max_pixel, 1e-9) << path;
+        std::printf("%s: max round trip camera %.3g px, projector %.3g px\n", rig.name.c_str(),
+                    camera.max_pixel, projector.max_pixel);
+    }
 }
 
 TEST(LensModel, UndistortInvertsDistortToMachinePrecision) {

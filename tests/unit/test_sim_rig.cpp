@@ -1,5 +1,6 @@
 // Rig: the paper's Table 1, its geometry facts, the YAML files under
-// board/sim/ and the strictness of the rig reader.
+// board/sim/ (among them the rigs with lens defects) and the strictness of
+// the rig reader.
 
 #include "fpp/error.hpp"
 #include "fpp/sim/rig.hpp"
@@ -7,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -61,6 +63,10 @@ void expect_same_lens(const fpp::LensModel& a, const fpp::LensModel& b) {
     EXPECT_EQ(a.s4, b.s4);
     EXPECT_EQ(a.t1, b.t1);
     EXPECT_EQ(a.t2, b.t2);
+    EXPECT_EQ(a.dc_k1, b.dc_k1);
+    EXPECT_EQ(a.dc_k2, b.dc_k2);
+    EXPECT_EQ(a.dc_x, b.dc_x);
+    EXPECT_EQ(a.dc_y, b.dc_y);
 }
 
 void expect_same_geometry(const Rig& a, const Rig& b, double rotation_tolerance) {
@@ -193,6 +199,122 @@ TEST(SimRig, EffectsRigHasTheDocumentedEffects) {
     EXPECT_GT(shift(640, 0), 0.05);
 }
 
+// The paper's lenses within the 5-coefficient model, the effects of
+// paper-rig-effects.yaml (radiometry, defocus, noise), and the camera field
+// lit over the calibration volume (almost all of it at the plane scene's 480 mm).
+void expect_paper_family_with_effects(const Rig& r) {
+    const Rig paper = Rig::paper();
+    EXPECT_EQ(r.camera_size, paper.camera_size);
+    EXPECT_EQ(r.projector_size, paper.projector_size);
+    expect_same_lens(r.without_effects().camera, paper.camera);
+    expect_same_lens(r.without_effects().projector, paper.projector);
+    // r with the effects rig's sensor and projector optics is r itself.
+    const Rig e = fpp::sim::load_rig(fpp::sim::effects_rig_path());
+    Rig with_those_effects = r;
+    with_those_effects.sensor = e.sensor;
+    with_those_effects.projector_optics = e.projector_optics;
+    expect_same_rig(r, with_those_effects, 0.0);
+    EXPECT_GT(fraction_lit_at_depth(r, 480, 10), 0.99) << r.name;
+    for (double Z = 400; Z <= 560; Z += 20)
+        EXPECT_GT(fraction_lit_at_depth(r, Z, 10), 0.9) << r.name << " " << Z;
+}
+
+// Largest displacement (pixels) of the device's image that its unmodelled
+// terms cause, over the image's border and centre lines.
+double largest_unmodelled_shift(const fpp::LensModel& lens, fpp::Size size) {
+    fpp::LensModel modelled = lens;
+    modelled.drop_unmodelled_terms();
+    double largest = 0;
+    for (int i = 0; i <= 32; ++i)
+        for (int j = 0; j <= 32; j += 16) {
+            for (const Vec2 px :
+                 {Vec2{(size.width - 1) * i / 32.0, (size.height - 1) * j / 32.0},
+                  Vec2{(size.width - 1) * j / 32.0, (size.height - 1) * i / 32.0}}) {
+                Vec2 n{};
+                EXPECT_TRUE(modelled.pixel_to_normalised(px, n));
+                const Vec2 p = lens.project({n[0], n[1], 1});
+                largest = std::max(largest, std::hypot(p[0] - px[0], p[1] - px[1]));
+            }
+        }
+    return largest;
+}
+
+TEST(SimRig, PrismProjectorRigIsAsDocumented) {
+    const Rig r = fpp::sim::load_rig(fpp::sim::prism_projector_rig_path());
+    EXPECT_EQ(r.name, "rig-prism-projector");
+    expect_paper_family_with_effects(r);
+    EXPECT_FALSE(r.camera.has_unmodelled_terms());
+    EXPECT_EQ(r.projector.s1, 0.0006);
+    EXPECT_EQ(r.projector.s2, 0.033);
+    EXPECT_EQ(r.projector.s3, -0.0005);
+    EXPECT_EQ(r.projector.s4, -0.029);
+    EXPECT_EQ(r.projector.k4, 0);
+    EXPECT_EQ(r.projector.t1, 0);
+    EXPECT_EQ(r.projector.dc_k2, 0);
+    // Up to ~7 projector pixels at the corners.
+    const double shift = largest_unmodelled_shift(r.projector, r.projector_size);
+    EXPECT_GT(shift, 5);
+    EXPECT_LT(shift, 9);
+    // Left of the camera (the paper rig's projector is right of it), ~150 mm away.
+    const Vec3 c = r.projector_centre_in_camera();
+    EXPECT_NEAR(c[0], -115, 0.1);
+    EXPECT_NEAR(c[1], 40, 0.1);
+    EXPECT_NEAR(c[2], -90, 0.1);
+    EXPECT_NEAR(std::hypot(c[0], c[1], c[2]), 151.4, 0.1);
+}
+
+TEST(SimRig, CameraDefectRigIsAsDocumented) {
+    const Rig r = fpp::sim::load_rig(fpp::sim::camera_defect_rig_path());
+    EXPECT_EQ(r.name, "rig-camera-defect");
+    expect_paper_family_with_effects(r);
+    // The defect is on the camera; the projector has only modelled distortion.
+    EXPECT_FALSE(r.projector.has_unmodelled_terms());
+    EXPECT_EQ(r.camera.k4, 1.0);
+    EXPECT_EQ(r.camera.t1, 0.0035);
+    EXPECT_EQ(r.camera.t2, -0.0025);
+    const double shift = largest_unmodelled_shift(r.camera, r.camera_size);
+    EXPECT_GT(shift, 1.5);
+    EXPECT_LT(shift, 2.5);
+    // Right of and a little above the camera, ~300 mm away.
+    const Vec3 c = r.projector_centre_in_camera();
+    EXPECT_NEAR(c[0], 290, 0.1);
+    EXPECT_NEAR(c[1], -30, 0.1);
+    EXPECT_NEAR(c[2], -50, 0.1);
+}
+
+TEST(SimRig, DecentredProjectorRigIsAsDocumented) {
+    const Rig r = fpp::sim::load_rig(fpp::sim::decentred_projector_rig_path());
+    EXPECT_EQ(r.name, "rig-decentred-projector");
+    expect_paper_family_with_effects(r);
+    EXPECT_FALSE(r.camera.has_unmodelled_terms());
+    EXPECT_EQ(r.projector.dc_k1, 0.02);
+    EXPECT_EQ(r.projector.dc_k2, 0.15);
+    EXPECT_EQ(r.projector.dc_x, 0.05);
+    EXPECT_EQ(r.projector.dc_y, -0.45);
+    EXPECT_EQ(r.projector.k4, 0);
+    EXPECT_EQ(r.projector.s1, 0);
+    EXPECT_EQ(r.projector.t1, 0);
+    // The principal point stays put.
+    Vec2 n{};
+    ASSERT_TRUE(r.projector.pixel_to_normalised({r.projector.cu, r.projector.cv}, n));
+    EXPECT_LT(std::hypot(n[0], n[1]), 1e-12);
+    // Above the camera, with a horizontal baseline of 130 mm for the columns to
+    // triangulate with.
+    const Vec3 c = r.projector_centre_in_camera();
+    EXPECT_NEAR(c[0], 130, 0.1);
+    EXPECT_NEAR(c[1], -170, 0.1);
+    EXPECT_NEAR(c[2], -60, 0.1);
+    // Upside down, its columns still vertical in the camera frame: the
+    // projector's x axis is nearly horizontal (pointing to -x).
+    const fpp::Mat3 Rt = fpp::transpose(r.R);
+    EXPECT_LT(Rt[0], -0.95);
+    EXPECT_LT(std::fabs(Rt[3]), 0.05);
+    // Depth comes from the column: along a camera ray the column moves by many
+    // pixels over the volume (the plane scene's centre ray, 400 to 560 mm).
+    const Vec2 near = projector_pixel(r, {0, 0, 400}), far = projector_pixel(r, {0, 0, 560});
+    EXPECT_GT(std::fabs(far[0] - near[0]), 100);
+}
+
 TEST(SimRig, YamlRoundTripWithARotationMatrix) {
     fpp::test::TempDir dir;
     Rig r = fpp::sim::load_rig(fpp::sim::effects_rig_path());
@@ -205,6 +327,29 @@ TEST(SimRig, YamlRoundTripWithARotationMatrix) {
     const Rig back = fpp::sim::load_rig(path);
     EXPECT_EQ(back.name, r.name);
     expect_same_rig(back, r, 0.0);
+}
+
+TEST(SimRig, YamlRoundTripWithEveryUnmodelledTermOnBothLenses) {
+    fpp::test::TempDir dir;
+    Rig r = fpp::sim::load_rig(fpp::sim::decentred_projector_rig_path());
+    r.camera.k4 = 0.5;
+    r.camera.s2 = 1e-3;
+    r.camera.t1 = 2.5e-4;
+    r.camera.dc_k1 = 0.01;
+    r.camera.dc_k2 = -0.125;
+    r.camera.dc_x = -0.0625;
+    r.camera.dc_y = 0.1;
+    r.projector.s4 = -3e-3;
+    r.projector.dc_x = 1.0 / 3.0; // not a short decimal: written to round-trip exactly
+    const auto path = dir / "rig.yaml";
+    std::ofstream(path) << fpp::sim::rig_to_yaml(r);
+    expect_same_rig(fpp::sim::load_rig(path), r, 0.0);
+    // An element's centre without coefficients distorts nothing but is still written.
+    Rig centre_only = Rig::paper();
+    centre_only.camera.dc_x = 0.25;
+    centre_only.camera.dc_y = -0.5;
+    std::ofstream(path) << fpp::sim::rig_to_yaml(centre_only);
+    expect_same_rig(fpp::sim::load_rig(path), centre_only, 0.0);
 }
 
 TEST(SimRig, BinnedCameraKeepsTheRays) {
@@ -251,6 +396,42 @@ void expect_rejected(const std::string& yaml, const std::string& field) {
         EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
+}
+
+TEST(SimRigYaml, UnmodelledDistortionKeysAreCheckedOnBothLenses) {
+    const std::string camera_line = "  distortion: {k1: -0.12, k2: -0.52, k3: 5.08, p1: 0.0011, "
+                                    "p2: 0.0006}\n";
+    const std::string projector_line = "  distortion: {k1: 0.002, k2: -0.077, k3: -0.033, p1: "
+                                       "0.0004, p2: 0.0002}\n";
+    auto with_camera = [&](const std::string& map) {
+        return replaced(paper_yaml(), camera_line,
+                        camera_line + "  unmodelled_distortion: " + map + "\n");
+    };
+    auto with_projector = [&](const std::string& map) {
+        return replaced(paper_yaml(), projector_line,
+                        projector_line + "  unmodelled_distortion: " + map + "\n");
+    };
+    // Every key is accepted on either lens.
+    fpp::test::TempDir dir;
+    const std::string all = "{k4: 0.1, s1: 1e-4, s2: 2e-4, s3: 3e-4, s4: 4e-4, t1: 5e-4, t2: "
+                            "6e-4, dc_k1: 0.01, dc_k2: 0.02, dc_x: 0.03, dc_y: -0.04}";
+    for (const std::string& yaml : {with_camera(all), with_projector(all)}) {
+        std::ofstream(dir / "rig.yaml") << yaml;
+        const Rig r = fpp::sim::load_rig(dir / "rig.yaml");
+        const fpp::LensModel& l = r.camera.has_unmodelled_terms() ? r.camera : r.projector;
+        EXPECT_EQ(l.t2, 6e-4);
+        EXPECT_EQ(l.dc_k1, 0.01);
+        EXPECT_EQ(l.dc_k2, 0.02);
+        EXPECT_EQ(l.dc_x, 0.03);
+        EXPECT_EQ(l.dc_y, -0.04);
+    }
+    expect_rejected(with_camera("{dc_k2: .nan}"), "camera.unmodelled_distortion.dc_k2");
+    expect_rejected(with_projector("{dc_k1: 0.01, dc_x: .inf}"),
+                    "projector.unmodelled_distortion.dc_x");
+    expect_rejected(with_projector("{t1: nan}"), "projector.unmodelled_distortion.t1");
+    expect_rejected(with_camera("{dc_y: abc}"), "camera.unmodelled_distortion.dc_y");
+    expect_rejected(with_camera("{dc_k3: 0.1}"), "camera.unmodelled_distortion.dc_k3");
+    expect_rejected(with_projector("{k1: 0.1}"), "projector.unmodelled_distortion.k1");
 }
 
 TEST(SimRigYaml, RejectsUnknownKeys) {

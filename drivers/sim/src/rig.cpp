@@ -48,7 +48,8 @@ void read_lens(const Reader& in, const YAML::Node& node, const std::string& fiel
     const YAML::Node u = node["unmodelled_distortion"];
     if (u.IsDefined()) {
         const std::string ufield = child(field, "unmodelled_distortion");
-        in.expect_map(u, ufield, {"k4", "s1", "s2", "s3", "s4", "t1", "t2"});
+        in.expect_map(u, ufield,
+                      {"k4", "s1", "s2", "s3", "s4", "t1", "t2", "dc_k1", "dc_k2", "dc_x", "dc_y"});
         lens.k4 = in.real_value_or(u, ufield, "k4", 0);
         lens.s1 = in.real_value_or(u, ufield, "s1", 0);
         lens.s2 = in.real_value_or(u, ufield, "s2", 0);
@@ -56,6 +57,10 @@ void read_lens(const Reader& in, const YAML::Node& node, const std::string& fiel
         lens.s4 = in.real_value_or(u, ufield, "s4", 0);
         lens.t1 = in.real_value_or(u, ufield, "t1", 0);
         lens.t2 = in.real_value_or(u, ufield, "t2", 0);
+        lens.dc_k1 = in.real_value_or(u, ufield, "dc_k1", 0);
+        lens.dc_k2 = in.real_value_or(u, ufield, "dc_k2", 0);
+        lens.dc_x = in.real_value_or(u, ufield, "dc_x", 0);
+        lens.dc_y = in.real_value_or(u, ufield, "dc_y", 0);
     }
 }
 
@@ -109,19 +114,23 @@ void write_lens(std::ostringstream& out, const char* name, Size size, const Lens
         << "  distortion: {k1: " << format_real(l.k1) << ", k2: " << format_real(l.k2)
         << ", k3: " << format_real(l.k3) << ", p1: " << format_real(l.p1)
         << ", p2: " << format_real(l.p2) << "}\n";
-    if (l.has_unmodelled_terms())
+    // Also when only the decentred element's centre is set, so that it survives a round trip.
+    if (l.has_unmodelled_terms() || l.dc_x != 0 || l.dc_y != 0)
         out << "  unmodelled_distortion: {k4: " << format_real(l.k4)
             << ", s1: " << format_real(l.s1) << ", s2: " << format_real(l.s2)
             << ", s3: " << format_real(l.s3) << ", s4: " << format_real(l.s4)
-            << ", t1: " << format_real(l.t1) << ", t2: " << format_real(l.t2) << "}\n";
+            << ", t1: " << format_real(l.t1) << ", t2: " << format_real(l.t2)
+            << ", dc_k1: " << format_real(l.dc_k1) << ", dc_k2: " << format_real(l.dc_k2)
+            << ", dc_x: " << format_real(l.dc_x) << ", dc_y: " << format_real(l.dc_y) << "}\n";
 }
 
 void check_lens(const std::filesystem::path& origin, const std::string& field, Size size,
                 const LensModel& l) {
     if (size.width < 2 || size.height < 2 || size.width > 65536 || size.height > 65536)
         throw InputError(origin, field + ".width", "image size must be 2..65536 pixels per side");
-    const double all[] = {l.fu, l.fv, l.cu, l.cv, l.skew, l.k1, l.k2, l.k3, l.p1,
-                          l.p2, l.k4, l.s1, l.s2, l.s3,   l.s4, l.t1, l.t2};
+    const double all[] = {l.fu, l.fv, l.cu, l.cv,    l.skew,  l.k1,   l.k2,
+                          l.k3, l.p1, l.p2, l.k4,    l.s1,    l.s2,   l.s3,
+                          l.s4, l.t1, l.t2, l.dc_k1, l.dc_k2, l.dc_x, l.dc_y};
     for (double v : all)
         if (!std::isfinite(v))
             throw InputError(origin, field, "non-finite lens parameter");
@@ -331,6 +340,18 @@ std::filesystem::path effects_rig_path() {
 
 std::filesystem::path lens_defects_rig_path() {
     return std::filesystem::path(FPP_BOARD_DIR) / "sim" / "paper-rig-lens-defects.yaml";
+}
+
+std::filesystem::path prism_projector_rig_path() {
+    return std::filesystem::path(FPP_BOARD_DIR) / "sim" / "rig-prism-projector.yaml";
+}
+
+std::filesystem::path camera_defect_rig_path() {
+    return std::filesystem::path(FPP_BOARD_DIR) / "sim" / "rig-camera-defect.yaml";
+}
+
+std::filesystem::path decentred_projector_rig_path() {
+    return std::filesystem::path(FPP_BOARD_DIR) / "sim" / "rig-decentred-projector.yaml";
 }
 
 } // namespace fpp::sim

@@ -5,12 +5,33 @@
 namespace fpp {
 
 bool LensModel::has_unmodelled_terms() const {
-    return k4 != 0 || s1 != 0 || s2 != 0 || s3 != 0 || s4 != 0 || t1 != 0 || t2 != 0;
+    return k4 != 0 || s1 != 0 || s2 != 0 || s3 != 0 || s4 != 0 || t1 != 0 || t2 != 0 ||
+           dc_k1 != 0 || dc_k2 != 0;
 }
 
 void LensModel::drop_unmodelled_terms() {
     k4 = s1 = s2 = s3 = s4 = t1 = t2 = 0;
+    dc_k1 = dc_k2 = dc_x = dc_y = 0;
 }
+
+namespace {
+
+// The decentred element's radial profile g(rho2) = dc_k1 rho2 + dc_k2 rho2^2.
+double decentred_profile(const LensModel& l, double rho2) {
+    return rho2 * (l.dc_k1 + l.dc_k2 * rho2);
+}
+
+// Its displacement at normalised (x, y), minus the one at the axis (0, 0).
+Vec2 decentred_displacement(const LensModel& l, double x, double y) {
+    if (l.dc_k1 == 0 && l.dc_k2 == 0)
+        return {0, 0};
+    const double dx = x - l.dc_x, dy = y - l.dc_y;
+    const double g = decentred_profile(l, dx * dx + dy * dy);
+    const double g_axis = decentred_profile(l, l.dc_x * l.dc_x + l.dc_y * l.dc_y);
+    return {dx * g + l.dc_x * g_axis, dy * g + l.dc_y * g_axis};
+}
+
+} // namespace
 
 Vec2 LensModel::distort(Vec2 n) const {
     const double x = n[0], y = n[1];
@@ -21,7 +42,8 @@ Vec2 LensModel::distort(Vec2 n) const {
                       t1 * d2 + 2 * t2 * x * y;
     const double yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + r2 * (s3 + s4 * r2) +
                       t2 * d2 - 2 * t1 * x * y;
-    return {xd, yd};
+    const Vec2 decentred = decentred_displacement(*this, x, y);
+    return {xd + decentred[0], yd + decentred[1]};
 }
 
 Mat2 LensModel::distortion_jacobian(Vec2 n) const {
@@ -40,7 +62,14 @@ Mat2 LensModel::distortion_jacobian(Vec2 n) const {
     const double dyx = y * dradial * 2 * x + p1 * 2 * x + 2 * p2 * y + dprism_y * 2 * x + tb;
     const double dyy =
         radial + y * dradial * 2 * y + p1 * 6 * y + 2 * p2 * x + dprism_y * 2 * y - ta;
-    return {dxx, dxy, dyx, dyy};
+    // Decentred element: d(d_i g(rho2))/d(x_j) = g delta_ij + 2 d_i d_j g'(rho2),
+    // with (d_x, d_y) = (x - dc_x, y - dc_y); its axis offset is a constant.
+    const double ddx = x - dc_x, ddy = y - dc_y;
+    const double rho2 = ddx * ddx + ddy * ddy;
+    const double g = decentred_profile(*this, rho2);
+    const double dg = dc_k1 + 2 * dc_k2 * rho2;
+    return {dxx + g + 2 * ddx * ddx * dg, dxy + 2 * ddx * ddy * dg, dyx + 2 * ddy * ddx * dg,
+            dyy + g + 2 * ddy * ddy * dg};
 }
 
 Vec2 LensModel::distorted_to_pixel(Vec2 d) const {

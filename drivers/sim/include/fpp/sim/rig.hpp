@@ -68,5 +68,11 @@ std::filesystem::path default_rig_path();
 std::filesystem::path effects_rig_path();
 // board/sim/paper-rig-lens-defects.yaml in the source tree.
 std::filesystem::path lens_defects_rig_path();
+// board/sim/rig-prism-projector.yaml: thin-prism projector lens, short baseline.
+std::filesystem::path prism_projector_rig_path();
+// board/sim/rig-camera-defect.yaml: the camera lens has the defect.
+std::filesystem::path camera_defect_rig_path();
+// board/sim/rig-decentred-projector.yaml: decentred projector element, projector above.
+std::filesystem::path decentred_projector_rig_path();
 
 } // namespace fpp::sim
