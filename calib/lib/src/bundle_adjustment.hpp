@@ -59,7 +59,7 @@ struct FreeParameters {
 };
 
 struct GridRegularisation {
-    double smoothness = 0.01; // weight of each squared second difference (px^2 per px^2)
+    double smoothness = 1;    // weight of each squared second difference (px^2 per px^2)
     double ridge = 1e-4;      // weight of each squared control value
 };
 

@@ -286,6 +286,39 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         }
     };
 
+    // Drops the dense samples further from the projector model than
+    // max(5 robust sigmas, 0.5 px); returns how many.
+    const auto drop_dense_outliers = [&]() -> std::size_t {
+        if (dense.empty())
+            return 0;
+        StereoCalibration model;
+        model.projector = s.projector;
+        model.projector_correction = s.projector_grid;
+        model.R = s.R;
+        model.T = s.T;
+        std::vector<double> error(dense.size());
+        for (std::size_t k = 0; k < dense.size(); ++k) {
+            const Vec2 up = model.projector_pixel(dense[k].camera_point);
+            error[k] = std::hypot(up[0] - dense[k].projector[0], up[1] - dense[k].projector[1]);
+        }
+        std::vector<double> sorted = error;
+        std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(sorted.size() / 2),
+                         sorted.end());
+        // The median of a 2D Gaussian error's magnitude is 1.1774 sigma.
+        const double limit = std::max(5 * sorted[sorted.size() / 2] / 1.1774, 0.5);
+        std::size_t kept = 0;
+        for (std::size_t k = 0; k < dense.size(); ++k)
+            if (error[k] <= limit) {
+                dense[kept] = dense[k];
+                dense_origin[kept] = dense_origin[k];
+                ++kept;
+            }
+        const std::size_t dropped = dense.size() - kept;
+        dense.resize(kept);
+        dense_origin.resize(kept);
+        return dropped;
+    };
+
     std::vector<bool> used(poses.size(), true);
     detail::AdjustmentOutcome camera_outcome, projector_outcome;
     for (int round = 0; round < 2; ++round) {
@@ -313,6 +346,15 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             projector_outcome = detail::adjust(s, corners, dense, used, free, regularisation,
                                                options.max_iterations, options.progress);
             result.iterations += camera_outcome.iterations + projector_outcome.iterations;
+            // Dense samples off the model (the board's edge against a wall
+            // behind it, a speck on the board) are dropped, once.
+            if (const std::size_t dropped = drop_dense_outliers(); dropped > 0) {
+                say("  again without " + std::to_string(dropped) +
+                    " dense samples off the model");
+                projector_outcome = detail::adjust(s, corners, dense, used, free, regularisation,
+                                                   options.max_iterations, options.progress);
+                result.iterations += projector_outcome.iterations;
+            }
         } else {
             say(round == 0 ? "joint bundle adjustment (both devices, skew " +
                                  std::string(options.skew ? "estimated" : "fixed at 0") + ")"

@@ -81,6 +81,14 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
 
     const std::vector<Vec3> board_points =
         checkerboard_points(columns, rows, result.board.square_size);
+    const bool dense = options.dense_samples &&
+                       options.stereo.procedure == StereoProcedure::camera_first;
+    const int dense_step =
+        options.dense_step_px > 0
+            ? options.dense_step_px
+            : std::max(2, static_cast<int>(std::lround(
+                              std::sqrt(double(result.camera_size.area()) / 8000.0))));
+    std::vector<PoseObservations> observations(folders.size());
     for (std::size_t p = 0; p < folders.size(); ++p) {
         SessionPose pose;
         pose.folder = folders[p];
@@ -117,6 +125,10 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
             result.poses.push_back(std::move(pose));
             continue;
         }
+        if (dense)
+            dense_projector_samples(decoded, bright_board_mask(decoded, true, options.bright),
+                                    dense_step, observations[p].dense_camera,
+                                    observations[p].dense_projector);
         for (int m = 0; m < kCornerMethods; ++m) {
             ProjectorCornerOptions o = options.corners;
             o.method = static_cast<CornerMethod>(m);
@@ -168,22 +180,23 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
         result.poses.push_back(std::move(pose));
     }
 
-    std::vector<PoseObservations> observations;
     std::string skipped;
+    std::vector<PoseObservations> used_observations;
     for (std::size_t p = 0; p < result.poses.size(); ++p) {
         const SessionPose& pose = result.poses[p];
         if (!pose.usable) {
             skipped += "\n  " + pose.name + ": " + pose.skip_reason;
             continue;
         }
-        PoseObservations o;
+        PoseObservations& o = observations[p];
         o.name = pose.name;
         o.board = board_points;
         o.camera = pose.corners.points;
         o.projector = pose.projector[static_cast<std::size_t>(result.method)].points;
-        observations.push_back(std::move(o));
+        used_observations.push_back(std::move(o));
         result.calibrated.push_back(static_cast<int>(p));
     }
+    observations = std::move(used_observations);
     if (observations.size() < 3)
         throw InputError(session, "",
                          "only " + std::to_string(observations.size()) + " of " +

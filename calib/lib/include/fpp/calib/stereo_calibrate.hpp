@@ -72,7 +72,7 @@ struct StereoOptions {
     StereoProcedure procedure = StereoProcedure::joint;
     GridSize camera_grid{};
     GridSize projector_grid{};
-    double grid_smoothness = 0.01; // weight of each squared second difference of a grid (px^2)
+    double grid_smoothness = 1;    // weight of each squared second difference of a grid (px^2)
     double grid_ridge = 1e-4;      // weight of each squared control value (px^2)
     bool skew = true;           // estimate skew for both devices (else fixed at 0)
     bool drop_outliers = false; // drop outlying poses and refine again

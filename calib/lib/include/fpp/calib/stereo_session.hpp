@@ -16,6 +16,7 @@
 // phase on x or y (both projector coordinates are needed), a capture that
 // cannot be read or decoded, fewer than 3 usable poses.
 
+#include "fpp/calib/board_samples.hpp"
 #include "fpp/calib/corner_projector.hpp"
 #include "fpp/calib/corners.hpp"
 #include "fpp/calib/stereo_calibrate.hpp"
@@ -40,6 +41,12 @@ struct StereoSessionOptions {
     DecodeOptions decode;
     // A pose needs projector coordinates for at least this fraction of its corners.
     double min_projector_corner_fraction = 0.5;
+    // Dense samples of the boards' bright parts for the projector (camera-first
+    // procedure): one every `dense_step_px` pixels (0: a step giving about
+    // 8000 grid points per pose) where `bright` keeps the pixel.
+    bool dense_samples = true;
+    int dense_step_px = 0;
+    BrightBoardOptions bright;
     std::function<void(const std::string&)> progress;
 };
 
