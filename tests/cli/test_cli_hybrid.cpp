@@ -71,7 +71,7 @@ TEST(CliHybrid, TableFromPlanesReconstructsAScan) {
     const fpp::CoefficientTable loaded = fpp::load_table(table, &camera);
     EXPECT_EQ(loaded.info().model, fpp::TableModel::rational);
     for (const char* f : {"summary.md", "poses.csv", "fit-rms-x.png", "fit-rms-y.png",
-                          "fit-rms-z.png", "pose-count.png", "plane-residuals.png"})
+                          "fit-rms-z.png", "samples.png", "sigma-z.png", "plane-residuals.png"})
         EXPECT_TRUE(fs::exists(report / f)) << f;
 
     const fs::path scan = dir / "scan", cloud = dir / "cloud.ply";

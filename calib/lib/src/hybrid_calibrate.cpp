@@ -4,6 +4,8 @@
 #include "fpp/calib/hybrid_calibrate.hpp"
 
 #include "fpp/calib/session_folder.hpp"
+#include "hybrid_fit.hpp"
+#include "phase_smoothing.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/error.hpp"
 #include "fpp/parallel.hpp"
@@ -79,47 +81,6 @@ double signed_distance(const BoardPlane& plane, const float* q) {
            plane.normal[2] * double(q[2]) - plane.d;
 }
 
-// Quadratic Savitzky-Golay smoothing of a flat board's phase map, separable:
-// rows, then columns. Weights of the centre value of a quadratic fit to
-// 2r + 1 equally spaced samples: (3(3r^2 + 3r - 1) - 15 k^2) / ((2r-1)(2r+1)(2r+3)).
-// A sample is smoothed only when its whole window is finite; else it keeps
-// its value.
-void smooth_phase(Image<float>& phase, int r, ThreadPool& pool) {
-    if (r <= 0)
-        return;
-    const int w = phase.width(), h = phase.height();
-    std::vector<double> weight(static_cast<std::size_t>(2 * r + 1));
-    const double den = double(2 * r - 1) * double(2 * r + 1) * double(2 * r + 3);
-    for (int k = -r; k <= r; ++k)
-        weight[static_cast<std::size_t>(k + r)] =
-            (3.0 * (3.0 * r * r + 3.0 * r - 1.0) - 15.0 * k * k) / den;
-    // Pass 1 along rows into `rows` (NaN where the window is incomplete).
-    Image<float> rows(phase.size(), 1, kNaN);
-    pool.parallel_for(h, 8, [&](int y0, int y1, int) {
-        for (int y = y0; y < y1; ++y) {
-            const float* in = phase.row(y);
-            float* out = rows.row(y);
-            for (int x = r; x < w - r; ++x) {
-                double sum = 0;
-                for (int k = -r; k <= r; ++k)
-                    sum += weight[static_cast<std::size_t>(k + r)] * double(in[x + k]);
-                out[x] = static_cast<float>(sum); // NaN if any sample is NaN
-            }
-        }
-    });
-    // Pass 2 along columns of `rows`, into phase where complete.
-    pool.parallel_for(h, 8, [&](int y0, int y1, int) {
-        for (int y = std::max(y0, r); y < std::min(y1, h - r); ++y)
-            for (int x = r; x < w - r; ++x) {
-                double sum = 0;
-                for (int k = -r; k <= r; ++k)
-                    sum += weight[static_cast<std::size_t>(k + r)] * double(rows.at(x, y + k));
-                if (std::isfinite(sum))
-                    phase.at(x, y) = static_cast<float>(sum);
-            }
-    });
-}
-
 float percentile(std::vector<float> values, double q) {
     if (values.empty())
         return kNaN;
@@ -129,6 +90,26 @@ float percentile(std::vector<float> values, double q) {
 }
 
 } // namespace
+
+const char* to_string(HybridSamples samples) {
+    switch (samples) {
+    case HybridSamples::boards_and_model:
+        return "boards+model";
+    case HybridSamples::boards:
+        return "boards";
+    case HybridSamples::model:
+        return "model";
+    }
+    return "?";
+}
+
+HybridSamples parse_hybrid_samples(const std::string& name) {
+    for (const HybridSamples s :
+         {HybridSamples::boards_and_model, HybridSamples::boards, HybridSamples::model})
+        if (name == to_string(s))
+            return s;
+    throw std::invalid_argument("unknown samples '" + name + "' (boards+model, boards, model)");
+}
 
 void HybridOptions::validate() const {
     auto bad = [](const std::string& field, const std::string& why) {
@@ -152,6 +133,17 @@ void HybridOptions::validate() const {
         bad("min_usable_poses", "at least 4 plane poses are needed for a cubic");
     if (threads < 0)
         bad("threads", "must not be negative");
+    if (model_samples < 2 || model_samples > 64)
+        bad("model_samples", "must be in [2, 64]");
+    if (!(model_depth_margin_mm >= 0 && model_depth_margin_mm <= 100))
+        bad("model_depth_margin_mm", "must be in [0, 100] mm");
+    if (!(max_sample_deviation_px > 0))
+        bad("max_sample_deviation_px", "must be positive");
+    if (!(min_lit_fraction > 0 && min_lit_fraction <= 1))
+        bad("min_lit_fraction", "must be in (0, 1]");
+    if (!(square_size_tolerance > 0 && square_size_tolerance < 0.5))
+        bad("square_size_tolerance", "must be in (0, 0.5)");
+    bright.validate();
 }
 
 bool fit_board_plane(Image<float>& xyz, const HybridOptions& options, BoardPlane& plane,
@@ -245,18 +237,30 @@ std::string HybridResult::summary() const {
     s.setf(std::ios::fixed);
     s.precision(4);
     const TableInfo& info = table.info();
+    const bool checkerboard = board == BoardDescription::Kind::checkerboard;
     s << "hybrid model: " << to_string(info.model) << ", camera " << size_text(info.camera)
       << ", tiles " << info.tile_width << " x " << info.tile_height << "\n";
+    if (checkerboard)
+        s << "procedure: checkerboards placed by the camera; fitted to " << to_string(samples)
+          << "\n";
+    else
+        s << "procedure: flat boards placed by SV (the paper's)\n";
     s << "poses: " << usable_poses << " of " << poses.size() << " used\n";
     for (const HybridPose& p : poses) {
         s << "  " << p.name << ": ";
-        if (p.usable)
+        if (!p.usable)
+            s << "rejected: " << p.skip_reason << "\n";
+        else if (checkerboard)
+            s << "board at " << std::setprecision(1) << p.distance_mm << " mm, tilt "
+              << p.tilt_deg << " deg, corners " << std::setprecision(4) << p.corner_rms_px
+              << " px, " << p.samples << " samples; SV plane " << std::setprecision(4)
+              << p.sv_offset_mm << " mm, " << p.sv_angle_deg << " deg from the camera's, SV RMS "
+              << p.plane_rms_mm << " mm about it\n";
+        else
             s << p.points << " points, plane at " << std::setprecision(1) << p.distance_mm
               << " mm, tilt " << p.tilt_deg << " deg, plane RMS " << std::setprecision(4)
               << p.plane_rms_mm << " mm, max " << p.plane_max_mm << " mm, " << p.outliers
               << " outliers\n";
-        else
-            s << "rejected: " << p.skip_reason << "\n";
     }
     const std::size_t total = pose_count.pixel_count();
     s << "pixels modelled: " << pixels_modelled << " of " << total << " (" << std::setprecision(2)
@@ -275,6 +279,14 @@ std::string HybridResult::summary() const {
     line("X", rms_x);
     line("Y", rms_y);
     line("Z", rms_z);
+    {
+        std::vector<float> v;
+        for (std::size_t i = 0; i < sigma_z.pixel_count(); ++i)
+            if (std::isfinite(sigma_z.data()[i]))
+                v.push_back(sigma_z.data()[i]);
+        s << "predicted depth sigma of the table (mm): median " << percentile(v, 0.5) << ", 99 % "
+          << percentile(v, 0.99) << "\n";
+    }
     s << "time: poses " << std::setprecision(2) << seconds_poses << " s, fit " << seconds_fit
       << " s, total " << seconds_total << " s\n";
     return s.str();
@@ -300,13 +312,16 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
             options.progress(s);
     };
     const SessionFolder folder = read_session_folder(
-        session, BoardDescription::Kind::plane, {Axis::x}, "hybrid calibration",
+        session, std::nullopt, {Axis::x}, "hybrid calibration",
         "the hybrid model maps the projector column (vertical fringes) to X, Y, Z");
     if (calibration.sizes_known() && !(calibration.camera_size == folder.camera_size))
         throw InputError(folder.poses.front() / "capture.yaml", "camera",
                          "camera size " + size_text(folder.camera_size) +
                              " differs from the calibration's " +
                              size_text(calibration.camera_size));
+    if (folder.board.kind == BoardDescription::Kind::checkerboard)
+        return detail::calibrate_hybrid_checkerboard(folder, calibration, calibration_hash,
+                                                     options, models);
     StereoCalibration calib = calibration;
     if (!calib.sizes_known()) {
         calib.camera_size = folder.camera_size;
@@ -316,6 +331,7 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
     const Size camera = folder.camera_size;
 
     HybridResult common; // the poses, shared by every model's result
+    common.board = BoardDescription::Kind::plane;
     std::vector<PoseSamples> samples;
     // Reading the next pose's PNG frames overlaps decoding and SV of this one.
     auto read_pose = [](const fs::path& f) { return read_capture_set(f); };
@@ -370,7 +386,7 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
                 std::acos(std::clamp(plane.normal[2], -1.0, 1.0)) * 180.0 / std::numbers::pi;
             PoseSamples s;
             s.phase = std::move(decoded.proj_x);
-            smooth_phase(s.phase, options.phase_smoothing_radius,
+            smooth_phase(s.phase, options.phase_smoothing_radius, IncompleteWindow::keep,
                          ThreadPool::shared(options.threads));
             // Only pixels with an SV point on the plane give a sample (not
             // those of something standing on the board).
@@ -396,22 +412,40 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
                              std::to_string(options.min_usable_poses) + " are needed");
 
     // Every model is fitted from the same decoded, reconstructed poses.
+    return detail::fit_hybrid_models(common, samples, sv.camera_rays(), folder.projector_size,
+                                     calibration_hash, options, models, {});
+}
+
+namespace detail {
+
+std::vector<HybridResult> fit_hybrid_models(const HybridResult& common,
+                                            const std::vector<PoseSamples>& samples,
+                                            const Image<float>& rays, Size projector,
+                                            std::uint64_t calibration_hash,
+                                            const HybridOptions& options,
+                                            const std::vector<TableModel>& models,
+                                            const ModelSampleSource& model_source) {
+    const bool plane_session = common.board == BoardDescription::Kind::plane;
     std::vector<HybridResult> results;
     for (const TableModel model : models) {
-        say(std::string("fitting the ") + to_string(model) + " model per pixel (" +
-            std::to_string(common.usable_poses) + " poses)");
+        if (options.progress)
+            options.progress(std::string("fitting the ") + to_string(model) +
+                             " model per pixel (" + std::to_string(common.usable_poses) +
+                             " poses)");
         const auto t_fit = std::chrono::steady_clock::now();
         HybridResult result;
         result.poses = common.poses;
         result.usable_poses = common.usable_poses;
         result.seconds_poses = common.seconds_poses;
+        result.board = common.board;
+        result.samples = common.samples;
         TableInfo info;
-        info.camera = camera;
+        info.camera = rays.size();
         info.tile_width = options.tile_width;
         info.tile_height = options.tile_height;
         info.model = model;
         info.phase_axis = Axis::x;
-        info.projector = folder.projector_size;
+        info.projector = projector;
         info.calibration_hash = calibration_hash;
         info.created_unix_s =
             static_cast<std::int64_t>(std::chrono::duration_cast<std::chrono::seconds>(
@@ -419,12 +453,18 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
                                           .count());
         PixelFitOptions fit;
         fit.model = model;
-        fit.correction = model == TableModel::polynomial ? PlaneCorrection::perpendicular_foot
-                                                         : PlaneCorrection::along_ray;
+        fit.correction = plane_session && model == TableModel::polynomial
+                             ? PlaneCorrection::perpendicular_foot
+                             : PlaneCorrection::along_ray;
         fit.min_samples = options.min_poses;
         fit.max_condition = options.max_condition;
         fit.threads = options.threads;
-        PixelFit pixels = fit_pixel_models(samples, sv.camera_rays(), info, fit);
+        if (!plane_session && options.samples != HybridSamples::boards) {
+            fit.model_samples = model_source;
+            fit.model_sample_count = options.model_samples;
+            fit.board_weight = options.samples == HybridSamples::model ? 0.0 : 1.0;
+        }
+        PixelFit pixels = fit_pixel_models(samples, rays, info, fit);
         result.table = std::move(pixels.table);
         result.rms_x = std::move(pixels.rms_x);
         result.rms_y = std::move(pixels.rms_y);
@@ -440,5 +480,7 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
     }
     return results;
 }
+
+} // namespace detail
 
 } // namespace fpp::calib

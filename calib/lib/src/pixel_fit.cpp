@@ -103,6 +103,11 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
         if (perpendicular && s.sv_depth.size() != camera)
             throw std::invalid_argument("pixel fit: the perpendicular correction needs SV depth");
     }
+    const int model_count = options.model_samples ? std::max(0, options.model_sample_count) : 0;
+    if (perpendicular && model_count > 0)
+        throw std::invalid_argument("pixel fit: model samples lie along the ray");
+    if (!(options.board_weight > 0) && model_count == 0)
+        throw std::invalid_argument("pixel fit: no samples are fitted (board weight 0, no model)");
     const TableModel model = info.model;
     const bool along_ray = !perpendicular;
     PixelFit result;
@@ -122,8 +127,9 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
     pool.parallel_for(camera.height, 4, [&](int row_begin, int row_end, int worker) {
         // Per pixel and pose: normalised phase t, the point X, Y, Z and the
         // weight (scratch allocated once per chunk of rows).
-        std::vector<double> phase(pose_count), t(pose_count), X(pose_count), Y(pose_count),
-            Z(pose_count), w(pose_count), wz(pose_count);
+        const std::size_t capacity = pose_count + std::size_t(model_count);
+        std::vector<double> phase(capacity), t(capacity), X(capacity), Y(capacity), Z(capacity),
+            w(capacity), wz(capacity);
         const auto wk = static_cast<std::size_t>(worker);
         const auto cubic_row = [&](std::size_t k, double* r) {
             r[0] = 1;
@@ -166,7 +172,7 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
                     if (!std::isfinite(Z[n]))
                         continue;
                     phase[n] = p;
-                    w[n] = weight;
+                    w[n] = weight * options.board_weight;
                     lo = std::min(lo, p);
                     hi = std::max(hi, p);
                     ++n;
@@ -176,6 +182,23 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
                 if (n < static_cast<std::size_t>(options.min_samples)) {
                     ++too_few[wk];
                     continue;
+                }
+                const std::size_t board_n = n;
+                if (model_count > 0) {
+                    double z_near = Z[0], z_far = Z[0];
+                    for (std::size_t k = 1; k < n; ++k) {
+                        z_near = std::min(z_near, Z[k]);
+                        z_far = std::max(z_far, Z[k]);
+                    }
+                    const int added = options.model_samples(u, v, z_near, z_far, &phase[n], &Z[n],
+                                                            model_count);
+                    for (int k = 0; k < added; ++k, ++n) {
+                        X[n] = xn * Z[n];
+                        Y[n] = yn * Z[n];
+                        w[n] = options.model_weight;
+                        lo = std::min(lo, phase[n]);
+                        hi = std::max(hi, phase[n]);
+                    }
                 }
                 const double centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
                 if (!(half > 0)) {
@@ -190,7 +213,6 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
                 double* cy = coeffs[1];
                 double* cz = coeffs[model == TableModel::polynomial ? 2 : 0];
                 bool ok = true;
-                const double* wfit = w.data();
                 if (model == TableModel::polynomial) {
                     const double* values[3] = {X.data(), Y.data(), Z.data()};
                     ok = least_squares(4, n, cubic_row, 3, values, w.data(),
@@ -225,28 +247,38 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
                     const double num = cubic(cz, tk);
                     return model == TableModel::rational ? num / (1 + cz[4] * tk) : num;
                 };
-                double sum2[3] = {0, 0, 0}, wsum = 0;
+                // Fit RMS over the board samples (the measurement the table is
+                // judged by); the depth sigma from the fitted samples' residuals
+                // (unbiased) times the mean leverage p / n.
+                double board2[3] = {0, 0, 0}, fit2 = 0, wsum = 0;
+                std::size_t fitted = 0;
                 for (std::size_t k = 0; k < n; ++k) {
                     const double dz = z_model(t[k]) - Z[k];
-                    if (along_ray) {
-                        sum2[0] += wfit[k] * dz * dz * xn * xn;
-                        sum2[1] += wfit[k] * dz * dz * yn * yn;
-                    } else {
-                        const double dx = cubic(cx, t[k]) - X[k], dy = cubic(cy, t[k]) - Y[k];
-                        sum2[0] += wfit[k] * dx * dx;
-                        sum2[1] += wfit[k] * dy * dy;
+                    if (k < board_n) {
+                        if (along_ray) {
+                            board2[0] += dz * dz * xn * xn;
+                            board2[1] += dz * dz * yn * yn;
+                        } else {
+                            const double dx = cubic(cx, t[k]) - X[k],
+                                         dy = cubic(cy, t[k]) - Y[k];
+                            board2[0] += dx * dx;
+                            board2[1] += dy * dy;
+                        }
+                        board2[2] += dz * dz;
                     }
-                    sum2[2] += wfit[k] * dz * dz;
-                    wsum += wfit[k];
+                    if (w[k] > 0) {
+                        fit2 += w[k] * dz * dz;
+                        wsum += w[k];
+                        ++fitted;
+                    }
                 }
-                result.rms_x.data()[i] = static_cast<float>(std::sqrt(sum2[0] / wsum));
-                result.rms_y.data()[i] = static_cast<float>(std::sqrt(sum2[1] / wsum));
-                result.rms_z.data()[i] = static_cast<float>(std::sqrt(sum2[2] / wsum));
-                // Residual sigma (unbiased) times the mean leverage p / n.
-                const double dof = double(n) - double(unknowns);
+                const auto nb = double(board_n);
+                result.rms_x.data()[i] = static_cast<float>(std::sqrt(board2[0] / nb));
+                result.rms_y.data()[i] = static_cast<float>(std::sqrt(board2[1] / nb));
+                result.rms_z.data()[i] = static_cast<float>(std::sqrt(board2[2] / nb));
+                const double dof = double(fitted) - double(unknowns);
                 result.sigma_z.data()[i] =
-                    dof > 0 ? static_cast<float>(std::sqrt(sum2[2] / wsum * double(n) / dof *
-                                                           double(unknowns) / double(n)))
+                    dof > 0 ? static_cast<float>(std::sqrt(fit2 / wsum / dof * double(unknowns)))
                             : kNaN;
                 const auto put = [&](int plane, double value) {
                     table.set(plane, u, v, static_cast<float>(value));

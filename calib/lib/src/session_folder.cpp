@@ -48,7 +48,8 @@ std::vector<fs::path> capture_folders(const fs::path& session) {
     return out;
 }
 
-SessionFolder read_session_folder(const fs::path& session, BoardDescription::Kind kind,
+SessionFolder read_session_folder(const fs::path& session,
+                                  std::optional<BoardDescription::Kind> kind,
                                   const std::vector<Axis>& axes, const std::string& purpose,
                                   const std::string& axes_reason) {
     SessionFolder s;
@@ -59,9 +60,9 @@ SessionFolder read_session_folder(const fs::path& session, BoardDescription::Kin
     if (!fs::exists(board_file))
         throw InputError(board_file, "", "missing: a session needs board.yaml (fpp-board/1)");
     s.board = read_board(board_file);
-    if (s.board.kind != kind)
+    if (kind && s.board.kind != *kind)
         throw InputError(board_file, "kind",
-                         purpose + " needs a " + kind_text(kind) + " (this board is a " +
+                         purpose + " needs a " + kind_text(*kind) + " (this board is a " +
                              kind_text(s.board.kind) + ")");
     s.poses = capture_folders(session);
     if (s.poses.empty())

@@ -220,6 +220,7 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
     }
     result.seconds_calibration = since(t_cal);
     result.stereo.calibration.origin = "fpp-calib stereo " + session.string();
+    result.stereo.calibration.board_square_size = result.board.square_size;
     result.seconds_total = since(t_start);
     return result;
 }

@@ -1,57 +1,66 @@
 #pragma once
-// The paper's hybrid calibration: flat-board poses reconstructed by SV,
-// corrected onto their best planes, then per camera pixel a cubic from phase
-// to the corrected coordinates, stored as a coefficient table
-// (fpp/coefficient_table.hpp).
+// Hybrid calibration: board poses whose planes are known, then per camera
+// pixel a model from phase to X, Y, Z (pixel_fit.hpp), stored as a
+// coefficient table (fpp/coefficient_table.hpp). The board kind in the
+// session's board.yaml decides the procedure:
+//
+// kind: checkerboard (camera-anchored, the default of the tools): each
+//   pose's plane comes from the camera alone: its corners and the
+//   calibration's camera model (intrinsics and correction grid, which the
+//   camera-first stereo procedure estimates from the camera's corners only)
+//   place the board. Samples where each pixel's ray meets that plane, on the
+//   board's bright parts (board_samples.hpp: white squares and margin, away
+//   from dark/bright edges, low modulation dropped), smoothed on each pose
+//   (window not reaching a dark square); samples further than
+//   max_sample_deviation_px from the stereo model's column are not on the
+//   board (a wall behind it) and are dropped. The stereo model then adds
+//   samples along each pixel's ray over the depth range its boards reached
+//   (`samples`): the poses between the boards. One session of about 30
+//   checkerboard poses with fringes in x and y thus gives the stereo
+//   calibration and the table. A pose is rejected, with its reason, when its
+//   board is not found, the projector lights too little of it, or too few
+//   of its pixels give a sample.
+//
+// kind: plane (the paper's procedure): flat white boards reconstructed by SV
+//   with the calibration, each corrected onto its own best plane. That plane
+//   carries whatever depth offset and tilt the stereo calibration has.
+//   Per pose: decode, SV reconstruction with the projector column only (the
+//   paper's SV), a robust least-squares plane (orthogonal distances; points
+//   farther than max(outlier_sigmas x the robust sigma, outlier_floor_mm)
+//   are dropped and the plane refitted). A pose is rejected, with its reason,
+//   when too few camera pixels get a point or too many points lie off the
+//   plane (a box on the board, a bent board).
 //
 // Conventions: camera frame, mm; phase = decoded projector column (projector
 // px, vertical fringes, as the paper); planes n . X = d with |n| = 1 and
 // n_z > 0 (facing away from the camera).
 //
-// Per pose (a session of `kind: plane` boards): decode, SV reconstruction
-// with the projector column only (the paper's SV), a robust least-squares
-// plane (orthogonal distances; points farther than max(outlier_sigmas x the
-// robust sigma, outlier_floor_mm) are dropped and the plane refitted). A pose
-// is rejected, with its reason, when too few camera pixels get a point or too
-// many points lie off the plane (a box on the board, a bent board).
-//
 // Correction of each point onto its pose's plane, by model:
-//   polynomial  the paper's: along the plane normal (perpendicular foot);
-//               X, Y and Z each get a cubic in phase.
-//   ray         along the pixel's camera ray (the camera's rays are the
-//               better-known lines of an SV calibration: the corrected point
-//               stays on its pixel's line of sight); only Z gets a cubic,
-//               X = xn Z and Y = yn Z with the pixel's ray (xn, yn): half the
-//               table.
+//   polynomial  the paper's: along the plane normal (perpendicular foot) for
+//               plane sessions, along the ray for checkerboard sessions; X,
+//               Y and Z each get a cubic in phase.
+//   ray         along the pixel's camera ray (the corrected point stays on
+//               its pixel's line of sight); only Z gets a cubic, X = xn Z and
+//               Y = yn Z with the pixel's ray (xn, yn): half the table.
 //   rational    as ray, with Z = cubic / (1 + d t) (the default): along a
 //               ray, depth is a ratio of linear functions of the projector
 //               column for a pinhole projector, which a cubic follows only to
 //               about 0.02 mm (0.06 mm at worst) over the paper's 130 mm deep
 //               volume; the rational form follows it exactly and leaves the
-//               cubic the lens distortion. On the virtual scanner the median
-//               per-pixel fit RMS drops from 0.019 to 0.005 mm, and the
-//               inclined plane's flatness from 0.014 (ray) and 0.015 mm
-//               (polynomial) to 0.010 mm.
+//               cubic the lens distortion.
 //
-// Before the fits each pose's phase map is smoothed (phase_smoothing_radius):
-// the board is flat and evenly white, so its phase varies smoothly over the
-// image, while the phase noise of each pixel (about 0.03 px on the paper rig)
-// would otherwise go straight into that pixel's cubic, which has only one
-// sample per pose to average it. A local quadratic least-squares fit
-// (separable Savitzky-Golay, window 2r + 1) keeps any quadratic variation of
-// the phase exactly and divides the noise by about 7 at r = 7. Pixels whose
-// window is not complete (image border, holes) keep their own phase. 0 = the
-// paper's raw per-pixel samples.
-//
-// Per pixel the phase is normalised to t in [-1, 1] over the range of its
-// poses, and the cubics are least-squares fits in double precision. A pixel
-// gets no model (NaN centre in the table) when fewer than `min_poses` poses
-// give it a point or its normal equations are ill-conditioned (samples
-// bunched at one phase).
+// Before the fits each pose's phase map is smoothed (phase_smoothing_radius,
+// a local quadratic fit; 0 = the paper's raw per-pixel samples). Per pixel
+// the phase is normalised to t in [-1, 1] over the range of its samples; a
+// pixel gets no model (NaN centre in the table) when fewer than `min_poses`
+// poses give it a sample or its fit is ill-conditioned; a phase outside the
+// calibrated range gives no point (no extrapolation).
 
+#include "fpp/calib/board_samples.hpp"
 #include "fpp/calib/pixel_fit.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
+#include "fpp/capture_set.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/decoder.hpp"
 #include "fpp/image.hpp"
@@ -64,6 +73,16 @@
 #include <vector>
 
 namespace fpp::calib {
+
+// What a checkerboard session's tables are fitted to.
+enum class HybridSamples {
+    boards_and_model, // the boards' samples and the stereo model's between them (default)
+    boards,           // the boards' samples alone
+    model,            // the stereo model's samples alone, over the boards' depth range
+};
+// "boards+model", "boards", "model"; parse throws std::invalid_argument otherwise.
+const char* to_string(HybridSamples samples);
+HybridSamples parse_hybrid_samples(const std::string& name);
 
 struct HybridOptions {
     TableModel model = TableModel::rational;
@@ -78,6 +97,14 @@ struct HybridOptions {
     double max_outlier_fraction = 0.02; // more points off the plane: pose rejected
     double min_pose_coverage = 0.25;    // fraction of camera pixels with a point
     int min_usable_poses = 4;
+    // Checkerboard sessions.
+    HybridSamples samples = HybridSamples::boards_and_model;
+    int model_samples = 8;            // per pixel, evenly over its boards' depth range
+    double model_depth_margin_mm = 5; // the range extended by this on each side
+    BrightBoardOptions bright;
+    double max_sample_deviation_px = 1.0; // from the stereo model's column: not on the board
+    double min_lit_fraction = 0.5;    // of the board's squares' area decoded, else rejected
+    double square_size_tolerance = 0.002; // relative, against the calibration's board
     int tile_width = 32;
     int tile_height = 8;
     DecodeOptions decode;
@@ -96,9 +123,21 @@ struct HybridPose {
     std::string skip_reason;
     std::size_t points = 0;   // SV points
     std::size_t outliers = 0; // points dropped from the plane fit
-    BoardPlane plane;
-    double plane_rms_mm = 0; // inliers, orthogonal
-    double plane_max_mm = 0; // largest |distance| among inliers
+    BoardPlane plane;         // the plane the samples are put on
+    // Plane sessions: inliers about their own plane, orthogonal. Checkerboard
+    // sessions: the SV points of the board's bright parts about the camera's
+    // plane (how far the stereo model is from where the camera puts it).
+    double plane_rms_mm = 0;
+    double plane_max_mm = 0; // largest |distance| among those points
+    // Checkerboard sessions: the board's camera-only placement against the
+    // stereo model's best plane through its SV points: the SV plane's
+    // signed distance from the board's centre along the normal (mm, > 0:
+    // SV puts the board further away) and the angle between the normals.
+    double sv_offset_mm = 0;
+    double sv_angle_deg = 0;
+    double corner_rms_px = 0;  // the camera's reprojection RMS of the corners at this pose
+    double lit_fraction = 0;   // of the board's squares' area decoded
+    std::size_t samples = 0;   // pixels given a sample
     double distance_mm = 0;  // plane's depth on the optical axis, d / n_z
     double tilt_deg = 0;     // angle between the normal and the optical axis
     double seconds = 0;      // read, decode, SV and plane fit
@@ -117,18 +156,22 @@ struct HybridResult {
     std::size_t pixels_too_few_poses = 0;
     std::size_t pixels_ill_conditioned = 0;
     double seconds_poses = 0, seconds_fit = 0, seconds_total = 0;
+    BoardDescription::Kind board = BoardDescription::Kind::plane; // the procedure used
+    HybridSamples samples = HybridSamples::boards; // what was fitted (checkerboard sessions)
 
     // A few lines: model, poses used and rejected (with reasons), pixels
     // modelled, fit RMS percentiles, times.
     std::string summary() const;
 };
 
-// Calibrates from a session folder (board.yaml kind plane, one capture set per
-// pose with phase along x). `calibration_hash` is stored in the table
-// (fnv1a64 of the calibration file). Throws InputError naming the file and
-// field for bad input (no session, wrong board kind, no x phase, sizes that
-// differ from each other or from the calibration, fewer than
-// min_usable_poses usable poses), std::invalid_argument for bad options.
+// Calibrates from a session folder (board.yaml and one capture set per pose
+// with phase along x; the board kind decides the procedure).
+// `calibration_hash` is stored in the table (fnv1a64 of the calibration
+// file). Throws InputError naming the file and field for bad input (no
+// session, no x phase, sizes that differ from each other or from the
+// calibration, a square size that differs from the calibration's board,
+// fewer than min_usable_poses usable poses), std::invalid_argument for bad
+// options.
 HybridResult calibrate_hybrid(const std::filesystem::path& session,
                               const StereoCalibration& calibration,
                               std::uint64_t calibration_hash, const HybridOptions& options = {});

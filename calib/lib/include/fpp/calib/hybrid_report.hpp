@@ -2,8 +2,11 @@
 // Report of a hybrid calibration: summary.md (Markdown) and PNG figures:
 //   fit-rms-x.png, fit-rms-y.png, fit-rms-z.png  per-pixel fit RMS maps (mm)
 //                                                with a colour bar (the paper's Fig. 5)
-//   pose-count.png                               poses that gave each pixel a sample
+//   sigma-z.png                                  predicted depth sigma of the table (mm)
+//   samples.png                                  board samples per pixel
 //   plane-residuals.png                          per-pose plane-fit RMS and max (mm)
+//   sv-offsets.png                               checkerboard sessions: per pose, the
+//                                                stereo model's plane against the camera's
 //   poses.csv                                    one row per pose
 
 #include "fpp/calib/hybrid_calibrate.hpp"

@@ -15,6 +15,8 @@
 //                       plane: Z = d / (n . (xn, yn, 1)), X = xn Z, Y = yn Z
 //   perpendicular_foot  the paper's: the SV point (xn z, yn z, z) moved onto
 //                       the plane along its normal (needs sv_depth)
+// A stereo model can add samples (ModelSampleSource) over the depth range
+// that a pixel's board samples reached, filling the poses between them.
 // Per pixel the phase is normalised to t in [-1, 1] over the range of its
 // samples; the fits are weighted least squares in double precision
 // (models: coefficient_table.hpp; rational by Sanathanan-Koerner, a second
@@ -29,6 +31,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace fpp::calib {
@@ -48,10 +51,26 @@ struct PoseSamples {
 
 enum class PlaneCorrection { along_ray, perpendicular_foot };
 
+// Samples of one pixel from a stereo model, for the checkerboard procedure:
+// the pixel (u, v) and the depth range [z_near, z_far] its board samples
+// reached; writes up to `capacity` pairs (projector column, depth along the
+// pixel's ray) and returns how many.
+using ModelSampleSource = std::function<int(int u, int v, double z_near, double z_far,
+                                            double* phase, double* depth, int capacity)>;
+
 struct PixelFitOptions {
     TableModel model = TableModel::rational;
     PlaneCorrection correction = PlaneCorrection::along_ray;
-    int min_samples = 6;
+    int min_samples = 6; // board samples a pixel needs
+    // Weight of each board sample in the fit (the pose's weight image
+    // scales it); 0: board samples only set a pixel's coverage and depth
+    // range, the model's samples alone are fitted.
+    double board_weight = 1;
+    // Model samples added to every pixel with enough board samples (along
+    // the ray only), each of weight model_weight.
+    ModelSampleSource model_samples;
+    int model_sample_count = 0;
+    double model_weight = 1;
     // Largest ratio of the normal equations' largest to smallest pivot.
     double max_condition = 1e7;
     int tile_width = 32;
@@ -74,8 +93,9 @@ struct PixelFit {
 // `rays`: the camera's undistorted ray (xn, yn) per pixel, 2 channels (NaN
 // where unknown); `info`: the table's layout (camera size, tiles, model,
 // axis, projector, hash, time). Every PoseSamples image has the camera's
-// size. Throws std::invalid_argument for sizes that disagree or a
-// perpendicular_foot correction without sv_depth.
+// size. Throws std::invalid_argument for sizes that disagree, a
+// perpendicular_foot correction without sv_depth or with model samples, or
+// board_weight 0 without model samples.
 PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<float>& rays,
                           const TableInfo& info, const PixelFitOptions& options);
 

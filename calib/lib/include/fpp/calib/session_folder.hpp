@@ -8,6 +8,7 @@
 #include "fpp/capture_set.hpp"
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,13 +24,15 @@ struct SessionFolder {
 };
 
 // Reads board.yaml and every pose's manifest and checks that they agree:
-// `kind` is the board that `purpose` (e.g. "stereo calibration") needs,
+// `kind` is the board that `purpose` (e.g. "stereo calibration") needs (any
+// when empty),
 // every pose has the same camera and projector sizes and a phase block along
 // each axis in `axes` (`axes_reason` says why, for the message). Throws InputError naming the file and the
 // field: no folder, no board.yaml, another board kind, no capture sets,
 // differing sizes, a missing phase axis.
 SessionFolder read_session_folder(const std::filesystem::path& session,
-                                  BoardDescription::Kind kind, const std::vector<Axis>& axes,
+                                  std::optional<BoardDescription::Kind> kind,
+                                  const std::vector<Axis>& axes,
                                   const std::string& purpose,
                                   const std::string& axes_reason);
 

@@ -69,9 +69,9 @@ struct GridSize {
 };
 
 struct StereoOptions {
-    StereoProcedure procedure = StereoProcedure::joint;
-    GridSize camera_grid{};
-    GridSize projector_grid{};
+    StereoProcedure procedure = StereoProcedure::camera_first;
+    GridSize camera_grid{12, 9};
+    GridSize projector_grid{12, 8};
     double grid_smoothness = 1;    // weight of each squared second difference of a grid (px^2)
     double grid_ridge = 1e-4;      // weight of each squared control value (px^2)
     bool skew = true;           // estimate skew for both devices (else fixed at 0)
