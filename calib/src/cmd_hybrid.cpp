@@ -1,5 +1,6 @@
 // fpp-calib hybrid SESSION --calib calib.yaml --out table.fpt [--report DIR]
 //                         [--model rational|ray|polynomial] [--min-poses N]
+//                         [--samples boards+model|boards|model]
 
 #include "cli_util.hpp"
 #include "commands.hpp"
@@ -24,6 +25,7 @@ struct HybridArgs {
     std::string out;
     std::string report;
     std::string model = "rational";
+    std::string samples = "boards+model";
     int min_poses = 6;
     int threads = 0;
 };
@@ -42,6 +44,7 @@ int run_hybrid(const HybridArgs& args) {
     HybridOptions options;
     options.model = parse_table_model(args.model);
     options.min_poses = args.min_poses;
+    options.samples = parse_hybrid_samples(args.samples);
     options.threads = args.threads;
     options.decode.threads = args.threads;
     options.sv.threads = args.threads;
@@ -62,10 +65,13 @@ Action add_hybrid_command(CLI::App& app) {
     auto args = std::make_shared<HybridArgs>();
     auto* cmd = app.add_subcommand(
         "hybrid",
-        "Fit the hybrid model from a session of flat-board poses (board.yaml with kind plane, one "
-        "capture set per pose, vertical fringes): each pose reconstructed by SV with --calib, "
-        "corrected onto its best plane, then per camera pixel a cubic from projector column to "
-        "X, Y, Z; writes the coefficient table the scanner loads (.fpt)");
+        "Fit the hybrid model per camera pixel, from phase (projector column) to X, Y, Z, and "
+        "write the coefficient table the scanner loads (.fpt). The session's board.yaml decides "
+        "the procedure. kind checkerboard (one session of about 30 poses with fringes in x and y, "
+        "the same as for `stereo`): each board is placed by the camera alone with --calib's "
+        "camera model, the samples are where the pixels' rays meet it on its white parts, and "
+        "the stereo model adds samples between the boards; kind plane (the paper's): flat "
+        "white boards reconstructed by SV with --calib and corrected onto their best planes");
     cmd->add_option("session", args->session, "session folder")->required();
     cmd->add_option("--calib", args->calib, "stereo calibration file")
         ->required()
@@ -84,6 +90,13 @@ Action add_hybrid_command(CLI::App& app) {
                     "polynomial: the paper's perpendicular correction, cubics for X, Y, Z")
         ->capture_default_str()
         ->check(CLI::IsMember({"rational", "ray", "polynomial"}));
+    cmd->add_option("--samples", args->samples,
+                    "checkerboard sessions: what the tables are fitted to: the boards' samples "
+                    "and the stereo model's between them (boards+model), the boards' alone "
+                    "(boards), or the stereo model's alone over the depths the boards reached "
+                    "(model)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"boards+model", "boards", "model"}));
     cmd->add_option("--min-poses", args->min_poses,
                     "poses a pixel needs for a model (at least 4)")
         ->capture_default_str()

@@ -219,14 +219,14 @@ class Problem {
                 if (!project_with_derivatives(s.camera, s.camera_grid, xc, p))
                     return std::numeric_limits<double>::infinity();
                 const double ru = p.pixel[0] - o.camera[0], rv = p.pixel[1] - o.camera[1];
-                cost += ru * ru + rv * rv;
+                cost += free_.camera_weight * (ru * ru + rv * rv);
                 rows += 2;
                 if (derivatives) {
                     row.count = 0;
                     add_device(row, layout, p, layout.camera_lens(), layout.camera_grid(),
                                free_.camera_grid);
                     add_rigid(row, layout, layout.pose(o.pose), p.d_point, rotated);
-                    normal->accumulate(row, ru, rv, 1.0);
+                    normal->accumulate(row, ru, rv, free_.camera_weight);
                 }
             }
             if (free_.projector_observations && std::isfinite(o.projector[0]) &&
@@ -236,7 +236,7 @@ class Problem {
                 if (!project_with_derivatives(s.projector, s.projector_grid, xp, p))
                     return std::numeric_limits<double>::infinity();
                 const double ru = p.pixel[0] - o.projector[0], rv = p.pixel[1] - o.projector[1];
-                cost += ru * ru + rv * rv;
+                cost += free_.projector_weight * (ru * ru + rv * rv);
                 rows += 2;
                 if (derivatives) {
                     row.count = 0;
@@ -247,25 +247,28 @@ class Problem {
                     double dX[2][3];
                     chain_rotation(p.d_point, s.R, dX);
                     add_rigid(row, layout, layout.pose(o.pose), dX, rotated);
-                    normal->accumulate(row, ru, rv, 1.0);
+                    normal->accumulate(row, ru, rv, free_.projector_weight);
                 }
             }
         }
         if (free_.projector_observations)
             for (const DenseObservation& o : dense_) {
+                if (o.pose >= 0 && !used_[std::size_t(o.pose)])
+                    continue;
                 const Vec3 rc = mul(s.R, o.camera_point);
                 const Vec3 xp = add(rc, s.T);
                 if (!project_with_derivatives(s.projector, s.projector_grid, xp, p))
                     return std::numeric_limits<double>::infinity();
                 const double ru = p.pixel[0] - o.projector[0], rv = p.pixel[1] - o.projector[1];
-                cost += o.weight * (ru * ru + rv * rv);
+                const double weight = o.weight * free_.dense_weight;
+                cost += weight * (ru * ru + rv * rv);
                 rows += 2;
                 if (derivatives) {
                     row.count = 0;
                     add_device(row, layout, p, layout.projector_lens(), layout.projector_grid(),
                                free_.projector_grid);
                     add_stereo(row, layout, p, rc);
-                    normal->accumulate(row, ru, rv, o.weight);
+                    normal->accumulate(row, ru, rv, weight);
                 }
             }
         if (normal)
@@ -273,10 +276,11 @@ class Problem {
         if (residual_rows)
             *residual_rows = rows;
         if (free_.camera_grid)
-            cost += regularise(s.camera_grid, camera_gauge_, layout, layout.camera_grid(), normal);
+            cost += regularise(s.camera_grid, camera_gauge_, reg_.camera_smoothness, layout,
+                               layout.camera_grid(), normal);
         if (free_.projector_grid)
-            cost += regularise(s.projector_grid, projector_gauge_, layout, layout.projector_grid(),
-                               normal);
+            cost += regularise(s.projector_grid, projector_gauge_, reg_.projector_smoothness,
+                               layout, layout.projector_grid(), normal);
         return cost;
     }
 
@@ -387,10 +391,13 @@ class Problem {
     // Smoothness and ridge terms of one grid (each coordinate alone), and
     // its gauge: no component along the gauge fields.
     double regularise(const CorrectionGrid& grid, const std::vector<std::vector<Vec2>>& gauge,
-                      const Layout& layout, int offset, Normal* normal) const {
+                      double smoothness, const Layout& layout, int offset,
+                      Normal* normal) const {
         double cost = 0;
         const std::vector<Vec2>& v = grid.values();
-        constexpr double kGaugeWeight = 1e6;
+        // Far above every observation's weight: a constraint, not a preference.
+        const double kGaugeWeight =
+            1e6 * std::max({1.0, free_.camera_weight, free_.projector_weight, free_.dense_weight});
         for (const std::vector<Vec2>& f : gauge) {
             double dot = 0;
             for (std::size_t k = 0; k < v.size(); ++k)
@@ -418,16 +425,16 @@ class Problem {
                     double diff = 0;
                     for (int k = 0; k < n; ++k)
                         diff += c[k] * v[std::size_t(idx[k])][std::size_t(axis)];
-                    cost += reg_.smoothness * diff * diff;
+                    cost += smoothness * diff * diff;
                     if (!normal)
                         return;
                     for (int a = 0; a < n; ++a) {
                         const int ca = layout.column(offset + 2 * idx[a] + axis);
-                        normal->g(ca) += reg_.smoothness * c[a] * diff;
+                        normal->g(ca) += smoothness * c[a] * diff;
                         for (int b = 0; b < n; ++b) {
                             const int cb = layout.column(offset + 2 * idx[b] + axis);
                             if (ca >= cb)
-                                normal->A(ca, cb) += reg_.smoothness * c[a] * c[b];
+                                normal->A(ca, cb) += smoothness * c[a] * c[b];
                         }
                     }
                 });
@@ -504,6 +511,31 @@ bool project_with_derivatives(const LensModel& lens, const CorrectionGrid& grid,
             out.d_lens[r][c] = M[r][0] * dp_dl[0][c] + M[r][1] * dp_dl[1][c];
     }
     return std::isfinite(out.pixel[0]) && std::isfinite(out.pixel[1]);
+}
+
+Linearisation linearise(const RigState& state, const std::vector<CornerObservation>& corners,
+                        const std::vector<DenseObservation>& dense,
+                        const std::vector<bool>& pose_used, const FreeParameters& free,
+                        const GridRegularisation& regularisation, const RigState* start) {
+    const Layout layout(state, free, pose_used);
+    const Problem problem(start ? *start : state, corners, dense, pose_used, free,
+                          regularisation);
+    Normal normal;
+    normal.reset(layout.columns());
+    Linearisation out;
+    out.cost = problem.evaluate(state, layout, &normal);
+    out.gradient.assign(normal.g.data(), normal.g.data() + normal.g.size());
+    return out;
+}
+
+void apply_increment(RigState& state, const std::vector<bool>& pose_used,
+                     const FreeParameters& free, const std::vector<double>& step) {
+    const Layout layout(state, free, pose_used);
+    std::vector<double> full(std::size_t(layout.size()), 0.0);
+    for (int k = 0; k < layout.size(); ++k)
+        if (const int c = layout.column(k); c >= 0)
+            full[std::size_t(k)] = step.at(std::size_t(c));
+    layout.apply(state, full);
 }
 
 AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& corners,

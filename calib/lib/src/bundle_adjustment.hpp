@@ -40,13 +40,16 @@ struct CornerObservation {
     Vec2 projector{};
 };
 
-// A point of the board at a known camera-frame position (placed by the
-// camera: its ray meets the board's plane) and the projector pixel decoded
-// there. Used only while the camera and the poses are held fixed.
+// A point of a board's bright parts at a known camera-frame position
+// (placed by the camera: the ray of camera pixel `camera` meets pose
+// `pose`'s plane) and the projector pixel decoded there. Used while the
+// camera and the poses are held.
 struct DenseObservation {
     Vec3 camera_point{};
     Vec2 projector{};
     double weight = 1;
+    int pose = -1;
+    Vec2 camera{};
 };
 
 struct FreeParameters {
@@ -56,11 +59,18 @@ struct FreeParameters {
     bool stereo = false; // R, T
     bool poses = false;
     bool camera_observations = false, projector_observations = false;
+    // Weight of each kind of observation (1 / its noise variance, px^-2):
+    // camera corners, projector corners, dense samples. The grids'
+    // regularisation weights are in the same units.
+    double camera_weight = 1, projector_weight = 1, dense_weight = 1;
 };
 
 struct GridRegularisation {
-    double smoothness = 1;    // weight of each squared second difference (px^2 per px^2)
-    double ridge = 1e-4;      // weight of each squared control value
+    // Weight of each squared second difference of a grid's control values
+    // (px^-2, the units of the observations' weights): 1 / the variance of
+    // the curvature a lens defect is expected to have at the grid's spacing.
+    double camera_smoothness = 1e4, projector_smoothness = 1e3;
+    double ridge = 1e-4; // weight of each squared control value (px^-2)
 };
 
 struct AdjustmentOutcome {
@@ -81,6 +91,25 @@ AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& 
                          const std::vector<bool>& pose_used, const FreeParameters& free,
                          const GridRegularisation& regularisation, int max_iterations,
                          const std::function<void(const std::string&)>& progress);
+
+// The cost (weighted squared residuals and regularisation) at `state` and
+// its gradient with respect to the free parameters, g = J^T W r (half the
+// cost's derivative), in the adjustment's parameter order; with
+// apply_increment, what the tests check the analytic Jacobians with.
+struct Linearisation {
+    double cost = 0;
+    std::vector<double> gradient;
+};
+// The grids' gauge (the fields they must not hold) comes from `start`'s
+// lenses, as in an adjustment that started there (`state` when null).
+Linearisation linearise(const RigState& state, const std::vector<CornerObservation>& corners,
+                        const std::vector<DenseObservation>& dense,
+                        const std::vector<bool>& pose_used, const FreeParameters& free,
+                        const GridRegularisation& regularisation,
+                        const RigState* start = nullptr);
+// Adds `step` (free parameters, the same order) to `state`.
+void apply_increment(RigState& state, const std::vector<bool>& pose_used,
+                     const FreeParameters& free, const std::vector<double>& step);
 
 // Projection through a lens and its correction grid, with derivatives.
 struct Projection {

@@ -216,7 +216,7 @@ Vec3 euler_deg_from_rotation(const Mat3& R) {
     return {a * 180 / kPi, b * 180 / kPi, c * 180 / kPi};
 }
 
-std::string calibration_summary(const SessionResult& r) {
+std::string calibration_summary(const SessionResult& r, const HeldOutCheck* held_out) {
     const StereoCalibration& c = r.stereo.calibration;
     std::ostringstream s;
     s << "# Stereo calibration\n\n";
@@ -236,15 +236,38 @@ std::string calibration_summary(const SessionResult& r) {
     s << "| OpenCV initialisation (per device, skew 0) | " << fmt(r.stereo.initial_camera_rms, 4)
       << " | " << fmt(r.stereo.initial_projector_rms, 4) << " |\n";
     const bool skew_on = r.stereo.skew_estimated;
-    s << "| joint bundle adjustment, skew " << (skew_on ? "estimated" : "fixed at 0")
+    const std::string procedure = std::string(to_string(r.stereo.procedure)) + " bundle adjustment";
+    s << "| " << procedure << ", skew " << (skew_on ? "estimated" : "fixed at 0")
       << " (saved) | " << fmt(c.camera_rms, 4) << " | " << fmt(c.projector_rms, 4) << " |\n";
     if (r.other_skew) {
         const StereoCalibration& o = r.other_skew->calibration;
-        s << "| joint bundle adjustment, skew " << (skew_on ? "fixed at 0" : "estimated")
+        s << "| " << procedure << ", skew " << (skew_on ? "fixed at 0" : "estimated")
           << " (comparison) | " << fmt(o.camera_rms, 4) << " | " << fmt(o.projector_rms, 4)
           << " |\n";
     }
     s << "\nLM iterations: " << r.stereo.iterations << "\n\n";
+    s << "Procedure: " << to_string(r.stereo.procedure)
+      << (r.stereo.procedure == StereoProcedure::joint
+              ? " (both devices and the boards together, the paper's)"
+              : " (the camera from its corners alone places the boards; the projector is "
+                "calibrated against them)")
+      << ".  \n";
+    const auto grid_text = [](const CorrectionGrid& g) {
+        return g.empty() ? std::string("none")
+                         : std::to_string(g.columns()) + " x " + std::to_string(g.rows()) +
+                               " control points, largest displacement " +
+                               fmt(g.largest_control_value(), 3) + " px";
+    };
+    s << "Correction grids: camera " << grid_text(c.camera_correction) << "; projector "
+      << grid_text(c.projector_correction) << ".  \n";
+    if (r.stereo.dense_rms >= 0) {
+        std::size_t samples = 0;
+        for (const PoseObservations& o : r.observations)
+            samples += o.dense_camera.size();
+        s << "Dense samples of the boards' bright parts: " << samples
+          << ", projector residual RMS " << fmt(r.stereo.dense_rms, 4) << " px.\n";
+    }
+    s << "\n";
 
     s << "## Poses\n\n| pose | finder | texture | projector corners | camera RMS (px) | projector "
          "RMS (px) | "
@@ -333,19 +356,37 @@ std::string calibration_summary(const SessionResult& r) {
         s << " |\n";
     }
 
+    if (held_out) {
+        s << "\n## Held-out poses\n\nEach pose left out in turn, the pair calibrated from the "
+             "others, the left-out board's corners measured by SV (x and y) and compared with "
+             "the board: rigid fit RMS (3D, mm), scale error, and the error of every "
+             "corner-to-corner length at least half the board's diagonal.\n\n"
+             "| pose | corners | distance (mm) | fit RMS (mm) | scale error (ppm) | length error "
+             "RMS (mm) | largest (mm) |\n|---|---:|---:|---:|---:|---:|---:|\n";
+        for (const HeldOutPose& p : held_out->poses)
+            s << "| " << p.name << " | " << p.corners << " | " << fmt(p.distance_mm, 1) << " | "
+              << fmt(p.fit_rms_mm, 4) << " | " << fmt(1e6 * p.scale_error, 1) << " | "
+              << fmt(p.length_rms_mm, 4) << " | " << fmt(p.length_max_mm, 4) << " |\n";
+        s << "| all | | | **" << fmt(held_out->fit_rms_mm, 4) << "** | "
+          << fmt(1e6 * held_out->scale_error_rms, 1) << " (RMS) | **"
+          << fmt(held_out->length_rms_mm, 4) << "** | **" << fmt(held_out->length_max_mm, 4)
+          << "** |\n";
+    }
+
     s << "\n## Timing\n\ndecoding " << fmt(r.seconds_decode, 2) << " s, corners "
       << fmt(r.seconds_corners, 2) << " s, calibration " << fmt(r.seconds_calibration, 2)
       << " s, total " << fmt(r.seconds_total, 2) << " s\n";
     return s.str();
 }
 
-void write_calibration_report(const fs::path& folder, const SessionResult& r) {
+void write_calibration_report(const fs::path& folder, const SessionResult& r,
+                              const HeldOutCheck* held_out) {
     if (!report_folder_writable(folder))
         throw InputError(folder, "",
                          "exists and is not a calibration report; choose another --report folder");
     const int columns = r.board.inner_columns, rows = r.board.inner_rows;
     write_report_folder(folder, [&](const fs::path& temp) {
-        write_file_synced(temp / "summary.md", calibration_summary(r));
+        write_file_synced(temp / "summary.md", calibration_summary(r, held_out));
         for (const SessionPose& p : r.poses) {
             const cv::Mat fig = corner_figure(p, columns, rows);
             if (!fig.empty())

@@ -136,8 +136,15 @@ void StereoOptions::validate() const {
         if (!grid.empty() && (grid.columns < 4 || grid.rows < 4 || grid.columns > 64 ||
                               grid.rows > 64))
             bad(name, "a correction grid has 4 to 64 control points per axis (0 x 0: none)");
-    if (!(grid_smoothness > 0) || !std::isfinite(grid_smoothness))
-        bad("grid_smoothness", "must be positive");
+    if (!(camera_grid_smoothness >= 0) || !std::isfinite(camera_grid_smoothness))
+        bad("camera_grid_smoothness", "must not be negative (0: chosen by cross-validation)");
+    if (camera_grid_smoothness == 0 && camera_grid_smoothness_choices.empty())
+        bad("camera_grid_smoothness_choices", "empty while camera_grid_smoothness is 0");
+    for (const double c : camera_grid_smoothness_choices)
+        if (!(c > 0) || !std::isfinite(c))
+            bad("camera_grid_smoothness_choices", "must all be positive");
+    if (!(projector_grid_smoothness > 0) || !std::isfinite(projector_grid_smoothness))
+        bad("projector_grid_smoothness", "must be positive");
     if (!(grid_ridge > 0) || !std::isfinite(grid_ridge))
         bad("grid_ridge", "must be positive");
     if (!(outlier_factor > 1))
@@ -252,7 +259,9 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         for (std::size_t k = 0; k < poses[i].board.size(); ++k)
             corners.push_back({static_cast<int>(i), poses[i].board[k], poses[i].camera[k],
                                poses[i].projector[k]});
-    const detail::GridRegularisation regularisation{options.grid_smoothness, options.grid_ridge};
+    detail::GridRegularisation regularisation{options.camera_grid_smoothness,
+                                              options.projector_grid_smoothness,
+                                              options.grid_ridge};
     const bool camera_first = options.procedure == StereoProcedure::camera_first;
 
     // The dense samples of the used poses, placed on their boards by the
@@ -280,15 +289,36 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                 const double z = d / den;
                 if (!(std::fabs(den) > 1e-9) || !(z > 0))
                     continue;
-                dense.push_back({{n[0] * z, n[1] * z, z}, o.dense_projector[k], 1.0});
+                dense.push_back({{n[0] * z, n[1] * z, z},
+                                 o.dense_projector[k],
+                                 1.0,
+                                 static_cast<int>(i),
+                                 o.dense_camera[k]});
                 dense_origin.emplace_back(static_cast<int>(i), static_cast<int>(k));
             }
         }
     };
 
+    // The dense samples' board points again, with the current camera and poses.
+    const auto refresh_dense_points = [&]() {
+        StereoCalibration camera_model;
+        camera_model.camera = s.camera;
+        camera_model.camera_correction = s.camera_grid;
+        for (detail::DenseObservation& o : dense) {
+            const RigidPose& pose = s.poses[std::size_t(o.pose)];
+            const Vec3 normal{pose.R[2], pose.R[5], pose.R[8]};
+            const double d = normal[0] * pose.t[0] + normal[1] * pose.t[1] + normal[2] * pose.t[2];
+            Vec2 n{};
+            if (!camera_model.camera_ray(o.camera, n))
+                continue;
+            const double z = d / (normal[0] * n[0] + normal[1] * n[1] + normal[2]);
+            o.camera_point = {n[0] * z, n[1] * z, z};
+        }
+    };
+
     // Drops the dense samples further from the projector model than
-    // max(5 robust sigmas, 0.5 px); returns how many.
-    const auto drop_dense_outliers = [&]() -> std::size_t {
+    // max(sigmas x the robust sigma, floor_px); returns how many.
+    const auto drop_dense_outliers = [&](double sigmas, double floor_px) -> std::size_t {
         if (dense.empty())
             return 0;
         StereoCalibration model;
@@ -305,7 +335,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(sorted.size() / 2),
                          sorted.end());
         // The median of a 2D Gaussian error's magnitude is 1.1774 sigma.
-        const double limit = std::max(5 * sorted[sorted.size() / 2] / 1.1774, 0.5);
+        const double limit = std::max(sigmas * sorted[sorted.size() / 2] / 1.1774, floor_px);
         std::size_t kept = 0;
         for (std::size_t k = 0; k < dense.size(); ++k)
             if (error[k] <= limit) {
@@ -319,6 +349,106 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         return dropped;
     };
 
+    // RMS per coordinate of each kind of observation at the state s.
+    struct ObservationNoise {
+        double camera = 1, projector = 1, dense = 1;
+    };
+    const auto square = [](double v) { return v * v; };
+    // Exact simulated data would give infinite weights; no calibration is
+    // better than a thousandth of a pixel.
+    const auto noise_floor = [](double sigma) {
+        return std::isfinite(sigma) ? std::max(sigma, 1e-3) : 1.0;
+    };
+    const auto observation_noise = [&](const detail::RigState& at) {
+        StereoCalibration model;
+        model.camera = at.camera;
+        model.camera_correction = at.camera_grid;
+        model.projector = at.projector;
+        model.projector_correction = at.projector_grid;
+        model.R = at.R;
+        model.T = at.T;
+        double sc = 0, sp = 0, sd = 0;
+        std::size_t nc = 0, np = 0;
+        for (const detail::CornerObservation& o : corners) {
+            const RigidPose& pose = at.poses[std::size_t(o.pose)];
+            const Vec2 c = project_camera(model, pose, o.board);
+            sc += std::pow(c[0] - o.camera[0], 2) + std::pow(c[1] - o.camera[1], 2);
+            ++nc;
+            if (std::isfinite(o.projector[0])) {
+                const Vec2 p = project_projector(model, pose, o.board);
+                sp += std::pow(p[0] - o.projector[0], 2) + std::pow(p[1] - o.projector[1], 2);
+                ++np;
+            }
+        }
+        for (const detail::DenseObservation& o : dense) {
+            const Vec2 p = model.projector_pixel(o.camera_point);
+            sd += std::pow(p[0] - o.projector[0], 2) + std::pow(p[1] - o.projector[1], 2);
+        }
+        ObservationNoise n;
+        n.camera = nc ? std::sqrt(sc / double(2 * nc)) : 1;
+        n.projector = np ? std::sqrt(sp / double(2 * np)) : n.camera;
+        n.dense = dense.empty() ? n.projector : std::sqrt(sd / double(2 * dense.size()));
+        n.camera = noise_floor(n.camera);
+        n.projector = noise_floor(n.projector);
+        n.dense = noise_floor(n.dense);
+        return n;
+    };
+
+    // The camera grid's smoothness by K-fold cross-validation over the poses.
+    const auto choose_camera_smoothness = [&](const detail::RigState& start,
+                                              const std::vector<bool>& used_poses,
+                                              const detail::FreeParameters& free,
+                                              detail::GridRegularisation reg) {
+        const std::vector<double>& choices = options.camera_grid_smoothness_choices;
+        std::vector<int> in_use;
+        for (std::size_t i = 0; i < used_poses.size(); ++i)
+            if (used_poses[i])
+                in_use.push_back(static_cast<int>(i));
+        if (in_use.size() < 6 || choices.size() == 1) {
+            result.camera_grid_validation.clear();
+            return choices.front();
+        }
+        const int folds = std::min<int>(5, static_cast<int>(in_use.size()) / 2);
+        say("choosing the camera grid's smoothness: " + std::to_string(folds) +
+            "-fold cross-validation over " + std::to_string(in_use.size()) + " poses");
+        detail::FreeParameters place;
+        place.poses = place.camera_observations = true;
+        place.camera_weight = free.camera_weight;
+        std::vector<double> rms;
+        for (const double choice : choices) {
+            reg.camera_smoothness = choice;
+            double sum = 0;
+            int rows = 0;
+            for (int f = 0; f < folds; ++f) {
+                std::vector<bool> train = used_poses, test(used_poses.size(), false);
+                for (std::size_t k = 0; k < in_use.size(); ++k)
+                    if (int(k) % folds == f) {
+                        train[std::size_t(in_use[k])] = false;
+                        test[std::size_t(in_use[k])] = true;
+                    }
+                detail::RigState trial = start;
+                detail::adjust(trial, corners, {}, train, free, reg, options.max_iterations,
+                               nullptr);
+                const detail::AdjustmentOutcome held = detail::adjust(
+                    trial, corners, {}, test, place, reg, options.max_iterations, nullptr);
+                sum += held.data_cost / place.camera_weight;
+                rows += held.residuals;
+            }
+            rms.push_back(std::sqrt(sum / std::max(rows, 1)));
+            result.camera_grid_validation.emplace_back(choice, rms.back());
+            std::ostringstream msg;
+            msg.precision(4);
+            msg << "  smoothness " << choice << ": held-out poses' corners " << rms.back()
+                << " px RMS per coordinate";
+            say(msg.str());
+        }
+        std::size_t best = 0;
+        for (std::size_t k = 1; k < rms.size(); ++k)
+            if (rms[k] < 0.98 * rms[best])
+                best = k;
+        return choices[best];
+    };
+
     std::vector<bool> used(poses.size(), true);
     detail::AdjustmentOutcome camera_outcome, projector_outcome;
     for (int round = 0; round < 2; ++round) {
@@ -329,28 +459,66 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                 "the camera alone from its corners (intrinsics, skew " +
                 (options.skew ? "estimated" : "fixed at 0") + ", distortion" +
                 (s.camera_grid.empty() ? "" : ", correction grid") + ", board poses)");
+            // Every kind of observation is weighted by 1 / its noise
+            // variance (so that the grids' regularisation means the same on
+            // a simulated rig with 0.005 px corners as on a real one with
+            // 0.2 px): first from OpenCV's initial residuals, then from the
+            // residuals of each stage.
+            ObservationNoise noise;
+            noise.camera = noise_floor(result.initial_camera_rms / std::sqrt(2.0));
+            noise.projector = noise_floor(result.initial_projector_rms / std::sqrt(2.0));
             detail::FreeParameters free;
             free.camera_lens = free.poses = free.camera_observations = true;
             free.camera_grid = !s.camera_grid.empty();
             free.skew = options.skew;
+            free.camera_weight = 1 / square(noise.camera);
+            if (free.camera_grid && options.camera_grid_smoothness == 0)
+                regularisation.camera_smoothness =
+                    choose_camera_smoothness(s, used, free, regularisation);
+            result.camera_grid_smoothness = regularisation.camera_smoothness;
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                             options.max_iterations, options.progress);
-            place_dense_samples(used);
-            say("the projector with the camera and the boards held (intrinsics, distortion" +
-                std::string(s.projector_grid.empty() ? "" : ", correction grid") + ", R, T; " +
-                std::to_string(dense.size()) + " dense samples)");
+            say("the projector with the camera and the boards held, from its corners "
+                "(intrinsics, distortion, R, T)");
             free = {};
             free.projector_lens = free.stereo = free.projector_observations = true;
-            free.projector_grid = !s.projector_grid.empty();
             free.skew = options.skew;
-            projector_outcome = detail::adjust(s, corners, dense, used, free, regularisation,
+            free.projector_weight = 1 / square(noise.projector);
+            projector_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                                options.max_iterations, options.progress);
             result.iterations += camera_outcome.iterations + projector_outcome.iterations;
-            // Dense samples off the model (the board's edge against a wall
-            // behind it, a speck on the board) are dropped, once.
-            if (const std::size_t dropped = drop_dense_outliers(); dropped > 0) {
-                say("  again without " + std::to_string(dropped) +
-                    " dense samples off the model");
+            // Then with the dense samples and the grid. Samples off the
+            // model (decoded to the wrong fringe, the board's edge against a
+            // wall behind it, a speck on the board) are dropped first against
+            // the corners' model, then once more against the dense one:
+            // squared residuals would let a few of them bend the projector.
+            place_dense_samples(used);
+            if (!dense.empty() || !s.projector_grid.empty()) {
+                const std::size_t placed = dense.size();
+                // Loose against the corners' model, which lacks the grid:
+                // only samples decoded to the wrong fringe go.
+                const std::size_t dropped = drop_dense_outliers(10, 5);
+                say("the projector again with " + std::to_string(dense.size()) +
+                    " dense samples of the boards' bright parts (" + std::to_string(dropped) +
+                    " of " + std::to_string(placed) + " off the corners' model dropped)" +
+                    (s.projector_grid.empty() ? "" : " and its correction grid"));
+                free.projector_grid = !s.projector_grid.empty();
+                noise = observation_noise(s);
+                free.projector_weight = 1 / square(noise.projector);
+                free.dense_weight = 1 / square(noise.dense);
+                projector_outcome = detail::adjust(s, corners, dense, used, free, regularisation,
+                                                   options.max_iterations, options.progress);
+                result.iterations += projector_outcome.iterations;
+                // Weighted again by the residuals of the grid's model, and
+                // without the samples that are still off it.
+                const std::size_t again = drop_dense_outliers(5, 0.5);
+                say("  again with the residuals' weights" +
+                    (again ? " and without " + std::to_string(again) +
+                                 " dense samples off the model"
+                           : std::string()));
+                noise = observation_noise(s);
+                free.projector_weight = 1 / square(noise.projector);
+                free.dense_weight = 1 / square(noise.dense);
                 projector_outcome = detail::adjust(s, corners, dense, used, free, regularisation,
                                                    options.max_iterations, options.progress);
                 result.iterations += projector_outcome.iterations;
@@ -407,6 +575,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         for (std::size_t i = 0; i < poses.size(); ++i)
             result.dense_residuals[i].assign(poses[i].dense_camera.size(), {kNaN, kNaN});
         double dense_sum = 0;
+        refresh_dense_points();
         for (std::size_t k = 0; k < dense.size(); ++k) {
             const Vec2 up = c.projector_pixel(dense[k].camera_point);
             const Vec2 e{up[0] - dense[k].projector[0], up[1] - dense[k].projector[1]};

@@ -88,7 +88,7 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
             ? options.dense_step_px
             : std::max(2, static_cast<int>(std::lround(
                               std::sqrt(double(result.camera_size.area()) / 8000.0))));
-    std::vector<PoseObservations> observations(folders.size());
+    std::vector<PoseObservations> per_pose(folders.size());
     for (std::size_t p = 0; p < folders.size(); ++p) {
         SessionPose pose;
         pose.folder = folders[p];
@@ -127,8 +127,8 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
         }
         if (dense)
             dense_projector_samples(decoded, bright_board_mask(decoded, true, options.bright),
-                                    dense_step, observations[p].dense_camera,
-                                    observations[p].dense_projector);
+                                    dense_step, per_pose[p].dense_camera,
+                                    per_pose[p].dense_projector);
         for (int m = 0; m < kCornerMethods; ++m) {
             ProjectorCornerOptions o = options.corners;
             o.method = static_cast<CornerMethod>(m);
@@ -188,7 +188,7 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
             skipped += "\n  " + pose.name + ": " + pose.skip_reason;
             continue;
         }
-        PoseObservations& o = observations[p];
+        PoseObservations& o = per_pose[p];
         o.name = pose.name;
         o.board = board_points;
         o.camera = pose.corners.points;
@@ -196,7 +196,8 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
         used_observations.push_back(std::move(o));
         result.calibrated.push_back(static_cast<int>(p));
     }
-    observations = std::move(used_observations);
+    result.observations = std::move(used_observations);
+    const std::vector<PoseObservations>& observations = result.observations;
     if (observations.size() < 3)
         throw InputError(session, "",
                          "only " + std::to_string(observations.size()) + " of " +

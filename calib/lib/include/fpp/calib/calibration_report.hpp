@@ -7,6 +7,7 @@
 //   residuals-projector.png one colour per pose, on the device's image
 //   pose-rms.png            per-pose camera and projector RMS bars
 
+#include "fpp/calib/held_out_check.hpp"
 #include "fpp/calib/report_folder.hpp"
 #include "fpp/calib/stereo_session.hpp"
 
@@ -15,13 +16,16 @@
 
 namespace fpp::calib {
 
-// The Markdown summary (also what the tool prints).
-std::string calibration_summary(const SessionResult& result);
+// The Markdown summary (also what the tool prints), with the held-out
+// check when given.
+std::string calibration_summary(const SessionResult& result,
+                                const HeldOutCheck* held_out = nullptr);
 
 // Writes the report folder as a whole (temporary folder renamed into place;
 // an earlier report there is replaced). Throws IoError, or InputError if the
 // folder exists and is not a report.
-void write_calibration_report(const std::filesystem::path& folder, const SessionResult& result);
+void write_calibration_report(const std::filesystem::path& folder, const SessionResult& result,
+                              const HeldOutCheck* held_out = nullptr);
 
 // Rotation matrix -> Euler angles in degrees (a, b, c) with R = Rz(c) Ry(b) Rx(a).
 Vec3 euler_deg_from_rotation(const Mat3& R);

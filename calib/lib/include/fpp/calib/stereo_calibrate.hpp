@@ -35,6 +35,7 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fpp::calib {
@@ -72,8 +73,23 @@ struct StereoOptions {
     StereoProcedure procedure = StereoProcedure::camera_first;
     GridSize camera_grid{12, 9};
     GridSize projector_grid{12, 8};
-    double grid_smoothness = 1;    // weight of each squared second difference of a grid (px^2)
-    double grid_ridge = 1e-4;      // weight of each squared control value (px^2)
+    // Weight of each squared second difference of a grid's control values
+    // (px^-2, as the observations', which are weighted by 1 / their noise
+    // variance): 1 / the variance of a lens defect's curvature at the grid's
+    // spacing. The camera's grid, seen only at its corners, is held
+    // stiffer than the projector's, which the dense samples see everywhere.
+    // camera_grid_smoothness 0: chosen among camera_grid_smoothness_choices
+    // by cross-validation over the poses (each fold's poses placed by a
+    // camera calibrated without them; the smoothness whose camera model
+    // reprojects them best, the stiffer one unless a softer one is 2 %
+    // better): a defect-free lens keeps a stiff grid, which leaves the
+    // camera's frame as well determined as the lens model alone does, and
+    // a lens with a defect gets the freedom to follow it. Needs at least 6
+    // poses, else the first choice is used.
+    double camera_grid_smoothness = 0;
+    std::vector<double> camera_grid_smoothness_choices{1e4, 1e3, 1e2};
+    double projector_grid_smoothness = 1e3;
+    double grid_ridge = 1e-4; // weight of each squared control value (px^-2)
     bool skew = true;           // estimate skew for both devices (else fixed at 0)
     bool drop_outliers = false; // drop outlying poses and refine again
     // A pose is an outlier when its RMS (camera and projector together)
@@ -105,6 +121,10 @@ struct StereoResult {
     int iterations = 0;
     bool skew_estimated = true;
     StereoProcedure procedure = StereoProcedure::camera_first;
+    // The camera grid's smoothness used, and the cross-validation's
+    // reprojection RMS (px) of each choice tried (empty when not chosen so).
+    double camera_grid_smoothness = 0;
+    std::vector<std::pair<double, double>> camera_grid_validation;
     // One-sigma uncertainties of the lens parameters (from the normal
     // equations and the residual variance); 0 for fixed parameters.
     LensModel camera_sigma;

@@ -74,6 +74,7 @@ struct SessionResult {
     Size projector_size;
     std::vector<SessionPose> poses;         // every capture set found
     std::vector<int> calibrated;            // indices into poses fed to the calibration
+    std::vector<PoseObservations> observations; // what each of them fed it, in that order
     StereoResult stereo;                    // with options.stereo.skew
     std::optional<StereoResult> other_skew; // with the other skew setting (compare_skew)
     CornerMethod method = CornerMethod::poly;
