@@ -1,11 +1,13 @@
 // fpp-calib paper-experiments --out DIR [--binning B] [--seed S]
-//     [--checkerboard-poses N] [--plane-poses N] [--timing-runs N] [--threads N]
+//     [--checkerboard-poses N] [--plane-poses N] [--board-poses N] [--timing-runs N]
+//     [--threads N]
 //     [--sv-calibration checkerboard|rig-model] [--rig RIG.yaml] [--keep-sessions]
 //
 // The paper's experiments on the virtual scanner in one run (see
-// fpp/calib/paper_experiments.hpp): stereo and hybrid calibration, then the
-// inclined plane, the cylinder, a sphere, the relief (with reconstruction
-// times) and the N x N window timing, each against ground truth. DIR is
+// fpp/calib/paper_experiments.hpp): the paper's and our calibration
+// procedures, then the inclined plane, the cylinder, a sphere, ball bars, the
+// relief (with reconstruction times) and the N x N window timing, each
+// against ground truth. DIR is
 // written as a whole and must not exist. Progress on stderr; the targets and
 // whether each is met on stdout.
 
@@ -46,12 +48,14 @@ Action add_paper_experiments_command(CLI::App& app) {
     auto args = std::make_shared<PaperArgs>();
     auto* cmd = app.add_subcommand(
         "paper-experiments",
-        "Reproduce the paper's experiments on the virtual scanner (paper rig with its effects): "
-        "stereo calibration from a checkerboard session, hybrid tables (every model) from a "
-        "flat-board session, then the inclined plane, the 168 mm cylinder, a sphere and the "
-        "relief reconstructed by SV (x only) and by each table, with shape fits, errors against "
-        "ground truth (with and without noise), reconstruction times and N x N window timing; "
-        "writes calib.yaml, table-<model>.fpt, reports, the scans and DIR/report");
+        "Reproduce the paper's experiments on the virtual scanner and measure every calibration "
+        "procedure against the truth: the paper's (a joint stereo calibration, hybrid tables "
+        "from flat boards placed by SV, every model) and ours (one checkerboard session: "
+        "camera-first stereo with correction grids, tables from boards placed by the camera); "
+        "then the inclined plane, the 168 mm cylinder, a sphere, ball bars at seven places and "
+        "the relief reconstructed by every method, with shape fits, errors against ground truth "
+        "(with and without noise), reconstruction times and N x N window timing; writes the "
+        "calibrations, table-<method>.fpt, reports, the scans and DIR/report");
     cmd->add_option("--out", args->out, "folder to create (must not exist)")->required();
     cmd->add_option("--sv-calibration", args->sv_calibration,
                     "SV model: checkerboard (stereo calibration from a simulated session, the "
@@ -70,6 +74,10 @@ Action add_paper_experiments_command(CLI::App& app) {
         ->check(CLI::Range(3, 200));
     cmd->add_option("--plane-poses", args->options.plane_poses,
                     "flat-board poses of the hybrid calibration (the paper's 30)")
+        ->capture_default_str()
+        ->check(CLI::Range(6, 500));
+    cmd->add_option("--board-poses", args->options.board_poses,
+                    "checkerboard poses of our session (stereo and hybrid calibration)")
         ->capture_default_str()
         ->check(CLI::Range(6, 500));
     cmd->add_option("--timing-runs", args->options.timing_runs,

@@ -386,7 +386,7 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
                 std::acos(std::clamp(plane.normal[2], -1.0, 1.0)) * 180.0 / std::numbers::pi;
             PoseSamples s;
             s.phase = std::move(decoded.proj_x);
-            smooth_phase(s.phase, options.phase_smoothing_radius, IncompleteWindow::keep,
+            smooth_phase(s.phase, options.phase_smoothing_radius,
                          ThreadPool::shared(options.threads));
             // Only pixels with an SV point on the plane give a sample (not
             // those of something standing on the board).

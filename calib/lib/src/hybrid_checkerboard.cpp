@@ -248,7 +248,7 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
                         s.phase.at(u, v) = p;
                 }
         });
-        smooth_phase(s.phase, options.phase_smoothing_radius, IncompleteWindow::drop, pool);
+        smooth_phase(s.phase, options.phase_smoothing_radius, pool);
         for (std::size_t i = 0; i < camera.area(); ++i)
             pose.samples += std::isfinite(s.phase.data()[i]) ? 1 : 0;
         if (double(pose.samples) < 0.01 * double(camera.area())) {

@@ -1,4 +1,6 @@
-// The paper's experiments on the virtual scanner (see paper_experiments.hpp).
+// The paper's experiments on the virtual scanner (see paper_experiments.hpp):
+// sessions, calibrations, scans and their measurement. The report and the
+// targets are in paper_report.cpp.
 
 #include "fpp/calib/paper_experiments.hpp"
 
@@ -10,25 +12,19 @@
 #include "fpp/calib/report_folder.hpp"
 #include "fpp/calib/shape_fit.hpp"
 #include "fpp/calib/stereo_session.hpp"
-#include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/error.hpp"
 #include "fpp/parallel.hpp"
 #include "fpp/sequences.hpp"
 #include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
 #include "fpp/sim/session.hpp"
 #include "fpp/table_kernel.hpp"
-
-#include <opencv2/imgproc.hpp>
+#include "paper_run.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
-#include <memory>
-#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -37,35 +33,7 @@ namespace fpp::calib {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// The paper's figures (Vargas et al., experiments 1 to 3).
-constexpr double kPaperPlaneSv = 0.118, kPaperPlaneHybrid = 0.044;       // mm, plane-fit RMS
-constexpr double kPaperCylinderSv = 0.076, kPaperCylinderHybrid = 0.059; // mm, cylinder-fit RMS
-constexpr double kPaperReliefDistance = 0.075;                           // mm, SV vs hybrid
-constexpr double kPaperReliefSvSeconds = 1.04, kPaperReliefHybridSeconds = 0.14;
-constexpr double kPaperReliefPoints = 683047;
-
-// Scenes (camera frame, mm).
-constexpr double kPlaneWidth = 230, kPlaneHeight = 175, kPlaneDistance = 480;
-constexpr double kPlaneTiltXDeg = 4, kPlaneTiltYDeg = -20; // ~20 deg to the optical axis
-constexpr double kCylinderDiameter = 168, kCylinderLength = 215, kCylinderFront = 500;
-constexpr double kSphereDiameter = 120, kSphereCentreZ = 520;
-constexpr double kReliefPixelsFullSize = 680000; // camera pixels seeing the relief at 1600 x 1200
-constexpr double kReliefBaseZ = 530;             // its base; heights rise towards the camera
-constexpr double kReliefWidth = 160, kReliefHeight = 220; // Relief::face_bumps() at scale 1
-constexpr int kWindowSizes = 8;
-constexpr int kWindowStepFullSize = 100; // N = 100, 200, ..., 800 at full size
-
-// Pixels this close to the edge of the reconstructed region are left out of
-// fits and truth comparisons: at a silhouette a pixel's phase is blurred with
-// its neighbours' (defocus) and its point is off the surface.
-constexpr int kEdgeMarginPx = 2;
-
-// Targets of the run.
-constexpr double kPlaneRatioTarget = 0.5; // hybrid truth error <= half of SV's on the plane
-constexpr double kSpeedupTarget = 50;     // hybrid at least this much faster on the relief
+using namespace paper;
 
 using Clock = std::chrono::steady_clock;
 
@@ -103,22 +71,21 @@ void check_window(Size camera, int x0, int y0, Size size, const char* what) {
         throw std::invalid_argument(std::string(what) + ": window outside the camera image");
 }
 
-std::string seconds_text(double s) {
-    if (!std::isfinite(s))
-        return "-";
-    if (s >= 1)
-        return fixed_text(s, 3) + " s";
-    if (s >= 1e-3)
-        return fixed_text(s * 1e3, 2) + " ms";
-    return fixed_text(s * 1e6, 1) + " us";
-}
-
 double median(std::vector<double> v) {
     if (v.empty())
         return kNaN;
     const auto mid = v.begin() + std::ptrdiff_t(v.size() / 2);
     std::nth_element(v.begin(), mid, v.end());
     return *mid;
+}
+
+double image_median(const Image<float>& image) {
+    std::vector<double> v;
+    v.reserve(image.pixel_count());
+    for (std::size_t i = 0; i < image.pixel_count(); ++i)
+        if (std::isfinite(image.data()[i]))
+            v.push_back(double(image.data()[i]));
+    return median(std::move(v));
 }
 
 // Keeps the pixels of `mask` (1 = set) whose (2r+1) x (2r+1) neighbourhood is
@@ -142,151 +109,17 @@ void erode(std::vector<std::uint8_t>& mask, Size size, int r) {
         }
 }
 
-// One Markdown table row.
-void table_row(std::ostream& md, const std::vector<std::string>& cells) {
-    md << "|";
-    for (const std::string& c : cells)
-        md << " " << c << " |";
-    md << "\n";
-}
-
-// ------------------------------------------------------------------ plots
-
-struct PlotSeries {
-    std::string label;
-    std::vector<double> seconds; // one per window size; non-positive: no point
-    cv::Scalar colour;
-};
-
-// "1 s", "100 ms", "10 us" for 10^e seconds.
-std::string decade_label(int e) {
-    int unit_exp = 0;
-    const char* unit = "s";
-    if (e < -6) {
-        unit_exp = -9;
-        unit = "ns";
-    } else if (e < -3) {
-        unit_exp = -6;
-        unit = "us";
-    } else if (e < 0) {
-        unit_exp = -3;
-        unit = "ms";
-    }
-    int mantissa = 1;
-    for (int k = unit_exp; k < e; ++k)
-        mantissa *= 10;
-    return std::to_string(mantissa) + " " + unit;
-}
-
-// Reconstruction time against window size, log time axis (the models differ
-// by orders of magnitude), one line and marker per series, with a legend.
-cv::Mat timing_plot(const std::vector<int>& sizes, const std::vector<PlotSeries>& series,
-                    const std::string& title) {
-    const int width = 960, height = 620;
-    const int left = 100, right = 30, top = 60, bottom = 80;
-    cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
-    double lo = std::numeric_limits<double>::infinity(), hi = 0;
-    for (const PlotSeries& s : series)
-        for (double t : s.seconds)
-            if (t > 0 && std::isfinite(t)) {
-                lo = std::min(lo, t);
-                hi = std::max(hi, t);
-            }
-    if (!(hi > 0) || sizes.empty())
-        return image;
-    const int e_lo = static_cast<int>(std::floor(std::log10(lo)));
-    const int e_hi = std::max(e_lo + 1, static_cast<int>(std::ceil(std::log10(hi))));
-    const double n_max = double(sizes.back()) * 1.05;
-    const auto px = [&](double n) {
-        return left + static_cast<int>(std::lround(n / n_max * double(width - left - right)));
-    };
-    const auto py = [&](double t) {
-        const double f = (std::log10(t) - double(e_lo)) / double(e_hi - e_lo);
-        return height - bottom - static_cast<int>(std::lround(f * double(height - top - bottom)));
-    };
-    const cv::Scalar axis(0, 0, 0), grid(220, 220, 220), text(40, 40, 40);
-    const int font = cv::FONT_HERSHEY_SIMPLEX;
-    for (int e = e_lo; e <= e_hi; ++e) {
-        const int y = py(std::pow(10.0, double(e)));
-        cv::line(image, {left, y}, {width - right, y}, grid, 1);
-        cv::putText(image, decade_label(e), {8, y + 5}, font, 0.5, text, 1, cv::LINE_AA);
-    }
-    for (int n : sizes) {
-        const int x = px(double(n));
-        cv::line(image, {x, top}, {x, height - bottom}, grid, 1);
-        const std::string label = std::to_string(n);
-        cv::putText(image, label, {x - 4 * static_cast<int>(label.size()), height - bottom + 22},
-                    font, 0.5, text, 1, cv::LINE_AA);
-    }
-    cv::line(image, {left, top}, {left, height - bottom}, axis, 1);
-    cv::line(image, {left, height - bottom}, {width - right, height - bottom}, axis, 1);
-    cv::putText(image, "window size N (N x N camera pixels)", {left + 220, height - 25}, font, 0.6,
-                text, 1, cv::LINE_AA);
-    cv::putText(image, title, {left, 35}, font, 0.65, text, 1, cv::LINE_AA);
-    int legend_y = top + 20;
-    for (const PlotSeries& s : series) {
-        cv::Point previous{-1, -1};
-        for (std::size_t i = 0; i < sizes.size() && i < s.seconds.size(); ++i) {
-            if (!(s.seconds[i] > 0) || !std::isfinite(s.seconds[i]))
-                continue;
-            const cv::Point p{px(double(sizes[i])), py(s.seconds[i])};
-            if (previous.x >= 0)
-                cv::line(image, previous, p, s.colour, 2, cv::LINE_AA);
-            cv::circle(image, p, 4, s.colour, cv::FILLED, cv::LINE_AA);
-            previous = p;
-        }
-        cv::line(image, {left + 20, legend_y - 5}, {left + 60, legend_y - 5}, s.colour, 2,
-                 cv::LINE_AA);
-        cv::putText(image, s.label, {left + 70, legend_y}, font, 0.55, text, 1, cv::LINE_AA);
-        legend_y += 24;
-    }
-    return image;
-}
-
-const cv::Scalar kSeriesColours[] = {
-    {40, 40, 200},  // SV: red (BGR)
-    {180, 90, 30},  // blue
-    {60, 150, 40},  // green
-    {150, 60, 140}, // purple
-    {20, 140, 220}, // orange
-};
-
-cv::Scalar series_colour(std::size_t i) {
-    return kSeriesColours[i % (sizeof(kSeriesColours) / sizeof(kSeriesColours[0]))];
-}
-
-// ------------------------------------------------------------------ the run
-
-struct ModelRun {
-    TableModel model;
-    std::string name;
-    CoefficientTable table;
-    int usable_poses = 0;
-    int poses = 0;
-    std::size_t pixels_modelled = 0;
-    double fit_rms_z_median = kNaN;
-    double seconds = 0;
-};
-
-// Reconstructions of one decoded scan: SV (label 0), then each table.
-struct Reconstructions {
-    std::vector<PointCloud> clouds;
-    std::vector<std::size_t> points;
-    std::vector<std::uint8_t> common; // 1 where every cloud has a point
-    std::size_t common_count = 0;
-};
-
 bool finite_point(const float* p) {
     return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
 }
 
-// The points of `cloud` at the pixels of `mask` (organised).
+// The points of `cloud` at the pixels of `mask` (organised) where it has one.
 CloudPoints masked_points(const PointCloud& cloud, const std::vector<std::uint8_t>& mask) {
     CloudPoints out;
     out.organised = cloud.size();
     const float* xyz = cloud.xyz.data();
     for (std::size_t i = 0; i < mask.size(); ++i)
-        if (mask[i]) {
+        if (mask[i] && finite_point(xyz + 3 * i)) {
             out.points.push_back(
                 {double(xyz[3 * i]), double(xyz[3 * i + 1]), double(xyz[3 * i + 2])});
             out.pixels.push_back(static_cast<std::uint32_t>(i));
@@ -294,59 +127,34 @@ CloudPoints masked_points(const PointCloud& cloud, const std::vector<std::uint8_
     return out;
 }
 
-enum class FitKind { plane, cylinder, sphere, none };
-
-struct ScanSummary {
-    std::string key;   // figures.csv name part
-    std::string title; // summary.md
-    FitKind fit = FitKind::none;
-    double nominal_diameter = 0;
-    std::size_t truth_pixels = 0;
-    std::size_t common = 0;
-    std::vector<std::size_t> points;                       // per label
-    std::vector<double> fit_rms, diameter, diameter_error; // per label (NaN: no fit), noisy scan
-    std::vector<double> fit_rms_clean, diameter_clean;     // the same on the noise-free scan
-    std::string fit_note;
-    std::vector<ErrorStats> truth_noisy, truth_clean; // per label
-    std::vector<ErrorStats> shape_noisy, shape_clean; // per label: bias and tilt removed
-    std::size_t compared_noisy = 0, compared_clean = 0;
-};
-
-struct ReliefSummary {
-    double scale = 1;
-    std::size_t pixels_seen = 0;
-    std::vector<double> distance_rms, dz_rms; // per model (SV - model, per pixel)
-    std::vector<std::size_t> matched;         // per model
-    std::vector<double> seconds;              // per label, one thread
-    double seconds_sv_plane_iteration = kNaN; // the paper's SV iteration
-};
-
-struct WindowSummary {
-    std::vector<int> sizes;
-    std::vector<std::size_t> points;          // SV points per window
-    std::vector<std::vector<double>> seconds; // [label][window]
-    double crop_max_difference_mm = 0;        // cropped vs full-image reconstruction
-    std::size_t crop_mismatched = 0;          // pixels with a point in one only
-    int x0 = 0, y0 = 0;                       // largest window's corner
+// Reconstructions of one decoded scan, one per method.
+struct Reconstructions {
+    std::vector<PointCloud> clouds;
+    std::vector<std::size_t> points;
+    std::vector<std::uint8_t> common; // 1 where every cloud has a point
+    std::size_t common_count = 0;
 };
 
 class Run {
   public:
     Run(const fs::path& folder, const PaperExperimentOptions& options)
-        : folder_(folder), options_(options), start_(Clock::now()) {}
+        : folder_(folder), start_(Clock::now()) {
+        record_.options = options;
+    }
 
     PaperExperimentResult run() {
         setup_rig();
         simulate_sessions();
-        calibrate_stereo();
-        calibrate_hybrid_models();
+        calibrate_paper_procedure();
+        calibrate_our_procedures();
         run_plane();
         run_shape("cylinder", "Experiment 2: cylinder (168 mm diameter, 215 mm long)",
-                  FitKind::cylinder, kCylinderDiameter, cylinder_scene, 12);
+                  FitKind::cylinder, kCylinderDiameter, cylinder_scene(), 12);
         run_shape("sphere", "Sphere (ours): 120 mm diameter", FitKind::sphere, kSphereDiameter,
-                  sphere_scene, 13);
+                  sphere_scene(), 13);
+        run_ball_bars();
         run_relief();
-        if (!options_.keep_sessions) {
+        if (!options().keep_sessions) {
             say("removing the calibration sessions (keep them with --keep-sessions)");
             fs::remove_all(folder_ / "sessions");
         }
@@ -355,163 +163,264 @@ class Run {
 
   private:
     // ---- small utilities
+    const PaperExperimentOptions& options() const { return record_.options; }
+    std::vector<Method>& methods() { return record_.methods; }
+    std::size_t count() const { return record_.methods.size(); }
     void say(const std::string& line) const {
-        if (options_.progress)
-            options_.progress(line);
+        if (options().progress)
+            options().progress(line);
     }
     std::function<void(const std::string&)> indented() const {
         return [this](const std::string& line) { say("  " + line); };
-    }
-    std::size_t labels() const { return 1 + models_.size(); }
-    std::string label_key(std::size_t i) const { return i == 0 ? "sv" : models_[i - 1].name; }
-    std::string label_title(std::size_t i) const {
-        if (i == 0)
-            return "SV (x only)";
-        std::string t = "hybrid " + models_[i - 1].name;
-        if (models_[i - 1].model == TableModel::polynomial)
-            t += " (paper's)";
-        if (models_[i - 1].name == default_model_)
-            t += " (default)";
-        return t;
     }
     void add(const std::string& name, double value, const std::string& unit) {
         figures_.push_back({name, value, unit});
     }
     void png(const std::string& name, const cv::Mat& image) { save_png(report_ / name, image); }
-    std::uint64_t scan_seed(int k) const { return options_.seed * 1000 + std::uint64_t(k); }
+    std::uint64_t scan_seed(int k) const { return options().seed * 1000 + std::uint64_t(k); }
+    const sim::Rig& rig() const { return record_.rig; }
 
     // ---- setup
     void setup_rig() {
         const fs::path rig_path =
-            options_.rig.empty() ? sim::lens_defects_rig_path() : options_.rig;
-        rig_ = sim::load_rig(rig_path);
-        if (options_.binning > 1)
-            rig_ = rig_.binned_camera(options_.binning);
-        clean_rig_ = rig_;
+            options().rig.empty() ? sim::lens_defects_rig_path() : options().rig;
+        record_.rig = sim::load_rig(rig_path);
+        if (options().binning > 1)
+            record_.rig = record_.rig.binned_camera(options().binning);
+        clean_rig_ = rig();
         clean_rig_.sensor.read_noise_dn = 0;
         clean_rig_.sensor.gain_e_per_dn = 0; // no shot noise
-        scan_sequence_ = standard_sequence("gray-x", rig_.projector_size);
-        decode_options_.threads = options_.threads;
-        default_model_ = to_string(HybridOptions{}.model);
+        scan_sequence_ = standard_sequence("gray-x", rig().projector_size);
+        decode_options_.threads = options().threads;
         report_ = folder_ / "report";
         fs::create_directories(report_);
         fs::create_directories(folder_ / "scans");
         fs::create_directories(folder_ / "sessions");
-        say("rig '" + rig_.name + "' (" + rig_path.string() + "), camera " +
-            std::to_string(rig_.camera_size.width) + " x " +
-            std::to_string(rig_.camera_size.height) + " (binning " +
-            std::to_string(options_.binning) + "), projector " +
-            std::to_string(rig_.projector_size.width) + " x " +
-            std::to_string(rig_.projector_size.height));
+        say("rig '" + rig().name + "' (" + rig_path.string() + "), camera " +
+            std::to_string(rig().camera_size.width) + " x " +
+            std::to_string(rig().camera_size.height) + " (binning " +
+            std::to_string(options().binning) + "), projector " +
+            std::to_string(rig().projector_size.width) + " x " +
+            std::to_string(rig().projector_size.height));
+        // The reference: the rig's own model, defects and all.
+        exact_calibration_ = calibration_from_rig(rig());
+        Method exact;
+        exact.key = "exact";
+        exact.title = "SV with the rig's exact model (reference)";
+        exact.procedure = Procedure::reference;
+        exact.calibration = &exact_calibration_;
+        exact.sv = make_sv(exact_calibration_);
+        methods().push_back(std::move(exact));
+    }
+
+    std::unique_ptr<SvReconstructor> make_sv(const StereoCalibration& c) const {
+        SvOptions sv;
+        sv.threads = options().threads;
+        return std::make_unique<SvReconstructor>(c, sv);
+    }
+
+    void write_session(const fs::path& folder, const sim::SessionOptions& session,
+                       const Sequence& sequence, const std::string& what) {
+        say("simulating " + what + ": " + std::to_string(session.poses) + " poses (" +
+            std::to_string(frame_count(sequence)) + " frames each)");
+        sim::write_session(folder, rig(), sequence, session, [&](int done, int total) {
+            say("  pose " + std::to_string(done) + "/" + std::to_string(total));
+        });
     }
 
     void simulate_sessions() {
         const auto start = Clock::now();
-        checkerboard_session_ = folder_ / "sessions" / "checkerboard";
+        paper_board_session_ = folder_ / "sessions" / "checkerboard";
         plane_session_ = folder_ / "sessions" / "planes";
-        if (options_.sv_calibration == SvCalibrationSource::checkerboard) {
+        board_session_ = folder_ / "sessions" / "boards";
+        const Sequence xy = standard_sequence("gray-xy", rig().projector_size);
+        if (options().sv_calibration == SvCalibrationSource::checkerboard) {
             sim::SessionOptions board;
             board.kind = sim::SessionKind::checkerboard;
-            board.poses = options_.checkerboard_poses;
-            board.seed = options_.seed;
-            const Sequence board_sequence = standard_sequence("gray-xy", rig_.projector_size);
-            say("simulating the checkerboard session: " + std::to_string(board.poses) +
-                " poses, gray-xy (" + std::to_string(frame_count(board_sequence)) +
-                " frames each)");
-            sim::write_session(
-                checkerboard_session_, rig_, board_sequence, board, [&](int done, int total) {
-                    say("  pose " + std::to_string(done) + "/" + std::to_string(total));
-                });
+            board.poses = options().checkerboard_poses;
+            board.seed = options().seed;
+            write_session(paper_board_session_, board, xy,
+                          "the paper's checkerboard session (its stereo calibration), gray-xy");
         }
         sim::SessionOptions planes;
         planes.kind = sim::SessionKind::plane;
-        planes.poses = options_.plane_poses;
-        planes.seed = options_.seed + 1;
-        say("simulating the flat-board session: " + std::to_string(planes.poses) +
-            " poses, gray-x, vertical fringes only (" +
-            std::to_string(frame_count(scan_sequence_)) + " frames each)");
-        sim::write_session(plane_session_, rig_, scan_sequence_, planes, [&](int done, int total) {
-            say("  pose " + std::to_string(done) + "/" + std::to_string(total));
-        });
-        seconds_sessions_ = seconds_since(start);
+        planes.poses = options().plane_poses;
+        planes.seed = options().seed + 1;
+        write_session(plane_session_, planes, scan_sequence_,
+                      "the paper's flat-board session, gray-x (vertical fringes only)");
+        sim::SessionOptions boards;
+        boards.kind = sim::SessionKind::checkerboard;
+        boards.poses = options().board_poses;
+        boards.seed = options().seed + 2;
+        write_session(board_session_, boards, xy,
+                      "our checkerboard session (stereo and hybrid calibration), gray-xy");
+        record_.seconds_sessions = seconds_since(start);
     }
 
-    void calibrate_stereo() {
+    // ---- calibrations
+    // A stereo calibration of a session; its summary and report.
+    StereoCalibration calibrate_stereo(const fs::path& session, const StereoSessionOptions& so,
+                                       const std::string& report, StereoSummary& summary) {
         const auto start = Clock::now();
-        if (options_.sv_calibration == SvCalibrationSource::rig_model) {
-            say("SV model: the rig's own lenses and pose within the 5-coefficient model "
-                "(no stereo calibration; the distortion outside that model is left to SV)");
-            calibration_ = calibration_from_rig(rig_);
-            calibration_.camera.drop_unmodelled_terms();
-            calibration_.projector.drop_unmodelled_terms();
-            calibration_.origin = "rig '" + rig_.name + "', 5-coefficient part of its model";
-        } else {
-            say("stereo calibration from the checkerboard session");
-            StereoSessionOptions so;
-            so.compare_skew = false;
-            so.decode.threads = options_.threads;
-            so.progress = indented();
-            const SessionResult session = calibrate_session(checkerboard_session_, so);
-            calibration_ = session.stereo.calibration;
-            write_calibration_report(folder_ / "stereo-report", session);
-            calibration_poses_ = static_cast<int>(session.calibrated.size());
-            add("calibration.camera_rms", calibration_.camera_rms, "px");
-            add("calibration.projector_rms", calibration_.projector_rms, "px");
-            add("calibration.poses_used", double(calibration_poses_), "");
-            say("stereo calibration: camera RMS " + fixed_text(calibration_.camera_rms, 4) +
-                " px, projector RMS " + fixed_text(calibration_.projector_rms, 4) + " px, " +
-                std::to_string(calibration_poses_) + " poses");
-        }
-        const std::string text = calibration_to_yaml(calibration_);
-        write_file_synced(folder_ / "calib.yaml", text);
-        calibration_hash_ = fnv1a64(text.data(), text.size());
-        seconds_stereo_ = seconds_since(start);
-        SvOptions sv;
-        sv.threads = options_.threads;
-        sv_ = std::make_unique<SvReconstructor>(calibration_, sv);
+        const SessionResult result = calibrate_session(session, so);
+        write_calibration_report(folder_ / report, result);
+        const StereoCalibration& c = result.stereo.calibration;
+        summary.calibrated = true;
+        summary.procedure = to_string(result.stereo.procedure);
+        summary.poses = static_cast<int>(result.calibrated.size());
+        summary.camera_rms = c.camera_rms;
+        summary.projector_rms = c.projector_rms;
+        summary.dense_rms = result.stereo.dense_rms;
+        summary.camera_grid_max = c.camera_correction.largest_control_value();
+        summary.projector_grid_max = c.projector_correction.largest_control_value();
+        summary.camera_grid_smoothness = result.stereo.camera_grid_smoothness;
+        summary.seconds = seconds_since(start);
+        summary.origin = c.origin;
+        say("  camera RMS " + fixed_text(c.camera_rms, 4) + " px, projector RMS " +
+            fixed_text(c.projector_rms, 4) + " px, " + std::to_string(summary.poses) +
+            " poses, " + fixed_text(summary.seconds, 1) + " s");
+        return c;
     }
 
-    void calibrate_hybrid_models() {
-        // One pass over the plane poses; every model is fitted to it.
-        const std::vector<TableModel> models = available_table_models();
-        say("hybrid calibration, every model from one pass over the poses");
+    // Writes a calibration file and returns the hash a table records.
+    std::uint64_t save(const StereoCalibration& c, const std::string& name) {
+        const std::string text = calibration_to_yaml(c);
+        write_file_synced(folder_ / name, text);
+        return fnv1a64(text.data(), text.size());
+    }
+
+    HybridOptions hybrid_options() const {
         HybridOptions ho;
-        ho.threads = options_.threads;
-        ho.decode.threads = options_.threads;
-        ho.sv.threads = options_.threads;
+        ho.threads = options().threads;
+        ho.decode.threads = options().threads;
+        ho.sv.threads = options().threads;
         ho.progress = indented();
-        const std::vector<HybridResult> results =
-            calibrate_hybrid(plane_session_, calibration_, calibration_hash_, ho, models);
-        for (std::size_t k = 0; k < models.size(); ++k) {
-            const TableModel model = models[k];
-            const HybridResult& result = results[k];
-            ModelRun m;
-            m.model = model;
-            m.name = to_string(model);
-            const fs::path table_path = folder_ / ("table-" + m.name + ".fpt");
+        return ho;
+    }
+
+    // One table method per result, read back from its file as the scanner would.
+    void add_tables(const std::vector<HybridResult>& results, Procedure procedure,
+                    const std::string& prefix, const std::string& title) {
+        for (const HybridResult& result : results) {
+            Method m;
+            m.model = result.table.info().model;
+            const std::string model = to_string(m.model);
+            m.key = prefix + "-" + model;
+            m.title = title + ", " + model;
+            m.procedure = procedure;
+            const fs::path table_path = folder_ / ("table-" + m.key + ".fpt");
             write_table(table_path, result.table);
-            write_hybrid_report(folder_ / ("hybrid-report-" + m.name), result);
-            // Reconstruct with the table as the scanner would: read back from its file.
-            m.table = load_table(table_path, &rig_.camera_size, false);
+            write_hybrid_report(folder_ / ("hybrid-report-" + m.key), result);
+            m.table = load_table(table_path, &rig().camera_size, false);
             m.usable_poses = result.usable_poses;
             m.poses = static_cast<int>(result.poses.size());
             m.pixels_modelled = result.pixels_modelled;
-            std::vector<double> rms;
-            rms.reserve(result.rms_z.pixel_count());
-            for (std::size_t i = 0; i < result.rms_z.pixel_count(); ++i)
-                if (std::isfinite(result.rms_z.data()[i]))
-                    rms.push_back(double(result.rms_z.data()[i]));
-            m.fit_rms_z_median = median(std::move(rms));
+            m.fit_rms_z_median = image_median(result.rms_z);
+            m.sigma_z_median = image_median(result.sigma_z);
             m.seconds = result.seconds_total;
-            add("hybrid." + m.name + ".usable_poses", double(m.usable_poses), "");
-            add("hybrid." + m.name + ".pixels_modelled", double(m.pixels_modelled), "");
-            add("hybrid." + m.name + ".fit_rms_z_median", m.fit_rms_z_median, "mm");
-            add("hybrid." + m.name + ".seconds", m.seconds, "s");
-            say("  " + m.name + ": " + std::to_string(m.usable_poses) + " of " +
+            add("hybrid." + m.key + ".usable_poses", double(m.usable_poses), "");
+            add("hybrid." + m.key + ".pixels_modelled", double(m.pixels_modelled), "");
+            add("hybrid." + m.key + ".fit_rms_z_median", m.fit_rms_z_median, "mm");
+            add("hybrid." + m.key + ".sigma_z_median", m.sigma_z_median, "mm");
+            add("hybrid." + m.key + ".seconds", m.seconds, "s");
+            say("  " + m.key + ": " + std::to_string(m.usable_poses) + " of " +
                 std::to_string(m.poses) + " poses, " + std::to_string(m.pixels_modelled) +
-                " pixels modelled, median Z fit RMS " + fixed_text(m.fit_rms_z_median, 4) + " mm");
-            models_.push_back(std::move(m));
+                " pixels modelled, median Z fit RMS " + fixed_text(m.fit_rms_z_median, 4) +
+                " mm");
+            methods().push_back(std::move(m));
         }
+    }
+
+    // The paper's procedure: a joint stereo calibration (or the rig's
+    // 5-coefficient model), then flat boards placed by SV, every model.
+    void calibrate_paper_procedure() {
+        if (options().sv_calibration == SvCalibrationSource::rig_model) {
+            say("the paper's SV model: the rig's own lenses and pose within the 5-coefficient "
+                "model (no stereo calibration; the distortion outside that model is left to SV)");
+            paper_calibration_ = calibration_from_rig(rig());
+            paper_calibration_.camera.drop_unmodelled_terms();
+            paper_calibration_.projector.drop_unmodelled_terms();
+            paper_calibration_.origin = "rig '" + rig().name + "', 5-coefficient part of its model";
+            record_.paper_stereo.origin = paper_calibration_.origin;
+        } else {
+            say("the paper's stereo calibration (joint, no correction grids)");
+            StereoSessionOptions so;
+            so.compare_skew = false;
+            so.decode.threads = options().threads;
+            so.stereo.procedure = StereoProcedure::joint;
+            so.stereo.camera_grid = {};
+            so.stereo.projector_grid = {};
+            so.progress = indented();
+            paper_calibration_ =
+                calibrate_stereo(paper_board_session_, so, "stereo-report-paper",
+                                 record_.paper_stereo);
+        }
+        const std::uint64_t hash = save(paper_calibration_, "calib-paper.yaml");
+        Method sv;
+        sv.key = "sv-paper";
+        sv.title = "SV, the paper's calibration";
+        sv.procedure = Procedure::paper;
+        sv.calibration = &paper_calibration_;
+        sv.sv = make_sv(paper_calibration_);
+        methods().push_back(std::move(sv));
+        say("the paper's hybrid tables from the flat boards, every model");
+        add_tables(calibrate_hybrid(plane_session_, paper_calibration_, hash, hybrid_options(),
+                                    available_table_models()),
+                   Procedure::paper, "paper", "paper's procedure");
+    }
+
+    // Ours: one checkerboard session gives the stereo calibration (camera
+    // first, correction grids) and the tables (boards placed by the
+    // camera); the same calibration with the paper's flat boards beside it.
+    void calibrate_our_procedures() {
+        say("our stereo calibration from the checkerboard session (camera first, correction "
+            "grids)");
+        StereoSessionOptions so;
+        so.compare_skew = false;
+        so.decode.threads = options().threads;
+        so.progress = indented();
+        const auto start = Clock::now();
+        our_calibration_ = calibrate_stereo(board_session_, so, "stereo-report", record_.our_stereo);
+        const std::uint64_t hash = save(our_calibration_, "calib.yaml");
+        Method sv;
+        sv.key = "sv";
+        sv.title = "SV, our calibration";
+        sv.procedure = Procedure::boards;
+        sv.calibration = &our_calibration_;
+        sv.sv = make_sv(our_calibration_);
+        methods().push_back(std::move(sv));
+
+        say("our hybrid tables from the same checkerboard session, every model");
+        const auto hybrid_start = Clock::now();
+        HybridOptions ho = hybrid_options();
+        std::vector<HybridResult> boards =
+            calibrate_hybrid(board_session_, our_calibration_, hash, ho, available_table_models());
+        record_.seconds_boards_hybrid = seconds_since(hybrid_start);
+        add("calibration.boards.seconds_stereo", record_.our_stereo.seconds, "s");
+        add("calibration.boards.seconds_hybrid", record_.seconds_boards_hybrid, "s");
+        add("calibration.boards.seconds", seconds_since(start), "s");
+        const std::size_t first = count();
+        add_tables(boards, Procedure::boards, "boards", "our procedure");
+        for (std::size_t m = first; m < count(); ++m)
+            methods()[m].is_default = methods()[m].model == HybridOptions{}.model;
+        // The same session's tables fitted to the boards' samples alone,
+        // and to the stereo model's alone, for comparison.
+        for (const HybridSamples samples : {HybridSamples::boards, HybridSamples::model}) {
+            ho.samples = samples;
+            const std::string key = samples == HybridSamples::boards ? "boards-only" : "model-only";
+            say("our tables fitted to " + std::string(to_string(samples)) + " samples only");
+            add_tables(calibrate_hybrid(board_session_, our_calibration_, hash, ho,
+                                        {HybridOptions{}.model}),
+                       Procedure::boards, key,
+                       samples == HybridSamples::boards ? "our procedure, board samples only"
+                                                        : "our procedure, stereo model only");
+            // The boards alone reach fewer pixels and depths.
+            methods().back().in_common = samples != HybridSamples::boards;
+        }
+        say("our stereo calibration with the paper's flat boards");
+        add_tables(calibrate_hybrid(plane_session_, our_calibration_, hash, hybrid_options(),
+                                    {HybridOptions{}.model}),
+                   Procedure::planes, "planes", "our calibration, the paper's flat boards");
     }
 
     // ---- scans
@@ -526,19 +435,23 @@ class Run {
 
     Reconstructions reconstruct_all(const DecodeResult& decoded) const {
         Reconstructions r;
-        r.clouds.resize(labels());
-        sv_->reconstruct(decoded, ReconstructAxes::x, r.clouds[0]);
-        for (std::size_t m = 0; m < models_.size(); ++m)
-            apply_table(models_[m].table, decoded.proj_x, r.clouds[m + 1]);
+        r.clouds.resize(count());
+        for (std::size_t m = 0; m < count(); ++m) {
+            const Method& method = record_.methods[m];
+            if (method.is_table())
+                apply_table(method.table, decoded.proj_x, r.clouds[m]);
+            else
+                method.sv->reconstruct(decoded, ReconstructAxes::x, r.clouds[m]);
+        }
         const std::size_t n = decoded.camera.area();
         r.common.assign(n, 1);
-        r.points.assign(labels(), 0);
-        for (std::size_t l = 0; l < labels(); ++l) {
-            const float* xyz = r.clouds[l].xyz.data();
+        r.points.assign(count(), 0);
+        for (std::size_t m = 0; m < count(); ++m) {
+            const float* xyz = r.clouds[m].xyz.data();
             for (std::size_t i = 0; i < n; ++i) {
                 const bool ok = finite_point(xyz + 3 * i);
-                r.points[l] += ok ? 1 : 0;
-                if (!ok)
+                r.points[m] += ok ? 1 : 0;
+                if (!ok && record_.methods[m].in_common)
                     r.common[i] = 0;
             }
         }
@@ -547,31 +460,33 @@ class Run {
         return r;
     }
 
-    // Simulates a scan (noisy, saved with truth; then noise-free), reconstructs
-    // both with every model and records truth errors, shape fits and figures.
-    // Returns the noisy scan's decode and reconstructions for later use.
+    // Simulates a scan (noisy, saved with truth; then noise-free),
+    // reconstructs both with every method and records truth errors, shape
+    // fits and figures. Returns the noisy scan's decode and reconstructions.
     struct NoisyScan {
         DecodeResult decoded;
         Reconstructions recon;
     };
     NoisyScan process_scan(ScanSummary& s, const sim::Scene& scene,
-                           std::unique_ptr<sim::Renderer> renderer, int seed_index) {
+                           std::unique_ptr<sim::Renderer> renderer, int seed_index,
+                           bool save = true) {
         const fs::path folder = folder_ / "scans" / s.key;
         say("scan '" + s.key + "': rendering with the rig's noise");
         if (!renderer)
-            renderer = std::make_unique<sim::Renderer>(rig_, scene, options_.threads);
+            renderer = std::make_unique<sim::Renderer>(rig(), scene, options().threads);
         NoisyScan noisy;
         {
             const sim::SimulatedCapture capture =
                 sim::simulate(*renderer, scan_sequence_, scan_seed(seed_index));
-            sim::write_simulated_capture(folder, capture);
+            if (save)
+                sim::write_simulated_capture(folder, capture);
             noisy.decoded = decode_capture(capture, folder);
             noisy.recon = reconstruct_all(noisy.decoded);
             s.points = noisy.recon.points;
             s.common = noisy.recon.common_count;
-            for (std::size_t l = 0; l < labels(); ++l) {
+            for (std::size_t m = 0; m < count(); ++m) {
                 const TruthComparison t = compare_with_truth(
-                    masked_points(noisy.recon.clouds[l], noisy.recon.common), capture.truth_xyz);
+                    masked_points(noisy.recon.clouds[m], noisy.recon.common), capture.truth_xyz);
                 s.truth_noisy.push_back(t.dz);
                 s.shape_noisy.push_back(t.dz_shape);
                 s.compared_noisy = t.compared;
@@ -579,100 +494,105 @@ class Run {
             }
         }
         renderer.reset();
-        say("scan '" + s.key + "': " + std::to_string(s.points[0]) + " SV points, " +
-            std::to_string(s.common) + " pixels with a point from every model");
+        say("scan '" + s.key + "': " + std::to_string(s.common) +
+            " pixels with a point from every method");
         fit_shapes(s, noisy.recon, true);
 
         say("scan '" + s.key + "': rendering noise-free (read noise 0, no shot noise)");
         {
-            const sim::Renderer clean(clean_rig_, scene, options_.threads);
+            const sim::Renderer clean(clean_rig_, scene, options().threads);
             const sim::SimulatedCapture capture =
                 sim::simulate(clean, scan_sequence_, scan_seed(seed_index));
             const DecodeResult decoded = decode_capture(capture, folder);
             const Reconstructions recon = reconstruct_all(decoded);
             fit_shapes(s, recon, false);
             std::vector<TruthComparison> cmp;
-            for (std::size_t l = 0; l < labels(); ++l) {
-                cmp.push_back(compare_with_truth(masked_points(recon.clouds[l], recon.common),
+            for (std::size_t m = 0; m < count(); ++m) {
+                cmp.push_back(compare_with_truth(masked_points(recon.clouds[m], recon.common),
                                                  capture.truth_xyz));
                 s.truth_clean.push_back(cmp.back().dz);
                 s.shape_clean.push_back(cmp.back().dz_shape);
+                s.distance_clean.push_back(cmp.back().distance);
                 s.compared_clean = cmp.back().compared;
             }
-            // Model error maps on one colour scale, SV's.
-            const double limit = symmetric_limit(cmp[0].dz_values);
-            for (std::size_t l = 0; l < labels(); ++l)
-                png("truth-" + s.key + "-" + label_key(l) + ".png",
-                    signed_map_figure(cmp[l].dz_map, limit,
-                                      s.key + " noise-free: Z - Z true, " + label_title(l)));
+            if (save) {
+                // Error maps on one colour scale, the paper's SV's.
+                const std::size_t reference = record_.find("sv-paper");
+                const double limit = symmetric_limit(cmp[reference].dz_values);
+                for (std::size_t m = 0; m < count(); ++m)
+                    png("truth-" + s.key + "-" + record_.methods[m].key + ".png",
+                        signed_map_figure(cmp[m].dz_map, limit,
+                                          s.key + " noise-free: Z - Z true, " +
+                                              record_.methods[m].title));
+            }
         }
-        for (std::size_t l = 0; l < labels(); ++l) {
-            const std::string k = label_key(l);
-            add(s.key + ".points." + k, double(s.points[l]), "");
-            add("truth." + s.key + ".noisy." + k + ".rms", s.truth_noisy[l].rms, "mm");
-            add("truth." + s.key + ".noisy." + k + ".mean", s.truth_noisy[l].mean, "mm");
-            add("truth." + s.key + ".noisy." + k + ".std", s.truth_noisy[l].stddev, "mm");
-            add("truth." + s.key + ".noise_free." + k + ".rms", s.truth_clean[l].rms, "mm");
-            add("truth." + s.key + ".noise_free." + k + ".mean", s.truth_clean[l].mean, "mm");
-            add("truth." + s.key + ".noise_free." + k + ".std", s.truth_clean[l].stddev, "mm");
-            add("truth." + s.key + ".noisy." + k + ".shape_rms", s.shape_noisy[l].rms, "mm");
-            add("truth." + s.key + ".noise_free." + k + ".shape_rms", s.shape_clean[l].rms, "mm");
+        for (std::size_t m = 0; m < count(); ++m) {
+            const std::string k = record_.methods[m].key;
+            add(s.key + ".points." + k, double(s.points[m]), "");
+            add("truth." + s.key + ".noisy." + k + ".rms", s.truth_noisy[m].rms, "mm");
+            add("truth." + s.key + ".noisy." + k + ".mean", s.truth_noisy[m].mean, "mm");
+            add("truth." + s.key + ".noise_free." + k + ".rms", s.truth_clean[m].rms, "mm");
+            add("truth." + s.key + ".noise_free." + k + ".mean", s.truth_clean[m].mean, "mm");
+            add("truth." + s.key + ".noise_free." + k + ".std", s.truth_clean[m].stddev, "mm");
+            add("truth." + s.key + ".noisy." + k + ".shape_rms", s.shape_noisy[m].rms, "mm");
+            add("truth." + s.key + ".noise_free." + k + ".shape_rms", s.shape_clean[m].rms, "mm");
+            add("truth." + s.key + ".noise_free." + k + ".distance_rms",
+                s.distance_clean[m].rms, "mm");
         }
         add(s.key + ".truth_pixels", double(s.truth_pixels), "");
         add(s.key + ".common_points", double(s.common), "");
-        add("truth." + s.key + ".noisy.compared", double(s.compared_noisy), "");
-        add("truth." + s.key + ".noise_free.compared", double(s.compared_clean), "");
         std::string line = "scan '" + s.key + "' Z error vs truth, RMS noisy / noise-free:";
-        for (std::size_t l = 0; l < labels(); ++l)
-            line += " " + label_key(l) + " " + fixed_text(s.truth_noisy[l].rms, 4) + " / " +
-                    fixed_text(s.truth_clean[l].rms, 4);
+        for (std::size_t m = 0; m < count(); ++m)
+            line += " " + record_.methods[m].key + " " + fixed_text(s.truth_noisy[m].rms, 4) +
+                    " / " + fixed_text(s.truth_clean[m].rms, 4);
         say(line + " mm");
         return noisy;
     }
 
-    // Shape fit of every model's points (the common pixels); for the noisy
+    // Shape fit of every method's points (the common pixels); for the noisy
     // scan also histograms and maps.
     void fit_shapes(ScanSummary& s, const Reconstructions& recon, bool noisy) {
-        std::vector<double> fit_rms(labels(), kNaN), diameter(labels(), kNaN),
-            diameter_error(labels(), kNaN);
+        std::vector<double> fit_rms(count(), kNaN), diameter(count(), kNaN),
+            diameter_error(count(), kNaN);
         if (s.fit == FitKind::none)
             return;
-        std::vector<CloudPoints> points(labels());
-        std::vector<std::vector<double>> residuals(labels());
-        for (std::size_t l = 0; l < labels(); ++l) {
-            points[l] = masked_points(recon.clouds[l], recon.common);
+        std::vector<CloudPoints> points(count());
+        std::vector<std::vector<double>> residuals(count());
+        for (std::size_t m = 0; m < count(); ++m) {
+            points[m] = masked_points(recon.clouds[m], recon.common);
             try {
                 if (s.fit == FitKind::plane) {
-                    const PlaneFit f = fit_plane(points[l].points);
-                    fit_rms[l] = f.fit.rms;
-                    residuals[l] = f.fit.residuals;
+                    const PlaneFit f = fit_plane(points[m].points);
+                    fit_rms[m] = f.fit.rms;
+                    residuals[m] = f.fit.residuals;
                 } else if (s.fit == FitKind::cylinder) {
                     const CylinderFigures f =
-                        cylinder_figures(points[l].points, s.nominal_diameter);
-                    fit_rms[l] = f.fit.fit.rms;
-                    diameter[l] = f.diameter;
-                    diameter_error[l] = f.diameter_error.value_or(kNaN);
-                    residuals[l] = f.fit.fit.residuals;
+                        cylinder_figures(points[m].points, s.nominal_diameter);
+                    fit_rms[m] = f.fit.fit.rms;
+                    diameter[m] = f.diameter;
+                    diameter_error[m] = f.diameter_error.value_or(kNaN);
+                    residuals[m] = f.fit.fit.residuals;
                 } else {
-                    const ProbingFigures f = probing_figures(points[l].points, s.nominal_diameter);
-                    fit_rms[l] = f.fit.fit.rms;
-                    diameter[l] = f.diameter;
-                    diameter_error[l] = f.size_error.value_or(kNaN);
-                    residuals[l] = f.fit.fit.residuals;
+                    const ProbingFigures f = probing_figures(points[m].points, s.nominal_diameter);
+                    fit_rms[m] = f.fit.fit.rms;
+                    diameter[m] = f.diameter;
+                    diameter_error[m] = f.size_error.value_or(kNaN);
+                    residuals[m] = f.fit.fit.residuals;
                 }
             } catch (const FitError& e) {
-                s.fit_note += label_title(l) + (noisy ? "" : " (noise-free)") + ": fit failed (" +
-                              e.what() + "). ";
+                s.fit_note += record_.methods[m].title + (noisy ? "" : " (noise-free)") +
+                              ": fit failed (" + e.what() + "). ";
             }
         }
         if (!noisy) {
             s.fit_rms_clean = fit_rms;
             s.diameter_clean = diameter;
-            for (std::size_t l = 0; l < labels(); ++l)
-                if (std::isfinite(fit_rms[l])) {
-                    add(s.key + ".fit_rms_noise_free." + label_key(l), fit_rms[l], "mm");
+            for (std::size_t m = 0; m < count(); ++m)
+                if (std::isfinite(fit_rms[m])) {
+                    add(s.key + ".fit_rms_noise_free." + record_.methods[m].key, fit_rms[m], "mm");
                     if (s.fit != FitKind::plane)
-                        add(s.key + ".diameter_noise_free." + label_key(l), diameter[l], "mm");
+                        add(s.key + ".diameter_noise_free." + record_.methods[m].key,
+                            diameter[m], "mm");
                 }
             return;
         }
@@ -682,35 +602,33 @@ class Run {
         const char* fit_name = s.fit == FitKind::plane      ? "plane"
                                : s.fit == FitKind::cylinder ? "cylinder"
                                                             : "sphere";
-        for (std::size_t l = 0; l < labels(); ++l) {
-            if (!std::isfinite(s.fit_rms[l]))
+        for (std::size_t m = 0; m < count(); ++m) {
+            if (!std::isfinite(s.fit_rms[m]))
                 continue;
-            add(s.key + ".fit_rms." + label_key(l), s.fit_rms[l], "mm");
+            const std::string& k = record_.methods[m].key;
+            add(s.key + ".fit_rms." + k, s.fit_rms[m], "mm");
             if (s.fit != FitKind::plane) {
-                add(s.key + ".diameter." + label_key(l), s.diameter[l], "mm");
-                add(s.key + ".diameter_error." + label_key(l), s.diameter_error[l], "mm");
+                add(s.key + ".diameter." + k, s.diameter[m], "mm");
+                add(s.key + ".diameter_error." + k, s.diameter_error[m], "mm");
             }
         }
-        if (residuals[0].empty())
+        const std::size_t reference = record_.find("sv-paper");
+        if (residuals[reference].empty())
             return;
-        const double limit = symmetric_limit(residuals[0]);
+        const double limit = symmetric_limit(residuals[reference]);
         std::vector<HistogramSeries> series;
-        for (std::size_t l = 0; l < labels(); ++l)
-            if (!residuals[l].empty())
-                series.push_back({label_title(l), residuals[l]});
+        for (std::size_t m = 0; m < count(); ++m)
+            if (!residuals[m].empty() && (m == reference || record_.methods[m].is_default))
+                series.push_back({record_.methods[m].title, residuals[m]});
         png(s.key + "-fit-histogram.png",
             histogram_figure(series, -limit, limit, std::string(fit_name) + " fit residual (mm)",
                              s.key + ": " + fit_name + "-fit residuals (noisy scan)"));
-        for (std::size_t l = 0; l < labels(); ++l)
-            if (!residuals[l].empty())
-                png(s.key + "-fit-map-" + label_key(l) + ".png",
-                    signed_map_figure(values_image(points[l], residuals[l]), limit,
+        for (std::size_t m = 0; m < count(); ++m)
+            if (!residuals[m].empty())
+                png(s.key + "-fit-map-" + record_.methods[m].key + ".png",
+                    signed_map_figure(values_image(points[m], residuals[m]), limit,
                                       s.key + ": " + fit_name + "-fit residual, " +
-                                          label_title(l)));
-        std::string line = "scan '" + s.key + "' " + fit_name + "-fit RMS:";
-        for (std::size_t l = 0; l < labels(); ++l)
-            line += " " + label_key(l) + " " + fixed_text(s.fit_rms[l], 4);
-        say(line + " mm");
+                                          record_.methods[m].title));
     }
 
     static sim::Scene plane_scene() {
@@ -750,15 +668,14 @@ class Run {
     }
 
     void run_shape(const std::string& key, const std::string& title, FitKind fit, double nominal,
-                   sim::Scene (*make)(), int seed_index) {
+                   const sim::Scene& scene, int seed_index) {
         ScanSummary s;
         s.key = key;
         s.title = title;
         s.fit = fit;
         s.nominal_diameter = nominal;
-        const sim::Scene scene = make();
         process_scan(s, scene, nullptr, seed_index);
-        scans_.push_back(std::move(s));
+        record_.scans.push_back(std::move(s));
     }
 
     void run_plane() {
@@ -766,23 +683,91 @@ class Run {
         s.key = "plane";
         s.title = "Experiment 1: inclined plane (230 x 175 mm, ~20 deg, 480 mm)";
         s.fit = FitKind::plane;
-        const sim::Scene scene = plane_scene();
-        const NoisyScan noisy = process_scan(s, scene, nullptr, 11);
-        scans_.push_back(std::move(s));
+        const NoisyScan noisy = process_scan(s, plane_scene(), nullptr, 11);
+        record_.scans.push_back(std::move(s));
         run_windows(noisy.decoded, noisy.recon);
+    }
+
+    // ---- VDI/VDE 2634-2 ball bar at seven places and directions in the
+    // volume (its length across the field, in depth and along both
+    // diagonals, near and far).
+    void run_ball_bars() {
+        // Centres of the spheres between about 430 and 530 mm: inside the
+        // depths every calibration session reaches (board centres 400 to
+        // 560 mm).
+        const std::vector<std::pair<Vec3, Vec3>> places = {
+            {{0, 0, 480}, {1, 0, 0}},         {{0, 0, 480}, {0.87, 0, 0.5}},
+            {{0, 0, 480}, {-0.87, 0, 0.5}},   {{0, 0, 480}, {0.55, 0.66, 0.5}},
+            {{0, 0, 480}, {0.7, 0.5, 0.5}},   {{0, 0, 480}, {-0.7, 0.5, 0.5}},
+            {{0, 10, 500}, {0.9, 0.44, 0}}};
+        for (std::size_t k = 0; k < places.size(); ++k) {
+            BallBarPosition b;
+            b.centre = places[k].first;
+            b.axis = places[k].second;
+            sim::Scene scene;
+            sim::add_ball_bar(scene, b.centre, b.axis, kBallBarLength, kBallDiameter / 2, 0.85);
+            ScanSummary s;
+            s.key = "ball-bar-" + std::to_string(k + 1);
+            s.title = "ball bar " + std::to_string(k + 1);
+            say("ball bar " + std::to_string(k + 1) + " of " + std::to_string(places.size()));
+            for (const bool noisy : {true, false}) {
+                const sim::Renderer renderer(noisy ? rig() : clean_rig_, scene,
+                                             options().threads);
+                const sim::SimulatedCapture capture =
+                    sim::simulate(renderer, scan_sequence_, scan_seed(20 + int(k)));
+                const DecodeResult decoded = decode_capture(capture, folder_);
+                const Reconstructions recon = reconstruct_all(decoded);
+                std::vector<double>& spacing = noisy ? b.spacing_error : b.spacing_error_clean;
+                for (std::size_t m = 0; m < count(); ++m) {
+                    // Each method's own points (a table covers what its boards
+                    // reached), away from the spheres' silhouettes.
+                    std::vector<std::uint8_t> own(decoded.camera.area());
+                    for (std::size_t i = 0; i < own.size(); ++i)
+                        own[i] = finite_point(recon.clouds[m].xyz.data() + 3 * i) ? 1 : 0;
+                    erode(own, decoded.camera, kEdgeMarginPx);
+                    const CloudPoints points = masked_points(recon.clouds[m], own);
+                    double error = kNaN, size = kNaN;
+                    try {
+                        const BallBarFigures f =
+                            ball_bar_figures(points.points, kBallBarLength, kBallDiameter);
+                        // Both spheres must be seen: one sphere split into
+                        // two clusters (the other outside the method's
+                        // range) is no ball bar.
+                        if (f.fit.distance > 0.5 * kBallBarLength) {
+                            error = f.spacing_error.value_or(kNaN);
+                            size = std::max(std::fabs(f.size_error_first.value_or(kNaN)),
+                                            std::fabs(f.size_error_second.value_or(kNaN)));
+                        }
+                    } catch (const FitError&) {
+                        // NaN: no fit (too few points)
+                    }
+                    spacing.push_back(error);
+                    if (noisy)
+                        b.size_error.push_back(size);
+                }
+            }
+            for (std::size_t m = 0; m < count(); ++m) {
+                const std::string base =
+                    "ball_bar." + std::to_string(k + 1) + "." + record_.methods[m].key;
+                add(base + ".spacing_error", b.spacing_error[m], "mm");
+                add(base + ".spacing_error_noise_free", b.spacing_error_clean[m], "mm");
+                add(base + ".size_error", b.size_error[m], "mm");
+            }
+            record_.ball_bars.push_back(std::move(b));
+        }
     }
 
     // ---- Experiment 3
     void run_relief() {
-        const double target = kReliefPixelsFullSize / double(options_.binning * options_.binning);
+        const double target = kReliefPixelsFullSize / double(options().binning * options().binning);
         say("relief: sizing it so that about " + std::to_string(static_cast<long>(target)) +
             " camera pixels see it");
         double scale = 1;
         std::unique_ptr<sim::Renderer> renderer;
         std::size_t seen = 0;
         for (int round = 0; round < 3; ++round) {
-            const sim::Scene scene = relief_scene(scale);
-            renderer = std::make_unique<sim::Renderer>(rig_, scene, options_.threads);
+            renderer = std::make_unique<sim::Renderer>(rig(), relief_scene(scale),
+                                                       options().threads);
             const Image<float>& proj = renderer->truth_projector();
             seen = 0;
             for (std::size_t i = 0; i < proj.pixel_count(); ++i)
@@ -795,93 +780,92 @@ class Run {
                 break;
             scale = std::clamp(scale * std::sqrt(target / double(seen)), 0.3, 1.5);
         }
-        relief_.scale = scale;
-        relief_.pixels_seen = seen;
+        ReliefSummary& relief = record_.relief;
+        relief.scale = scale;
+        relief.pixels_seen = seen;
         add("relief.scale", scale, "");
         add("relief.pixels_seen", double(seen), "");
-        add("relief.width", kReliefWidth * scale, "mm");
-        add("relief.height", kReliefHeight * scale, "mm");
 
         ScanSummary s;
         s.key = "relief";
         s.title = "Experiment 3: freeform relief (face)";
         s.fit = FitKind::none;
-        const sim::Scene scene = relief_scene(scale);
-        const NoisyScan noisy = process_scan(s, scene, std::move(renderer), 14);
-        scans_.push_back(std::move(s));
+        const NoisyScan noisy = process_scan(s, relief_scene(scale), std::move(renderer), 14);
+        record_.scans.push_back(std::move(s));
 
-        // SV and each table, per pixel (each cloud's own points).
-        const CloudPoints sv_points = cloud_points(noisy.recon.clouds[0]);
+        // The paper's comparison: its SV against its hybrid tables, per pixel.
+        const std::size_t sv = record_.find("sv-paper");
+        const CloudPoints sv_points = cloud_points(noisy.recon.clouds[sv]);
         std::vector<std::vector<double>> differences;
-        for (std::size_t m = 0; m < models_.size(); ++m) {
-            const CloudDistance d =
-                compare_per_pixel(sv_points, cloud_points(noisy.recon.clouds[m + 1]));
-            relief_.distance_rms.push_back(d.distance.rms);
-            relief_.dz_rms.push_back(d.dz.rms);
-            relief_.matched.push_back(d.matched);
-            add("relief.difference." + models_[m].name + ".distance_rms", d.distance.rms, "mm");
-            add("relief.difference." + models_[m].name + ".dz_rms", d.dz.rms, "mm");
-            add("relief.difference." + models_[m].name + ".dz_mean", d.dz.mean, "mm");
-            add("relief.difference." + models_[m].name + ".matched", double(d.matched), "");
-            png("relief-difference-" + models_[m].name + ".png",
+        for (std::size_t m = 0; m < count(); ++m) {
+            const Method& method = record_.methods[m];
+            if (method.procedure != Procedure::paper || !method.is_table())
+                continue;
+            const CloudDistance d = compare_per_pixel(sv_points, cloud_points(noisy.recon.clouds[m]));
+            relief.compared_methods.push_back(m);
+            relief.distance_rms.push_back(d.distance.rms);
+            relief.dz_rms.push_back(d.dz.rms);
+            relief.matched.push_back(d.matched);
+            add("relief.difference." + method.key + ".distance_rms", d.distance.rms, "mm");
+            add("relief.difference." + method.key + ".dz_rms", d.dz.rms, "mm");
+            png("relief-difference-" + method.key + ".png",
                 signed_map_figure(d.dz_map, symmetric_limit(d.values),
-                                  "relief: Z(SV) - Z(hybrid " + models_[m].name + ")"));
+                                  "relief: Z(SV) - Z(" + method.title + ")"));
             differences.push_back(d.values);
         }
         if (!differences.empty()) {
             std::vector<HistogramSeries> series;
-            for (std::size_t m = 0; m < models_.size(); ++m)
-                series.push_back({"SV - " + models_[m].name, differences[m]});
+            for (std::size_t k = 0; k < differences.size(); ++k)
+                series.push_back({"SV - " + record_.methods[relief.compared_methods[k]].key,
+                                  differences[k]});
             const double limit = symmetric_limit(differences[0]);
             png("relief-difference-histogram.png",
                 histogram_figure(series, -limit, limit, "Z(SV) - Z(hybrid) per pixel (mm)",
-                                 "relief: SV vs hybrid reconstructions"));
+                                 "relief: the paper's SV vs its hybrid tables"));
         }
         time_relief(noisy.decoded);
     }
 
     void time_relief(const DecodeResult& decoded) {
-        const int runs = options_.timing_runs;
+        const int runs = options().timing_runs;
+        ReliefSummary& relief = record_.relief;
         say("relief: timing the reconstructions, one thread each, best of " + std::to_string(runs));
-        relief_.seconds.assign(labels(), kNaN);
+        relief.seconds.assign(count(), kNaN);
         PointCloud cloud;
         SvOptions one;
         one.threads = 1;
-        {
-            const SvReconstructor sv(calibration_, one);
-            relief_.seconds[0] =
-                best_seconds(runs, [&] { sv.reconstruct(decoded, ReconstructAxes::x, cloud); });
-        }
-        {
-            SvOptions paper = one;
-            paper.solver = XOnlySolver::plane_iteration;
-            const SvReconstructor sv(calibration_, paper);
-            relief_.seconds_sv_plane_iteration =
-                best_seconds(runs, [&] { sv.reconstruct(decoded, ReconstructAxes::x, cloud); });
-        }
         ThreadPool single(1);
-        for (std::size_t m = 0; m < models_.size(); ++m)
-            relief_.seconds[m + 1] = best_seconds(
-                runs, [&] { apply_table(models_[m].table, decoded.proj_x, cloud, &single); });
-        add("relief.time.sv", relief_.seconds[0], "s");
-        add("relief.time.sv_plane_iteration", relief_.seconds_sv_plane_iteration, "s");
-        std::string line = "relief: SV " + seconds_text(relief_.seconds[0]) +
-                           " (paper's plane iteration " +
-                           seconds_text(relief_.seconds_sv_plane_iteration) + ")";
-        for (std::size_t m = 0; m < models_.size(); ++m) {
-            const double speedup = relief_.seconds[0] / relief_.seconds[m + 1];
-            add("relief.time." + models_[m].name, relief_.seconds[m + 1], "s");
-            add("relief.speedup." + models_[m].name, speedup, "");
-            line += ", " + models_[m].name + " " + seconds_text(relief_.seconds[m + 1]) + " (" +
-                    fixed_text(speedup, 1) + "x)";
+        for (std::size_t m = 0; m < count(); ++m) {
+            const Method& method = record_.methods[m];
+            if (method.procedure == Procedure::reference)
+                continue;
+            if (method.is_table()) {
+                relief.seconds[m] = best_seconds(
+                    runs, [&] { apply_table(method.table, decoded.proj_x, cloud, &single); });
+            } else {
+                const SvReconstructor sv(*method.calibration, one);
+                relief.seconds[m] =
+                    best_seconds(runs, [&] { sv.reconstruct(decoded, ReconstructAxes::x, cloud); });
+            }
+            add("relief.time." + method.key, relief.seconds[m], "s");
         }
-        say(line);
+        SvOptions iteration = one;
+        iteration.solver = XOnlySolver::plane_iteration;
+        const SvReconstructor sv(paper_calibration_, iteration);
+        relief.seconds_sv_plane_iteration =
+            best_seconds(runs, [&] { sv.reconstruct(decoded, ReconstructAxes::x, cloud); });
+        add("relief.time.sv_plane_iteration", relief.seconds_sv_plane_iteration, "s");
     }
 
-    // ---- Experiment 4
+    // ---- Experiment 4: the paper's SV and our tables on N x N windows.
     void run_windows(const DecodeResult& decoded, const Reconstructions& full) {
+        WindowSummary& windows = record_.windows;
+        windows.methods.push_back(record_.find("sv-paper"));
+        for (std::size_t m = 0; m < count(); ++m)
+            if (record_.methods[m].procedure == Procedure::boards &&
+                record_.methods[m].is_table() && record_.methods[m].key.starts_with("boards-"))
+                windows.methods.push_back(m);
         const Size camera = decoded.camera;
-        // Centre: centroid of the plane's pixels.
         double cx = 0, cy = 0;
         std::size_t n = 0;
         for (int y = 0; y < camera.height; ++y)
@@ -899,404 +883,120 @@ class Run {
         for (int k = 1; k <= kWindowSizes; ++k) {
             const int size = std::min(
                 largest, std::max(8, static_cast<int>(std::lround(double(kWindowStepFullSize * k) /
-                                                                  double(options_.binning)))));
-            if (windows_.sizes.empty() || size > windows_.sizes.back())
-                windows_.sizes.push_back(size);
+                                                                  double(options().binning)))));
+            if (windows.sizes.empty() || size > windows.sizes.back())
+                windows.sizes.push_back(size);
         }
-        const int runs = options_.timing_runs;
-        say("windows: timing " + std::to_string(windows_.sizes.size()) +
+        const int runs = options().timing_runs;
+        say("windows: timing " + std::to_string(windows.sizes.size()) +
             " square windows of the plane scan, one thread each, best of " + std::to_string(runs));
-        windows_.seconds.assign(labels(), {});
+        windows.seconds.assign(windows.methods.size(), {});
         ThreadPool single(1);
         SvOptions one;
         one.threads = 1;
-        for (int size : windows_.sizes) {
+        for (int size : windows.sizes) {
             const int x0 =
                 std::clamp(static_cast<int>(std::lround(cx - size / 2.0)), 0, camera.width - size);
             const int y0 =
                 std::clamp(static_cast<int>(std::lround(cy - size / 2.0)), 0, camera.height - size);
-            windows_.x0 = x0;
-            windows_.y0 = y0;
             const Size window{size, size};
             const DecodeResult cropped = crop_decode(decoded, x0, y0, window);
-            std::vector<PointCloud> clouds(labels());
-            {
-                const SvReconstructor sv(crop_calibration(calibration_, x0, y0, window), one);
-                windows_.seconds[0].push_back(best_seconds(
-                    runs, [&] { sv.reconstruct(cropped, ReconstructAxes::x, clouds[0]); }));
-            }
-            for (std::size_t m = 0; m < models_.size(); ++m) {
-                const CoefficientTable table = crop_table(models_[m].table, x0, y0, window);
-                windows_.seconds[m + 1].push_back(best_seconds(
-                    runs, [&] { apply_table(table, cropped.proj_x, clouds[m + 1], &single); }));
-            }
-            // The window's reconstructions must be the full image's, pixel for pixel.
             std::size_t points = 0;
-            for (std::size_t l = 0; l < labels(); ++l)
+            for (std::size_t w = 0; w < windows.methods.size(); ++w) {
+                const std::size_t m = windows.methods[w];
+                const Method& method = record_.methods[m];
+                PointCloud cloud;
+                if (method.is_table()) {
+                    const CoefficientTable table = crop_table(method.table, x0, y0, window);
+                    windows.seconds[w].push_back(best_seconds(
+                        runs, [&] { apply_table(table, cropped.proj_x, cloud, &single); }));
+                } else {
+                    const SvReconstructor sv(
+                        crop_calibration(*method.calibration, x0, y0, window), one);
+                    windows.seconds[w].push_back(best_seconds(
+                        runs, [&] { sv.reconstruct(cropped, ReconstructAxes::x, cloud); }));
+                }
+                // The window's reconstruction must be the full image's, pixel for pixel.
                 for (int y = 0; y < size; ++y)
                     for (int x = 0; x < size; ++x) {
-                        const float* a = &clouds[l].xyz.at(x, y, 0);
-                        const float* b = &full.clouds[l].xyz.at(x0 + x, y0 + y, 0);
+                        const float* a = &cloud.xyz.at(x, y, 0);
+                        const float* b = &full.clouds[m].xyz.at(x0 + x, y0 + y, 0);
                         const bool fa = finite_point(a), fb = finite_point(b);
-                        if (l == 0 && fa)
+                        if (w == 0 && fa)
                             ++points;
                         if (fa != fb) {
-                            ++windows_.crop_mismatched;
+                            ++windows.crop_mismatched;
                             continue;
                         }
                         if (fa)
                             for (int c = 0; c < 3; ++c)
-                                windows_.crop_max_difference_mm =
-                                    std::max(windows_.crop_max_difference_mm,
+                                windows.crop_max_difference_mm =
+                                    std::max(windows.crop_max_difference_mm,
                                              std::abs(double(a[c]) - double(b[c])));
                     }
-            windows_.points.push_back(points);
-            std::string line = "  N = " + std::to_string(size) + ": SV " +
-                               seconds_text(windows_.seconds[0].back());
-            for (std::size_t m = 0; m < models_.size(); ++m)
-                line += ", " + models_[m].name + " " + seconds_text(windows_.seconds[m + 1].back());
-            say(line);
+            }
+            windows.points.push_back(points);
         }
-        for (std::size_t w = 0; w < windows_.sizes.size(); ++w) {
-            const std::string base = "windows.n" + std::to_string(windows_.sizes[w]);
-            add(base + ".points", double(windows_.points[w]), "");
-            for (std::size_t l = 0; l < labels(); ++l)
-                add(base + ".time." + label_key(l), windows_.seconds[l][w], "s");
-        }
-        add("windows.crop_max_difference", windows_.crop_max_difference_mm, "mm");
-        add("windows.crop_mismatched", double(windows_.crop_mismatched), "");
+        for (std::size_t k = 0; k < windows.sizes.size(); ++k)
+            for (std::size_t w = 0; w < windows.methods.size(); ++w)
+                add("windows.n" + std::to_string(windows.sizes[k]) + ".time." +
+                        record_.methods[windows.methods[w]].key,
+                    windows.seconds[w][k], "s");
+        add("windows.crop_max_difference", windows.crop_max_difference_mm, "mm");
+        add("windows.crop_mismatched", double(windows.crop_mismatched), "");
         std::vector<PlotSeries> series;
-        for (std::size_t l = 0; l < labels(); ++l)
-            series.push_back({label_title(l), windows_.seconds[l], series_colour(l)});
+        for (std::size_t w = 0; w < windows.methods.size(); ++w)
+            series.push_back({record_.methods[windows.methods[w]].title, windows.seconds[w],
+                              series_colour(w)});
         png("windows-timing.png",
-            timing_plot(windows_.sizes, series,
+            timing_plot(windows.sizes, series,
                         "Experiment 4: reconstruction time of N x N windows (one thread)"));
     }
 
-    // ---- targets and report
-    const ScanSummary* scan(const std::string& key) const {
-        for (const ScanSummary& s : scans_)
-            if (s.key == key)
-                return &s;
-        return nullptr;
-    }
-
-    void evaluate_targets() {
-        for (std::size_t m = 0; m < models_.size(); ++m) {
-            const std::size_t l = m + 1;
-            const std::string name = models_[m].name;
-            for (bool clean : {true, false}) {
-                const std::string noise = clean ? "noise_free" : "noisy";
-                const std::string noise_text = clean ? "noise-free" : "with noise";
-                for (const char* key : {"plane", "cylinder", "sphere", "relief"}) {
-                    const ScanSummary* s = scan(key);
-                    if (!s)
-                        continue;
-                    const double sv = clean ? s->truth_clean[0].rms : s->truth_noisy[0].rms;
-                    const double hy = clean ? s->truth_clean[l].rms : s->truth_noisy[l].rms;
-                    const bool plane = std::string(key) == "plane";
-                    const double bound = plane ? kPlaneRatioTarget * sv : sv;
-                    PaperTarget t;
-                    t.key = std::string(key) + (plane ? "_half_of_sv." : "_no_worse_than_sv.") +
-                            noise + "." + name;
-                    t.description = std::string(key) + ": hybrid " + name + " Z error vs truth " +
-                                    (plane ? "<= 0.5 x SV's" : "<= SV's") + " (" + noise_text + ")";
-                    t.met = hy <= bound;
-                    t.detail = fixed_text(hy, 5) + " mm vs " + (plane ? "0.5 x " : "") +
-                               fixed_text(sv, 5) + " mm";
-                    targets_.push_back(t);
-                    // The same on the error's shape (depth offset and tilt
-                    // removed), what a correction onto planes can improve.
-                    const double sv_shape = clean ? s->shape_clean[0].rms : s->shape_noisy[0].rms;
-                    const double hy_shape = clean ? s->shape_clean[l].rms : s->shape_noisy[l].rms;
-                    const double shape_bound = plane ? kPlaneRatioTarget * sv_shape : sv_shape;
-                    PaperTarget shape;
-                    shape.key = std::string(key) +
-                                (plane ? "_shape_half_of_sv." : "_shape_no_worse_than_sv.") +
-                                noise + "." + name;
-                    shape.description = std::string(key) + ": hybrid " + name +
-                                        " Z error shape vs truth (offset and tilt removed) " +
-                                        (plane ? "<= 0.5 x SV's" : "<= SV's") + " (" + noise_text +
-                                        ")";
-                    shape.met = hy_shape <= shape_bound;
-                    shape.detail = fixed_text(hy_shape, 5) + " mm vs " + (plane ? "0.5 x " : "") +
-                                   fixed_text(sv_shape, 5) + " mm";
-                    targets_.push_back(shape);
-                }
-            }
-            if (!relief_.seconds.empty()) {
-                const double speedup = relief_.seconds[0] / relief_.seconds[l];
-                PaperTarget t;
-                t.key = "relief_speedup_50x." + name;
-                t.description = "relief: hybrid " + name +
-                                " reconstruction at least 50x faster than SV (one thread each)";
-                t.met = speedup >= kSpeedupTarget;
-                t.detail = fixed_text(speedup, 1) + "x (" + seconds_text(relief_.seconds[0]) +
-                           " vs " + seconds_text(relief_.seconds[l]) + "; " +
-                           fixed_text(relief_.seconds_sv_plane_iteration / relief_.seconds[l], 1) +
-                           "x against the paper's plane iteration)";
-                targets_.push_back(t);
-            }
-        }
-        for (const PaperTarget& t : targets_)
-            add("target." + t.key, t.met ? 1.0 : 0.0, "");
-    }
-
-    std::string summary() const {
-        std::ostringstream md;
-        const auto row = [&](std::initializer_list<std::string> cells) {
-            md << "|";
-            for (const std::string& c : cells)
-                md << " " << c << " |";
-            md << "\n";
-        };
-        md << "# The paper's experiments on the virtual scanner\n\n";
-        md << "Rig `" << rig_.name << "` with its effects (projector distortion outside the "
-           << "stereo model, gamma, defocus, noise), camera " << rig_.camera_size.width << " x "
-           << rig_.camera_size.height << " (binning " << options_.binning << "), seed "
-           << options_.seed << ". ";
-        if (options_.sv_calibration == SvCalibrationSource::checkerboard)
-            md << "Stereo calibration from " << options_.checkerboard_poses
-               << " checkerboard poses (gray-xy)";
-        else
-            md << "SV model: the rig's own lenses and pose restricted to the 5-coefficient model "
-                  "(terms outside it dropped; no stereo calibration), i.e. SV with a known "
-                  "model deficit";
-        md << "; hybrid tables from " << options_.plane_poses
-           << " flat-board poses (gray-x, vertical fringes only). Scans use gray-x; SV "
-           << "reconstructs with the projector column only (the paper's SV). Models: SV, ";
-        for (std::size_t m = 0; m < models_.size(); ++m)
-            md << (m ? ", " : "") << "hybrid " << models_[m].name;
-        md << " (default model: " << default_model_ << "; polynomial is the paper's).\n\n";
-        md << "Shape fits and truth errors use the pixels where every model gives a point, "
-              "at least "
-           << kEdgeMarginPx
-           << " px inside the edge of that region (silhouette pixels mix the phase of the "
-              "surface with their neighbours'). "
-              "Reconstruction times are phase to XYZ only (decoding is common to both), one "
-              "thread each, best of "
-           << options_.timing_runs << " runs after a warm-up.\n\n";
-        md << "Reading the errors against ground truth: Z(point) - Z(true) per pixel, with its "
-              "mean (bias) and spread (std). The hybrid calibration moves each flat-board pose "
-              "onto its own best-fitting plane, so it can remove only the part of SV's error "
-              "that bends planes; an error that keeps planes flat (a depth bias, a slight scale "
-              "or tilt of space such as a calibration leaves) is passed on to every table. The "
-              "shape RMS is the Z error less its own best a + b X + c Y (depth offset and tilt "
-              "taken out): the part of the error against the truth that such a correction can "
-              "reach. The fit RMS of the noise-free scans is each model's error against its "
-              "own best shape.\n\n";
-
-        md << "## The paper's figures beside ours\n\n";
-        row({"figure", "paper SV", "paper hybrid", "our SV", "our " + default_model_,
-             "our polynomial"});
-        row({"---", "---:", "---:", "---:", "---:", "---:"});
-        const auto ours = [&](const ScanSummary* s, const std::string& name) {
-            if (!s)
-                return std::string("-");
-            for (std::size_t l = 0; l < labels(); ++l)
-                if (label_key(l) == name)
-                    return fixed_text(s->fit_rms[l], 4);
-            return std::string("-");
-        };
-        const ScanSummary* plane = scan("plane");
-        const ScanSummary* cylinder = scan("cylinder");
-        row({"plane-fit RMS, inclined plane (mm)", fixed_text(kPaperPlaneSv, 3),
-             fixed_text(kPaperPlaneHybrid, 3), ours(plane, "sv"), ours(plane, default_model_),
-             ours(plane, "polynomial")});
-        row({"cylinder-fit RMS (mm)", fixed_text(kPaperCylinderSv, 3),
-             fixed_text(kPaperCylinderHybrid, 3), ours(cylinder, "sv"),
-             ours(cylinder, default_model_), ours(cylinder, "polynomial")});
-        const auto relief_time = [&](const std::string& name) {
-            for (std::size_t l = 0; l < labels() && l < relief_.seconds.size(); ++l)
-                if (label_key(l) == name)
-                    return seconds_text(relief_.seconds[l]);
-            return std::string("-");
-        };
-        row({"relief reconstruction time (one thread)", seconds_text(kPaperReliefSvSeconds),
-             seconds_text(kPaperReliefHybridSeconds), relief_time("sv"),
-             relief_time(default_model_), relief_time("polynomial")});
-        const auto relief_distance = [&](const std::string& name) {
-            for (std::size_t m = 0; m < models_.size() && m < relief_.distance_rms.size(); ++m)
-                if (models_[m].name == name)
-                    return fixed_text(relief_.distance_rms[m], 4);
-            return std::string("-");
-        };
-        row({"relief: RMS distance SV vs hybrid (mm)", "-", fixed_text(kPaperReliefDistance, 3),
-             "-", relief_distance(default_model_), relief_distance("polynomial")});
-        const ScanSummary* relief = scan("relief");
-        row({"relief points", "-", std::to_string(static_cast<long>(kPaperReliefPoints)),
-             relief ? std::to_string(relief->points[0]) : "-", "-", "-"});
-        md << "\nThe paper's times are of its own implementation on its authors' PC; ours are of "
-              "this build on this machine. The SV figure above uses our Newton solver; the "
-              "paper's plane iteration took "
-           << seconds_text(relief_.seconds_sv_plane_iteration) << ".\n\n";
-
-        md << "## Calibration\n\n";
-        if (options_.sv_calibration == SvCalibrationSource::checkerboard)
-            md << "Stereo: camera RMS " << fixed_text(calibration_.camera_rms, 4)
-               << " px, projector RMS " << fixed_text(calibration_.projector_rms, 4) << " px, "
-               << calibration_poses_ << " poses (report: `stereo-report/`).\n\n";
-        else
-            md << "SV model: " << calibration_.origin << " (`calib.yaml`).\n\n";
-        row({"hybrid model", "poses used", "pixels modelled", "median Z fit RMS (mm)", "time"});
-        row({"---", "---:", "---:", "---:", "---:"});
-        for (const ModelRun& m : models_)
-            row({m.name, std::to_string(m.usable_poses) + " / " + std::to_string(m.poses),
-                 std::to_string(m.pixels_modelled) + " / " +
-                     std::to_string(rig_.camera_size.area()),
-                 fixed_text(m.fit_rms_z_median, 4), seconds_text(m.seconds)});
-        md << "\nTables: `table-<model>.fpt`; reports: `hybrid-report-<model>/`.\n\n";
-
-        for (const ScanSummary& s : scans_) {
-            md << "## " << s.title << "\n\n";
-            if (s.key == "relief")
-                md << "Relief scaled by " << fixed_text(relief_.scale, 3) << " ("
-                   << fixed_text(kReliefWidth * relief_.scale, 1) << " x "
-                   << fixed_text(kReliefHeight * relief_.scale, 1) << " mm), seen by "
-                   << relief_.pixels_seen << " lit camera pixels.\n\n";
-            md << "Pixels with a true surface: " << s.truth_pixels
-               << "; compared (a point from every model, " << kEdgeMarginPx
-               << " px inside the edge): " << s.common << ".\n\n";
-            const bool fitted = s.fit != FitKind::none;
-            const bool round = s.fit == FitKind::cylinder || s.fit == FitKind::sphere;
-            std::vector<std::string> head{"model", "points"};
-            if (fitted)
-                head.insert(head.end(), {"fit RMS (mm)", "fit RMS, noise-free (mm)"});
-            if (round)
-                head.insert(head.end(), {"diameter (mm)", "diameter error (mm)"});
-            head.insert(head.end(), {"Z error RMS (mm)", "Z error RMS, noise-free (mm)",
-                                     "mean (bias), noise-free (mm)", "std, noise-free (mm)",
-                                     "shape RMS, noise-free (mm)"});
-            table_row(md, head);
-            std::vector<std::string> align{"---"};
-            align.resize(head.size(), "---:");
-            table_row(md, align);
-            for (std::size_t l = 0; l < labels(); ++l) {
-                std::vector<std::string> cells{label_title(l), std::to_string(s.points[l])};
-                if (fitted)
-                    cells.insert(cells.end(),
-                                 {fixed_text(s.fit_rms[l], 4), fixed_text(s.fit_rms_clean[l], 4)});
-                if (round)
-                    cells.insert(cells.end(), {fixed_text(s.diameter[l], 3),
-                                               fixed_text(s.diameter_error[l], 3)});
-                cells.insert(cells.end(), {fixed_text(s.truth_noisy[l].rms, 4),
-                                           fixed_text(s.truth_clean[l].rms, 4),
-                                           fixed_text(s.truth_clean[l].mean, 4),
-                                           fixed_text(s.truth_clean[l].stddev, 4),
-                                           fixed_text(s.shape_clean[l].rms, 4)});
-                table_row(md, cells);
-            }
-            if (!s.fit_note.empty())
-                md << "\n" << s.fit_note << "\n";
-            md << "\nFigures: ";
-            if (fitted)
-                md << "`" << s.key << "-fit-histogram.png`, `" << s.key
-                   << "-fit-map-<model>.png`, ";
-            md << "`truth-" << s.key << "-<model>.png` (noise-free Z error maps).\n\n";
-            if (s.key == "relief") {
-                row({"SV vs", "pixels", "RMS 3D distance (mm)", "RMS Z difference (mm)",
-                     "time, one thread", "speed-up over SV"});
-                row({"---", "---:", "---:", "---:", "---:", "---:"});
-                for (std::size_t m = 0; m < models_.size(); ++m)
-                    row({"hybrid " + models_[m].name, std::to_string(relief_.matched[m]),
-                         fixed_text(relief_.distance_rms[m], 4), fixed_text(relief_.dz_rms[m], 4),
-                         seconds_text(relief_.seconds[m + 1]),
-                         fixed_text(relief_.seconds[0] / relief_.seconds[m + 1], 1) + "x"});
-                md << "\nSV itself: " << seconds_text(relief_.seconds[0])
-                   << " (Newton along the epipolar line), "
-                   << seconds_text(relief_.seconds_sv_plane_iteration)
-                   << " (the paper's plane iteration). Figures: `relief-difference-<model>.png`, "
-                      "`relief-difference-histogram.png`.\n\n";
-            }
-        }
-
-        md << "## Experiment 4: N x N windows of the plane scan\n\n";
-        md << "SV runs on the cropped camera (principal point shifted), the kernel on the "
-              "cropped table; both give the full image's points to "
-           << fixed_text(windows_.crop_max_difference_mm * 1e3, 3) << " um ("
-           << windows_.crop_mismatched << " pixels with a point in one only).\n\n";
-        {
-            std::vector<std::string> head{"N", "SV points"};
-            for (std::size_t l = 0; l < labels(); ++l)
-                head.push_back(label_key(l));
-            md << "|";
-            for (const std::string& h : head)
-                md << " " << h << " |";
-            md << "\n|";
-            for (std::size_t i = 0; i < head.size(); ++i)
-                md << (i == 0 ? " --- |" : " ---: |");
-            md << "\n";
-            for (std::size_t w = 0; w < windows_.sizes.size(); ++w) {
-                md << "| " << windows_.sizes[w] << " | " << windows_.points[w] << " |";
-                for (std::size_t l = 0; l < labels(); ++l)
-                    md << " " << seconds_text(windows_.seconds[l][w]) << " |";
-                md << "\n";
-            }
-        }
-        md << "\nFigure: `windows-timing.png`.\n\n";
-
-        md << "## Targets\n\n";
-        row({"target", "met", "numbers"});
-        row({"---", "---", "---"});
-        for (const PaperTarget& t : targets_)
-            row({t.description, t.met ? "yes" : "**no**", t.detail});
-        md << "\nAll figures: `figures.csv` (name,value,unit).\n";
-        return md.str();
-    }
-
+    // ---- report
     PaperExperimentResult finish() {
-        evaluate_targets();
+        const std::vector<PaperTarget> targets = evaluate_targets(record_);
+        for (const PaperTarget& t : targets)
+            add("target." + t.key, t.met ? 1.0 : 0.0, "");
         PaperExperimentResult result;
-        for (const ModelRun& m : models_)
-            result.models.push_back(m.name);
-        result.default_model = default_model_;
+        for (const Method& m : record_.methods)
+            result.methods.push_back(m.key);
+        result.default_method = record_.methods[record_.default_method()].key;
         result.seconds = seconds_since(start_);
-        add("run.binning", double(options_.binning), "");
-        add("run.sv_calibration_rig_model",
-            options_.sv_calibration == SvCalibrationSource::rig_model ? 1.0 : 0.0, "");
-        add("run.camera_width", double(rig_.camera_size.width), "px");
-        add("run.camera_height", double(rig_.camera_size.height), "px");
-        add("run.checkerboard_poses", double(options_.checkerboard_poses), "");
-        add("run.plane_poses", double(options_.plane_poses), "");
-        add("run.seconds_sessions", seconds_sessions_, "s");
-        add("run.seconds_stereo", seconds_stereo_, "s");
+        add("run.binning", double(options().binning), "");
+        add("run.camera_width", double(rig().camera_size.width), "px");
+        add("run.camera_height", double(rig().camera_size.height), "px");
+        add("run.checkerboard_poses", double(options().checkerboard_poses), "");
+        add("run.plane_poses", double(options().plane_poses), "");
+        add("run.board_poses", double(options().board_poses), "");
+        add("run.seconds_sessions", record_.seconds_sessions, "s");
         add("run.seconds", result.seconds, "s");
-        add("paper.plane.fit_rms.sv", kPaperPlaneSv, "mm");
-        add("paper.plane.fit_rms.hybrid", kPaperPlaneHybrid, "mm");
-        add("paper.cylinder.fit_rms.sv", kPaperCylinderSv, "mm");
-        add("paper.cylinder.fit_rms.hybrid", kPaperCylinderHybrid, "mm");
-        add("paper.relief.distance_rms", kPaperReliefDistance, "mm");
-        add("paper.relief.time.sv", kPaperReliefSvSeconds, "s");
-        add("paper.relief.time.hybrid", kPaperReliefHybridSeconds, "s");
-        add("paper.relief.points", kPaperReliefPoints, "");
-        result.summary_markdown = summary();
+        for (const auto& [key, s] : {std::pair{"paper", &record_.paper_stereo},
+                                     std::pair{"boards", &record_.our_stereo}}) {
+            if (!s->calibrated)
+                continue;
+            add(std::string("calibration.") + key + ".camera_rms", s->camera_rms, "px");
+            add(std::string("calibration.") + key + ".projector_rms", s->projector_rms, "px");
+            add(std::string("calibration.") + key + ".poses_used", double(s->poses), "");
+        }
+        result.summary_markdown = summary_markdown(record_, targets);
         write_file_synced(report_ / "summary.md", result.summary_markdown);
         write_file_synced(report_ / "figures.csv", figures_csv(figures_));
         result.figures = figures_;
-        result.targets = targets_;
+        result.targets = targets;
         return result;
     }
 
     fs::path folder_;
-    PaperExperimentOptions options_;
     Clock::time_point start_;
+    Record record_;
     fs::path report_;
-    sim::Rig rig_, clean_rig_;
+    sim::Rig clean_rig_;
     Sequence scan_sequence_;
     DecodeOptions decode_options_;
-    std::string default_model_;
-    fs::path checkerboard_session_, plane_session_;
-    StereoCalibration calibration_;
-    std::uint64_t calibration_hash_ = 0;
-    int calibration_poses_ = 0;
-    std::unique_ptr<SvReconstructor> sv_;
-    std::vector<ModelRun> models_;
-    std::vector<ScanSummary> scans_;
-    ReliefSummary relief_;
-    WindowSummary windows_;
+    fs::path paper_board_session_, plane_session_, board_session_;
+    StereoCalibration exact_calibration_, paper_calibration_, our_calibration_;
     std::vector<Figure> figures_;
-    std::vector<PaperTarget> targets_;
-    double seconds_sessions_ = 0, seconds_stereo_ = 0;
 };
 
 } // namespace
@@ -1322,6 +1022,8 @@ void PaperExperimentOptions::validate() const {
     if (plane_poses < 6 || plane_poses > 500)
         throw std::invalid_argument("plane_poses: must be 6 to 500 (a cubic per pixel needs "
                                     "at least 6 poses seeing it)");
+    if (board_poses < 6 || board_poses > 500)
+        throw std::invalid_argument("board_poses: must be 6 to 500");
     if (timing_runs < 1 || timing_runs > 100)
         throw std::invalid_argument("timing_runs: must be 1 to 100");
     if (threads < 0)
@@ -1336,6 +1038,8 @@ std::vector<TableModel> available_table_models() {
 StereoCalibration crop_calibration(const StereoCalibration& calibration, int x0, int y0,
                                    Size size) {
     check_window(calibration.camera_size, x0, y0, size, "crop_calibration");
+    if (!calibration.camera_correction.empty())
+        throw std::invalid_argument("crop_calibration: a camera with a correction grid");
     StereoCalibration out = calibration;
     out.camera_size = size;
     // u = fu xd + skew yd + cu: the window's pixel u - x0 has principal point cu - x0.

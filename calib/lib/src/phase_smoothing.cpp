@@ -16,8 +16,9 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // Quadratic Savitzky-Golay smoothing of a flat board's phase map, separable:
 // rows, then columns. Weights of the centre value of a quadratic fit to
 // 2r + 1 equally spaced samples: (3(3r^2 + 3r - 1) - 15 k^2) / ((2r-1)(2r+1)(2r+3)).
-// A sample is smoothed only when its whole window is finite.
-void smooth_phase(Image<float>& phase, int r, IncompleteWindow incomplete, ThreadPool& pool) {
+// A sample is smoothed only when its whole window is finite; else it keeps
+// its value.
+void smooth_phase(Image<float>& phase, int r, ThreadPool& pool) {
     if (r <= 0)
         return;
     const int w = phase.width(), h = phase.height();
@@ -49,8 +50,6 @@ void smooth_phase(Image<float>& phase, int r, IncompleteWindow incomplete, Threa
                     sum += weight[static_cast<std::size_t>(k + r)] * double(rows.at(x, y + k));
                 if (std::isfinite(sum))
                     phase.at(x, y) = static_cast<float>(sum);
-                else if (incomplete == IncompleteWindow::drop)
-                    phase.at(x, y) = kNaN;
             }
     });
 }

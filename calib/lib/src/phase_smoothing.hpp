@@ -12,14 +12,8 @@
 
 namespace fpp::calib {
 
-// What becomes of a pixel whose window is not all finite. At the image's
-// border a pixel always keeps its own phase.
-enum class IncompleteWindow {
-    keep, // its own phase (a plain white board: only its edges)
-    drop, // NaN (a checkerboard: the window reaches a masked dark square)
-};
-
-// r = 0 leaves the phase as it is.
-void smooth_phase(Image<float>& phase, int r, IncompleteWindow incomplete, ThreadPool& pool);
+// A pixel whose window is not all finite (the image's border, a hole, a dark
+// square of a checkerboard) keeps its own phase. r = 0 leaves the phase as it is.
+void smooth_phase(Image<float>& phase, int r, ThreadPool& pool);
 
 } // namespace fpp::calib

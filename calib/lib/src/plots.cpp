@@ -266,4 +266,106 @@ cv::Mat histogram_figure(const std::vector<HistogramSeries>& series, double lo, 
     return canvas;
 }
 
+// ------------------------------------------------------------------ timing
+
+namespace {
+
+// "1 s", "100 ms", "10 us" for 10^e seconds.
+std::string decade_label(int e) {
+    int unit_exp = 0;
+    const char* unit = "s";
+    if (e < -6) {
+        unit_exp = -9;
+        unit = "ns";
+    } else if (e < -3) {
+        unit_exp = -6;
+        unit = "us";
+    } else if (e < 0) {
+        unit_exp = -3;
+        unit = "ms";
+    }
+    int mantissa = 1;
+    for (int k = unit_exp; k < e; ++k)
+        mantissa *= 10;
+    return std::to_string(mantissa) + " " + unit;
+}
+
+const cv::Scalar kSeriesColours[] = {
+    {40, 40, 200},  // red (BGR)
+    {180, 90, 30},  // blue
+    {60, 150, 40},  // green
+    {150, 60, 140}, // purple
+    {20, 140, 220}, // orange
+};
+
+} // namespace
+
+cv::Mat timing_plot(const std::vector<int>& sizes, const std::vector<PlotSeries>& series,
+                    const std::string& title) {
+    const int width = 960, height = 620;
+    const int left = 100, right = 30, top = 60, bottom = 80;
+    cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+    for (const PlotSeries& s : series)
+        for (double t : s.seconds)
+            if (t > 0 && std::isfinite(t)) {
+                lo = std::min(lo, t);
+                hi = std::max(hi, t);
+            }
+    if (!(hi > 0) || sizes.empty())
+        return image;
+    const int e_lo = static_cast<int>(std::floor(std::log10(lo)));
+    const int e_hi = std::max(e_lo + 1, static_cast<int>(std::ceil(std::log10(hi))));
+    const double n_max = double(sizes.back()) * 1.05;
+    const auto px = [&](double n) {
+        return left + static_cast<int>(std::lround(n / n_max * double(width - left - right)));
+    };
+    const auto py = [&](double t) {
+        const double f = (std::log10(t) - double(e_lo)) / double(e_hi - e_lo);
+        return height - bottom - static_cast<int>(std::lround(f * double(height - top - bottom)));
+    };
+    const cv::Scalar axis(0, 0, 0), grid(220, 220, 220), text(40, 40, 40);
+    const int font = cv::FONT_HERSHEY_SIMPLEX;
+    for (int e = e_lo; e <= e_hi; ++e) {
+        const int y = py(std::pow(10.0, double(e)));
+        cv::line(image, {left, y}, {width - right, y}, grid, 1);
+        cv::putText(image, decade_label(e), {8, y + 5}, font, 0.5, text, 1, cv::LINE_AA);
+    }
+    for (int n : sizes) {
+        const int x = px(double(n));
+        cv::line(image, {x, top}, {x, height - bottom}, grid, 1);
+        const std::string label = std::to_string(n);
+        cv::putText(image, label, {x - 4 * static_cast<int>(label.size()), height - bottom + 22},
+                    font, 0.5, text, 1, cv::LINE_AA);
+    }
+    cv::line(image, {left, top}, {left, height - bottom}, axis, 1);
+    cv::line(image, {left, height - bottom}, {width - right, height - bottom}, axis, 1);
+    cv::putText(image, "window size N (N x N camera pixels)", {left + 220, height - 25}, font, 0.6,
+                text, 1, cv::LINE_AA);
+    cv::putText(image, title, {left, 35}, font, 0.65, text, 1, cv::LINE_AA);
+    int legend_y = top + 20;
+    for (const PlotSeries& s : series) {
+        cv::Point previous{-1, -1};
+        for (std::size_t i = 0; i < sizes.size() && i < s.seconds.size(); ++i) {
+            if (!(s.seconds[i] > 0) || !std::isfinite(s.seconds[i]))
+                continue;
+            const cv::Point p{px(double(sizes[i])), py(s.seconds[i])};
+            if (previous.x >= 0)
+                cv::line(image, previous, p, s.colour, 2, cv::LINE_AA);
+            cv::circle(image, p, 4, s.colour, cv::FILLED, cv::LINE_AA);
+            previous = p;
+        }
+        cv::line(image, {left + 20, legend_y - 5}, {left + 60, legend_y - 5}, s.colour, 2,
+                 cv::LINE_AA);
+        cv::putText(image, s.label, {left + 70, legend_y}, font, 0.55, text, 1, cv::LINE_AA);
+        legend_y += 24;
+    }
+    return image;
+}
+
+cv::Scalar series_colour(std::size_t i) {
+    return kSeriesColours[i % (sizeof(kSeriesColours) / sizeof(kSeriesColours[0]))];
+}
+
+
 } // namespace fpp::calib

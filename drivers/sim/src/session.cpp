@@ -168,7 +168,7 @@ CheckerboardSpec session_checkerboard() {
     spec.inner_columns = 11;
     spec.inner_rows = 8;
     spec.square_size = 15.0;
-    spec.margin = 15.0;
+    spec.margin = 120.0;
     return spec;
 }
 

@@ -11,7 +11,7 @@
 //   place the board. Samples where each pixel's ray meets that plane, on the
 //   board's bright parts (board_samples.hpp: white squares and margin, away
 //   from dark/bright edges, low modulation dropped), smoothed on each pose
-//   (window not reaching a dark square); samples further than
+//   where the smoothing window holds no dark square; samples further than
 //   max_sample_deviation_px from the stereo model's column are not on the
 //   board (a wall behind it) and are dropped. The stereo model then adds
 //   samples along each pixel's ray over the depth range its boards reached
@@ -100,7 +100,10 @@ struct HybridOptions {
     // Checkerboard sessions.
     HybridSamples samples = HybridSamples::boards_and_model;
     int model_samples = 8;            // per pixel, evenly over its boards' depth range
-    double model_depth_margin_mm = 5; // the range extended by this on each side
+    // The range extended by this on each side: the stereo model is a model
+    // of rays, as good a little beyond the boards' depths as between them
+    // (unlike beyond the projector pixels they lit).
+    double model_depth_margin_mm = 25;
     BrightBoardOptions bright;
     double max_sample_deviation_px = 1.0; // from the stereo model's column: not on the board
     double min_lit_fraction = 0.5;    // of the board's squares' area decoded, else rejected

@@ -1,43 +1,62 @@
 #pragma once
-// The paper's experiments reproduced on the virtual scanner, in one run.
+// The paper's experiments reproduced on the virtual scanner, in one run, with
+// every calibration procedure measured against the truth.
 //
 // Setup: by default the paper rig with effects and a projector lens defect
 // outside every stereo model (board/sim/paper-rig-lens-defects.yaml: gamma,
 // defocus, noise, prism and trefoil distortion, sized so that SV's plane-fit
-// RMS is the paper's 0.118 mm), optionally with the camera binned. A checkerboard session (gray-xy)
-// gives the stereo (SV) calibration (or, with SvCalibrationSource::rig_model, the rig's own
-// 5-coefficient model); a flat-board session (gray-x, vertical fringes only, as the paper) gives
-// one hybrid coefficient table per table model.
+// RMS is the paper's 0.118 mm); any rig file with --rig; optionally the
+// camera binned.
+//
+// Procedures and the methods they give (a method turns a decoded scan into
+// points):
+//   reference  `exact`: SV with the rig's own model, defects and all: what the
+//              scan's noise and decoding leave, no calibration error
+//   paper      the paper's: a joint stereo calibration without correction
+//              grids from `checkerboard_poses` poses (or, with
+//              SvCalibrationSource::rig_model, the rig's 5-coefficient
+//              model): `sv-paper`; flat boards (`plane_poses`, gray-x) placed
+//              by that SV: `paper-polynomial`, `paper-ray`, `paper-rational`
+//   boards     ours (the tools' default): one checkerboard session of
+//              `board_poses` poses (gray-xy) gives the camera-first stereo
+//              calibration with correction grids (`sv`) and the hybrid
+//              tables, boards placed by the camera (`boards-<model>`, the
+//              rational one the default; `boards-only-rational` and
+//              `model-only-rational` fitted to one kind of sample)
+//   planes     our calibration with the paper's flat boards
+//              (`planes-rational`)
 //
 // Scans (gray-x, saved as capture sets with ground truth), each reconstructed
-// by SV with the projector column only (the paper's SV) and by every table:
+// by every method:
 //   plane     Experiment 1: a 230 x 175 mm board tilted by ~20 deg at 480 mm;
 //             plane-fit RMS, histograms, signed residual maps
 //   cylinder  Experiment 2: 168 mm diameter, 215 mm long, axis vertical, front
 //             at 500 mm; cylinder-fit RMS and diameter
 //   sphere    ours: 120 mm diameter at 520 mm; sphere-fit RMS and diameter
+//   ball bars ours: two 25 mm spheres 200 mm apart at seven places and
+//             directions in the volume; the sphere-spacing error (VDI/VDE
+//             2634-2) and the spheres' size errors
 //   relief    Experiment 3: the face relief scaled so that about 680,000
 //             camera pixels (at full size; / binning^2) see it; RMS distance
-//             between the SV and the hybrid clouds per pixel, reconstruction
-//             times with one thread each (best of `timing_runs`)
+//             between the paper's SV and its hybrid clouds per pixel,
+//             reconstruction times with one thread each (best of `timing_runs`)
 //   windows   Experiment 4: N x N windows of the plane scan (N = 100 .. 800 at
-//             full size, / binning): the SV reconstructor of the cropped camera
-//             (principal point shifted) and the kernel on the cropped table,
-//             one thread each
+//             full size, / binning): the paper's SV on the cropped camera
+//             (principal point shifted) and our tables cropped, one thread each
 // Every scan is also rendered noise-free (read noise 0, no shot noise), and
 // both versions are compared with the ground truth pixel by pixel (Z
-// difference along the camera ray): the noise-free errors isolate each
-// model's own error. Shape fits and truth errors use, per scan, the pixels
-// where SV and every table give a point, so that no model is judged on an
-// easier subset.
+// difference along the camera ray, and 3D distance), nothing removed first;
+// the shape error (less its own offset and tilt) is reported beside it.
+// Shape fits and truth errors use, per scan, the pixels where every method
+// gives a point, so that no method is judged on an easier subset.
 //
 // Reconstruction time is phase -> XYZ only (decoding is common to both).
 //
 // Output folder (written as a whole: a temporary sibling renamed at the end):
-//   calib.yaml                 stereo calibration (fpp-stereo/1)
-//   stereo-report/             its report
-//   table-<model>.fpt          one coefficient table per model
-//   hybrid-report-<model>/     hybrid calibration report per model
+//   calib.yaml, calib-paper.yaml   our and the paper's stereo calibrations
+//   stereo-report/, stereo-report-paper/   their reports
+//   table-<method>.fpt          one coefficient table per table method
+//   hybrid-report-<method>/     its hybrid calibration report
 //   scans/<scan>/              the noisy scans as capture sets with truth
 //   sessions/                  the calibration sessions (only with keep_sessions)
 //   report/summary.md          the paper's numbers beside ours, tables, targets
@@ -77,8 +96,9 @@ struct PaperExperimentOptions {
     SvCalibrationSource sv_calibration = SvCalibrationSource::checkerboard;
     int binning = 1;             // camera binning (1 = the paper's 1600 x 1200)
     std::uint64_t seed = 1;      // poses, noise
-    int checkerboard_poses = 15; // the paper's 15
-    int plane_poses = 30;        // the paper's 30
+    int checkerboard_poses = 15; // the paper's 15 (its stereo calibration)
+    int plane_poses = 30;        // the paper's 30 (its flat boards)
+    int board_poses = 30;        // our checkerboard session
     int timing_runs = 3;         // best of this many runs per timing
     int threads = 0;             // simulation, decoding, calibration (timings use 1); 0 = all
     bool keep_sessions = false;  // keep the calibration sessions in the output
@@ -98,8 +118,8 @@ struct PaperTarget {
 };
 
 struct PaperExperimentResult {
-    std::vector<std::string> models; // table models run, e.g. "polynomial", "ray"
-    std::string default_model;       // HybridOptions{}.model
+    std::vector<std::string> methods; // every method's key, e.g. "sv-paper", "boards-rational"
+    std::string default_method;       // the tools' default procedure and model
     std::vector<Figure> figures;     // as in report/figures.csv
     std::vector<PaperTarget> targets;
     std::string summary_markdown; // report/summary.md
@@ -120,7 +140,7 @@ std::vector<TableModel> available_table_models();
 // size.height): same lenses and extrinsics, principal point shifted by
 // (-x0, -y0), camera size `size`. Pixel (u, v) of the window is pixel
 // (u + x0, v + y0) of the full camera. Throws std::invalid_argument if the
-// window is not inside the camera.
+// window is not inside the camera, or the camera has a correction grid.
 StereoCalibration crop_calibration(const StereoCalibration& calibration, int x0, int y0, Size size);
 // The table of the same camera window (same tiling, model, axis, projector,
 // hash); every coefficient copied with get/set. Throws std::invalid_argument

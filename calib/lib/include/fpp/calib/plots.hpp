@@ -7,6 +7,7 @@
 //                       labelled colour bar (pixels without a value grey)
 //   histogram_figure    one or more histograms overlaid in distinct colours
 //                       (percent of each series per bin), with a legend
+//   timing_plot         times against a size on a log axis, one line per series
 //
 // Report folders and the PNG writer are in fpp/calib/report_folder.hpp.
 
@@ -53,5 +54,18 @@ struct HistogramSeries {
 // lengths) and count per series.
 cv::Mat histogram_figure(const std::vector<HistogramSeries>& series, double lo, double hi,
                          const std::string& x_label, const std::string& title);
+
+struct PlotSeries {
+    std::string label;
+    std::vector<double> seconds; // one per size; non-positive: no point
+    cv::Scalar colour;
+};
+// Reconstruction time against window size N (N x N camera pixels), log time
+// axis (the methods differ by orders of magnitude), one line and marker per
+// series, with a legend.
+cv::Mat timing_plot(const std::vector<int>& sizes, const std::vector<PlotSeries>& series,
+                    const std::string& title);
+// A distinct colour per series index (BGR), cycling.
+cv::Scalar series_colour(std::size_t i);
 
 } // namespace fpp::calib

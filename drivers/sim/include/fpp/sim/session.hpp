@@ -31,12 +31,15 @@ namespace fpp::sim {
 enum class SessionKind { checkerboard, plane };
 
 // The session checkerboard: 11 x 8 inner corners of 15 mm (12 x 9 squares,
-// 180 x 135 mm) with a 15 mm white margin. The paper's board had 8 mm squares;
-// 15 mm squares fill more of the ~270 x 200 mm field (more of the lens
-// distortion is sampled) and still fit inside both fields at 400 mm when
-// tilted by ~28 degrees. 11 + 8 is odd, so the pattern is not symmetric under
-// a 180-degree turn: the origin corner can be told by colour (the square
-// diagonally outside inner corner (0, 0) is black).
+// 180 x 135 mm) printed in the middle of a flat white board with a 120 mm
+// margin (420 x 375 mm). The paper's board had 8 mm squares; 15 mm squares
+// fill more of the ~270 x 200 mm field (more of the lens distortion is
+// sampled) and still fit inside both fields at 400 mm when tilted by ~28
+// degrees. The white margin fills the rest of the field, so that every pose
+// also samples the projector and the per-pixel fits over most of the image
+// (the camera-anchored hybrid calibration). 11 + 8 is odd, so the pattern is
+// not symmetric under a 180-degree turn: the origin corner can be told by
+// colour (the square diagonally outside inner corner (0, 0) is black).
 CheckerboardSpec session_checkerboard();
 
 struct SessionOptions {
