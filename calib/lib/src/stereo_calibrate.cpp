@@ -533,8 +533,21 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             free.projector_grid = !s.projector_grid.empty();
             free.camera_observations = free.projector_observations = true;
             free.skew = options.skew;
+            // Weighted by 1 / the noise variance, as the camera-first stages:
+            // from OpenCV's initial residuals, then from the joint's own.
+            free.camera_weight =
+                1 / square(noise_floor(result.initial_camera_rms / std::sqrt(2.0)));
+            free.projector_weight =
+                1 / square(noise_floor(result.initial_projector_rms / std::sqrt(2.0)));
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                             options.max_iterations, options.progress);
+            if (free.camera_grid || free.projector_grid) {
+                const ObservationNoise noise = observation_noise(s);
+                free.camera_weight = 1 / square(noise.camera);
+                free.projector_weight = 1 / square(noise.projector);
+                camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
+                                                options.max_iterations, options.progress);
+            }
             projector_outcome = camera_outcome;
             result.iterations += camera_outcome.iterations;
         }
