@@ -533,15 +533,20 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             free.projector_grid = !s.projector_grid.empty();
             free.camera_observations = free.projector_observations = true;
             free.skew = options.skew;
-            // Weighted by 1 / the noise variance, as the camera-first stages:
-            // from OpenCV's initial residuals, then from the joint's own.
-            free.camera_weight =
-                1 / square(noise_floor(result.initial_camera_rms / std::sqrt(2.0)));
-            free.projector_weight =
-                1 / square(noise_floor(result.initial_projector_rms / std::sqrt(2.0)));
+            // Without grids, the paper's: every residual in pixels alike.
+            // With them, weighted by 1 / the noise variance as the
+            // camera-first stages (the grids' regularisation is in those
+            // units): from OpenCV's initial residuals, then from the joint's.
+            const bool grids = free.camera_grid || free.projector_grid;
+            if (grids) {
+                free.camera_weight =
+                    1 / square(noise_floor(result.initial_camera_rms / std::sqrt(2.0)));
+                free.projector_weight =
+                    1 / square(noise_floor(result.initial_projector_rms / std::sqrt(2.0)));
+            }
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                             options.max_iterations, options.progress);
-            if (free.camera_grid || free.projector_grid) {
+            if (grids) {
                 const ObservationNoise noise = observation_noise(s);
                 free.camera_weight = 1 / square(noise.camera);
                 free.projector_weight = 1 / square(noise.projector);
