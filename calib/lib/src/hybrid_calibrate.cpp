@@ -133,6 +133,8 @@ void HybridOptions::validate() const {
         bad("min_usable_poses", "at least 4 plane poses are needed for a cubic");
     if (threads < 0)
         bad("threads", "must not be negative");
+    if (min_board_samples < 2)
+        bad("min_board_samples", "at least 2 board samples show a pixel's depth range");
     if (model_samples < 2 || model_samples > 64)
         bad("model_samples", "must be in [2, 64]");
     if (!(model_depth_margin_mm >= 0 && model_depth_margin_mm <= 100))
@@ -460,6 +462,7 @@ std::vector<HybridResult> fit_hybrid_models(const HybridResult& common,
         fit.max_condition = options.max_condition;
         fit.threads = options.threads;
         if (!plane_session && options.samples != HybridSamples::boards) {
+            fit.min_samples = options.min_board_samples;
             fit.model_samples = model_source;
             fit.model_sample_count = options.model_samples;
             fit.board_weight = options.samples == HybridSamples::model ? 0.0 : 1.0;

@@ -101,7 +101,9 @@ bool inside_quad(const Vec2 q[4], double x, double y) {
     return true;
 }
 
-// Fraction of the pixels inside the outer corners' quadrilateral that decode.
+// The decoded pixels inside the outer corners' quadrilateral, as a fraction
+// of half its area (the white squares'; dark squares may not decode), at
+// most 1.
 double lit_fraction(const DecodeResult& decoded, const std::vector<Vec2>& corners, int columns,
                     int rows) {
     const Vec2 quad[4] = {corners[0], corners[std::size_t(columns - 1)],
@@ -122,7 +124,7 @@ double lit_fraction(const DecodeResult& decoded, const std::vector<Vec2>& corner
                 ++inside;
                 lit += std::isfinite(decoded.proj_x.at(u, v)) ? 1 : 0;
             }
-    return inside ? double(lit) / double(inside) : 0.0;
+    return inside ? std::min(1.0, 2.0 * double(lit) / double(inside)) : 0.0;
 }
 
 } // namespace

@@ -99,6 +99,10 @@ struct HybridOptions {
     int min_usable_poses = 4;
     // Checkerboard sessions.
     HybridSamples samples = HybridSamples::boards_and_model;
+    // Board samples a pixel needs when the stereo model's samples are
+    // fitted too (min_poses when the boards' alone are): enough to show
+    // that the boards reached the pixel and over which depths.
+    int min_board_samples = 3;
     int model_samples = 8;            // per pixel, evenly over its boards' depth range
     // The range extended by this on each side: the stereo model is a model
     // of rays, as good a little beyond the boards' depths as between them
@@ -106,7 +110,7 @@ struct HybridOptions {
     double model_depth_margin_mm = 25;
     BrightBoardOptions bright;
     double max_sample_deviation_px = 1.0; // from the stereo model's column: not on the board
-    double min_lit_fraction = 0.5;    // of the board's squares' area decoded, else rejected
+    double min_lit_fraction = 0.5;    // of the board's white squares' area decoded, else rejected
     double square_size_tolerance = 0.002; // relative, against the calibration's board
     int tile_width = 32;
     int tile_height = 8;
@@ -139,7 +143,7 @@ struct HybridPose {
     double sv_offset_mm = 0;
     double sv_angle_deg = 0;
     double corner_rms_px = 0;  // the camera's reprojection RMS of the corners at this pose
-    double lit_fraction = 0;   // of the board's squares' area decoded
+    double lit_fraction = 0;   // of the board's white squares' area decoded (half the squares')
     std::size_t samples = 0;   // pixels given a sample
     double distance_mm = 0;  // plane's depth on the optical axis, d / n_z
     double tilt_deg = 0;     // angle between the normal and the optical axis
