@@ -1,6 +1,7 @@
 // fpp-calib hybrid and reconstruct --table, run as a person would: a stereo
-// calibration from a checkerboard session, a table from a plane session, a
-// scan reconstructed with it; bad input gives exit code 2, a message naming
+// calibration from a checkerboard session, a table from the same session
+// (boards placed by the camera) and from a plane session (the paper's), a
+// scan reconstructed with each; bad input gives exit code 2, a message naming
 // the file and what is wrong, and nothing written. Camera binned 4x
 // (400 x 300) so that each step takes a second or two.
 
@@ -32,13 +33,13 @@ bool contains(const std::string& text, const std::string& what) {
 // Sessions, calibration and table made once for the tests of this file.
 struct Made {
     TempDir dir;
-    fs::path calib, planes, table, report;
+    fs::path calib, boards, planes, table, report;
 };
 
 const Made& made() {
     static Made* m = [] {
         auto* out = new Made;
-        const fs::path boards = out->dir / "boards";
+        const fs::path boards = out->boards = out->dir / "boards";
         out->planes = out->dir / "planes";
         out->calib = out->dir / "calib.yaml";
         out->table = out->dir / "table.fpt";
@@ -47,7 +48,7 @@ const Made& made() {
             const ToolRun run = run_calib(args, out->dir);
             EXPECT_EQ(run.exit_code, 0) << args << "\n" << run.output;
         };
-        must("simulate-session --poses 8 --binning 4 --out " + shell_quote(boards));
+        must("simulate-session --poses 10 --binning 4 --out " + shell_quote(boards));
         must("stereo " + shell_quote(boards) + " --out " + shell_quote(out->calib));
         must("simulate-session --kind plane --sequence gray-x --poses 8 --binning 4 --out " +
              shell_quote(out->planes));
@@ -94,16 +95,58 @@ TEST(CliHybrid, TableFromPlanesReconstructsAScan) {
     EXPECT_TRUE(contains(points.comments.front(), "hybrid model (rational"));
 }
 
+// One checkerboard session gives the stereo calibration and the table.
+TEST(CliHybrid, TableFromTheCheckerboardSessionReconstructsAScan) {
+    const Made& m = made();
+    TempDir dir;
+    const fs::path table = dir / "table.fpt", report = dir / "report";
+    const ToolRun hybrid = run_calib("hybrid " + shell_quote(m.boards) + " --calib " +
+                                         shell_quote(m.calib) + " --out " + shell_quote(table) +
+                                         " --report " + shell_quote(report),
+                                     dir);
+    ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
+    EXPECT_TRUE(contains(hybrid.output, "procedure: checkerboards placed by the camera; fitted "
+                                        "to boards+model"))
+        << hybrid.output;
+    EXPECT_TRUE(contains(hybrid.output, "poses: 10 of 10 used")) << hybrid.output;
+    for (const char* f : {"summary.md", "poses.csv", "sv-offsets.png", "samples.png"})
+        EXPECT_TRUE(fs::exists(report / f)) << f;
+    const fs::path scan = dir / "scan", cloud = dir / "cloud.ply";
+    ASSERT_EQ(run_calib("simulate --rig " + shell_quote(fpp::test::source_dir() /
+                                                        "board/sim/paper-rig-effects.yaml") +
+                            " --scene inclined-plane --sequence gray-x --binning 4 --out " +
+                            shell_quote(scan),
+                        dir)
+                  .exit_code,
+              0);
+    const ToolRun rec = run_calib("reconstruct " + shell_quote(scan) + " --table " +
+                                      shell_quote(table) + " --out " + shell_quote(cloud),
+                                  dir);
+    ASSERT_EQ(rec.exit_code, 0) << rec.output;
+    // The boards of 10 poses reach most of the plane.
+    EXPECT_GT(fpp::read_ply(cloud).size(), 90000u);
+}
+
 TEST(CliHybrid, BadInputExitsWithTwoAndWritesNothing) {
     const Made& m = made();
     TempDir dir;
-    // A checkerboard session is not a plane session.
-    const fs::path table = dir / "t.fpt";
-    ToolRun run = run_calib("hybrid " + shell_quote(m.dir / "boards") + " --calib " +
+    // A checkerboard whose square size is not the stereo calibration's.
+    const fs::path table = dir / "t.fpt", session = dir / "boards";
+    fs::copy(m.boards, session, fs::copy_options::recursive);
+    {
+        std::ifstream in(session / "board.yaml");
+        std::string text((std::istreambuf_iterator<char>(in)), {});
+        const std::size_t at = text.find("square_size: 15");
+        ASSERT_NE(at, std::string::npos) << text;
+        text.replace(at, 15, "square_size: 14");
+        std::ofstream(session / "board.yaml") << text;
+    }
+    ToolRun run = run_calib("hybrid " + shell_quote(session) + " --calib " +
                                 shell_quote(m.calib) + " --out " + shell_quote(table),
                             dir);
     EXPECT_EQ(run.exit_code, 2) << run.output;
     EXPECT_TRUE(contains(run.output, "board.yaml")) << run.output;
+    EXPECT_TRUE(contains(run.output, "square_size")) << run.output;
     EXPECT_FALSE(fs::exists(table));
 
     // A table with one flipped bit in its coefficients.

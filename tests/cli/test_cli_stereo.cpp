@@ -70,8 +70,9 @@ TEST(CliStereo, SimulatedSessionCalibratesAndWritesTheReport) {
     const ToolRun run = stereo(dir, session);
     ASSERT_EQ(run.exit_code, 0) << run.output;
     EXPECT_TRUE(contains(run.output, "calibrated from 6 of 6 poses")) << run.output;
-    EXPECT_TRUE(contains(run.output, "joint bundle adjustment"))
+    EXPECT_TRUE(contains(run.output, "the camera alone from its corners"))
         << run.output; // progress on stderr
+    EXPECT_TRUE(contains(run.output, "dense samples of the boards' bright parts")) << run.output;
 
     const fpp::calib::StereoCalibration c = fpp::calib::load_calibration(dir / "calib.yaml");
     EXPECT_EQ(c.camera_size, (fpp::Size{400, 300}));
@@ -89,6 +90,9 @@ TEST(CliStereo, SimulatedSessionCalibratesAndWritesTheReport) {
     std::stringstream summary;
     summary << in.rdbuf();
     EXPECT_TRUE(contains(summary.str(), "## Reprojection error")) << summary.str();
+    EXPECT_TRUE(contains(summary.str(), "Procedure: camera-first")) << summary.str();
+    EXPECT_TRUE(contains(summary.str(), "Correction grids: camera 12 x 9")) << summary.str();
+    EXPECT_EQ(fpp::calib::load_calibration(dir / "calib.yaml").board_square_size, 15.0);
     EXPECT_TRUE(contains(summary.str(), "Projector corner methods against ground truth"))
         << summary.str();
     for (const char* png : {"corners-pose-01.png", "corners-pose-06.png", "residuals-camera.png",
@@ -107,6 +111,33 @@ TEST(CliStereo, SimulatedSessionCalibratesAndWritesTheReport) {
     EXPECT_TRUE(contains(again.output, "corners by homography")) << again.output;
     EXPECT_EQ(fpp::calib::load_calibration(dir / "calib.yaml").camera.skew, 0.0);
     EXPECT_TRUE(fs::exists(report / "summary.md"));
+}
+
+// The paper's procedure on request, and the held-out check of absolute
+// accuracy in the output and the report.
+TEST(CliStereo, JointProcedureAndTheHeldOutCheck) {
+    TempDir dir;
+    const fs::path session = simulate_session(dir, "session", 6, "--seed 4");
+    const ToolRun run =
+        stereo(dir, session, "--procedure joint --camera-grid none --projector-grid none --held-out");
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "joint bundle adjustment")) << run.output;
+    EXPECT_TRUE(contains(run.output, "held-out poses")) << run.output;
+    EXPECT_TRUE(contains(run.output, "pose-06: 88 corners")) << run.output;
+    const fpp::calib::StereoCalibration c = fpp::calib::load_calibration(dir / "calib.yaml");
+    EXPECT_TRUE(c.camera_correction.empty());
+    EXPECT_TRUE(c.projector_correction.empty());
+    std::ifstream in(dir / "report" / "summary.md");
+    std::stringstream summary;
+    summary << in.rdbuf();
+    EXPECT_TRUE(contains(summary.str(), "## Held-out poses")) << summary.str();
+    EXPECT_TRUE(contains(summary.str(), "Procedure: joint")) << summary.str();
+    // A grid size that is no grid size.
+    TempDir other;
+    const ToolRun bad = stereo(other, session, "--camera-grid 12by9");
+    EXPECT_NE(bad.exit_code, 0);
+    EXPECT_TRUE(contains(bad.output, "--camera-grid")) << bad.output;
+    EXPECT_FALSE(fs::exists(other / "calib.yaml"));
 }
 
 TEST(CliStereo, FewerThanThreeUsablePosesIsAnError) {
