@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The main job on the virtual scanner, as a person runs it on a real one:
-#   1. fpp-scanner records a checkerboard session and a flat-board session
-#      (capture mode, one scan per board pose);
-#   2. fpp-calib calibrates the camera-projector pair (stereo) and fits the
-#      hybrid coefficient table;
+#   1. fpp-scanner records a calibration session: a checkerboard on a white
+#      board at 30 poses (capture mode, one scan per pose);
+#   2. fpp-calib calibrates the camera-projector pair (stereo, the camera
+#      first) and fits the hybrid coefficient table from the same session
+#      (each board placed by the camera);
 #   3. fpp-scanner loads the table and scans the composite scene (a button
 #      press), writing the point cloud;
 #   4. fpp-calib compares the cloud with the scene's ground truth.
@@ -23,15 +24,13 @@ mkdir -p "$out"
 log="$out/demo.log" # the tools' progress and the scanner's log lines
 trap 'echo "error: a step failed; see $log" >&2' ERR
 
-echo "== 1. recording the calibration sessions with fpp-scanner (capture mode)"
-"$scanner" --board "$root/board/sim-checkerboard-session.yaml" --mode capture --scans 15 \
-  --store "$out/sessions/checkerboard" > /dev/null 2>> "$log"
-"$scanner" --board "$root/board/sim-plane-session.yaml" --mode capture --scans 30 \
-  --store "$out/sessions/planes" > /dev/null 2>> "$log"
+echo "== 1. recording the calibration session with fpp-scanner (capture mode)"
+"$scanner" --board "$root/board/sim-checkerboard-session.yaml" --mode capture --scans 30 \
+  --store "$out/session" > /dev/null 2>> "$log"
 
-echo "== 2. calibrating with fpp-calib: stereo, then the hybrid table"
-"$calib" stereo "$out/sessions/checkerboard" --out "$out/calib.yaml" --report "$out/stereo-report" 2>> "$log" | tail -n 3
-"$calib" hybrid "$out/sessions/planes" --calib "$out/calib.yaml" --out "$out/table.fpt" \
+echo "== 2. calibrating with fpp-calib: stereo, then the hybrid table, from the same session"
+"$calib" stereo "$out/session" --out "$out/calib.yaml" --report "$out/stereo-report" 2>> "$log" | tail -n 3
+"$calib" hybrid "$out/session" --calib "$out/calib.yaml" --out "$out/table.fpt" \
   --report "$out/hybrid-report" 2>> "$log" | tail -n 3
 
 echo "== 3. a scan on fpp-scanner with that table"

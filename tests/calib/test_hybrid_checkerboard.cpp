@@ -6,19 +6,22 @@
 // pattern on a wide white board) on the rig with a projector lens defect no
 // stereo model has (paper-rig-lens-defects.yaml), camera binned 4x (400 x
 // 300); the default stereo calibration of it (camera first, correction
-// grids), then the hybrid table from the same session. For comparison the
-// paper's joint stereo calibration of the same session.
+// grids), then the hybrid table from the same session, with each kind of
+// sample. For comparison the paper's joint stereo calibration of the same
+// session.
 //
 // Measured (Release; noise-free scans, Z error along the ray, mm: RMS /
 // mean / shape, the RMS about the mean):
 //                        inclined plane          sphere                  cylinder
-//   joint SV (paper's)   0.440 / +0.076 / 0.434  0.059 / +0.041 / 0.043  0.126 / -0.042 / 0.118
-//   our SV               0.100 / -0.098 / 0.018  0.103 / -0.102 / 0.012  0.104 / -0.103 / 0.013
-//   our table            0.096 / -0.095 / 0.016  0.101 / -0.100 / 0.016  0.103 / -0.101 / 0.016
-// 96 % of the pixels modelled; the SV planes within 0.06 mm and 0.04 deg of
-// the camera's. The depth offset of our procedure at this size (about -0.1
-// mm) is the camera's focal length from 400 x 300 corners (0.02 % short):
-// at full size it is ten times smaller (paper-experiments).
+//   joint SV (paper's)   0.484 / +0.271 / 0.401  0.224 / +0.220 / 0.043  0.184 / +0.141 / 0.119
+//   our SV               0.021 / -0.007 / 0.019  0.015 / +0.001 / 0.015  0.016 / -0.002 / 0.016
+//   our table            0.023 / -0.002 / 0.022  0.017 / +0.002 / 0.017  0.018 / -0.000 / 0.018
+// 96 % of the pixels modelled; the SV planes within 0.035 mm and 0.015 deg
+// of the camera's. Our procedure's depth offset at this size is the
+// camera's focal length from 400 x 300 corners, good to about 1e-4 of
+// itself (0.05 mm at 480 mm): small on this session, -0.1 mm on others.
+// The refusals run on a small session with the rig's exact model as its
+// calibration.
 
 #include "test_support.hpp"
 
@@ -42,6 +45,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 
 namespace fpp::test {
 namespace {
@@ -170,31 +174,71 @@ TEST(HybridCheckerboard, OneSessionGivesATableTrueInShapeAndCloseToItsStereoMode
         EXPECT_LT(sc->table.shape, 0.5 * sc->joint.shape);
     }
     // The lens defect bends the joint SV's plane; ours stays flat.
-    EXPECT_LT(plane.table.shape, 0.02);
+    EXPECT_LT(plane.table.shape, 0.025);
     EXPECT_GT(plane.joint.shape, 0.05);
-}
 
-// The boards' samples alone reach fewer pixels than with the stereo model
-// between them, and the model alone is the stereo model.
-TEST(HybridCheckerboard, SampleKindsCoverWhatTheyShould) {
-    Session& s = setup();
+    // The boards' samples alone reach fewer pixels than with the stereo
+    // model between them; the model's alone are the stereo model.
     calib::HybridOptions options;
     options.samples = calib::HybridSamples::boards;
     const calib::HybridResult boards = calib::calibrate_hybrid(s.session, s.calibration, 1, options);
     options.samples = calib::HybridSamples::model;
     const calib::HybridResult model = calib::calibrate_hybrid(s.session, s.calibration, 1, options);
     EXPECT_EQ(boards.samples, calib::HybridSamples::boards);
-    EXPECT_LT(boards.pixels_modelled, model.pixels_modelled);
+    EXPECT_LT(double(boards.pixels_modelled), 0.95 * double(model.pixels_modelled));
     const Scan a = scan("inclined-plane", model.table);
     EXPECT_LT(std::fabs(a.table.rms - a.sv.rms), 0.003);
+
+    // Pixels whose boards gave too few samples get no model, and the
+    // samples map says how many they had.
+    options.samples = calib::HybridSamples::boards_and_model;
+    options.min_board_samples = 20;
+    const calib::HybridResult sparse = calib::calibrate_hybrid(s.session, s.calibration, 1, options);
+    EXPECT_GT(sparse.pixels_too_few_poses, sparse.pose_count.pixel_count() / 10);
+    std::size_t checked = 0, with_model = 0;
+    for (int y = 0; y < sparse.pose_count.height(); ++y)
+        for (int x = 0; x < sparse.pose_count.width(); ++x)
+            if (sparse.pose_count.at(x, y) < 20) {
+                ++checked;
+                with_model += sparse.table.has_model(x, y) ? 1 : 0;
+            }
+    EXPECT_EQ(checked, sparse.pixels_too_few_poses);
+    EXPECT_EQ(with_model, 0u);
+}
+
+// A small session and the rig's exact model as its calibration, for the
+// refusals (no stereo calibration needed to test them).
+struct Small {
+    sim::Rig rig;
+    TempDir dir;
+    fs::path session;
+    calib::StereoCalibration calibration;
+};
+
+Small& small() {
+    static Small* s = [] {
+        auto* out = new Small;
+        out->rig = sim::load_rig(sim::lens_defects_rig_path()).binned_camera(4);
+        out->session = out->dir.path() / "boards";
+        sim::SessionOptions options;
+        options.poses = 6;
+        options.seed = 5;
+        sim::write_session(out->session, out->rig,
+                           standard_sequence("gray-xy", out->rig.projector_size), options);
+        out->calibration = calib::calibration_from_rig(out->rig);
+        out->calibration.board_square_size = options.board.square_size;
+        return out;
+    }();
+    return *s;
 }
 
 // A copy of the session with `edit` applied to its board.yaml text.
 fs::path edited_session(const TempDir& dir, const std::string& from, const std::string& to) {
     const fs::path copy = dir.path() / "edited";
-    fs::copy(setup().session, copy, fs::copy_options::recursive);
-    std::ifstream in(copy / "board.yaml");
-    std::string text((std::istreambuf_iterator<char>(in)), {});
+    fs::copy(small().session, copy, fs::copy_options::recursive);
+    std::stringstream read;
+    read << std::ifstream(copy / "board.yaml").rdbuf();
+    std::string text = read.str();
     const std::size_t at = text.find(from);
     EXPECT_NE(at, std::string::npos);
     text.replace(at, from.size(), to);
@@ -206,7 +250,7 @@ TEST(HybridCheckerboard, ASquareSizeNotTheCalibrationsIsRefusedNamingTheField) {
     TempDir dir;
     const fs::path session = edited_session(dir, "square_size: 15", "square_size: 16");
     try {
-        (void)calib::calibrate_hybrid(session, setup().calibration, 1);
+        (void)calib::calibrate_hybrid(session, small().calibration, 1);
         ADD_FAILURE() << "a 16 mm square size accepted for a 15 mm calibration";
     } catch (const InputError& e) {
         const std::string what = e.what();
@@ -221,16 +265,10 @@ TEST(HybridCheckerboard, ASquareSizeNotTheCalibrationsIsRefusedNamingTheField) {
 // the projector barely lights.
 TEST(HybridCheckerboard, BadPosesAreRejectedWithTheirReasons) {
     TempDir dir;
-    const fs::path session = dir.path() / "session";
-    const Session& s = setup();
+    const Small& s = small();
     // Six good poses.
-    fs::create_directories(session);
-    fs::copy(s.session / "board.yaml", session / "board.yaml");
-    for (int k = 1; k <= 6; ++k) {
-        char name[16];
-        std::snprintf(name, sizeof name, "pose-%02d", k);
-        fs::copy(s.session / name, session / name, fs::copy_options::recursive);
-    }
+    const fs::path session = dir.path() / "session";
+    fs::copy(s.session, session, fs::copy_options::recursive);
     const Sequence sequence = standard_sequence("gray-xy", s.rig.projector_size);
     // No board: a plain wall.
     sim::Scene wall;
@@ -278,25 +316,6 @@ TEST(HybridCheckerboard, BadPosesAreRejectedWithTheirReasons) {
         EXPECT_NE(what.find("pose-07-wall"), std::string::npos) << what;
         EXPECT_NE(what.find("pose-08-dark"), std::string::npos) << what;
     }
-}
-
-// Pixels whose boards gave too few samples get no model, and the samples
-// map says how many they had.
-TEST(HybridCheckerboard, PixelsWithTooFewSamplesAreLeftOut) {
-    Session& s = setup();
-    calib::HybridOptions options;
-    options.min_board_samples = 20;
-    const calib::HybridResult r = calib::calibrate_hybrid(s.session, s.calibration, 1, options);
-    EXPECT_GT(r.pixels_too_few_poses, r.pose_count.pixel_count() / 10);
-    std::size_t checked = 0, with_model = 0;
-    for (int y = 0; y < r.pose_count.height(); ++y)
-        for (int x = 0; x < r.pose_count.width(); ++x)
-            if (r.pose_count.at(x, y) < 20) {
-                ++checked;
-                with_model += r.table.has_model(x, y) ? 1 : 0;
-            }
-    EXPECT_EQ(checked, r.pixels_too_few_poses);
-    EXPECT_EQ(with_model, 0u);
 }
 
 } // namespace

@@ -31,7 +31,8 @@ TEST(SimSession, CheckerboardPosesSpreadThroughTheVolumeAndStayVisible) {
            ymax = -1e9;
     for (const sim::Pose& p : poses) {
         EXPECT_TRUE(
-            sim::checkerboard_fully_visible(rig, options.board, p, options.visibility_margin_px));
+            sim::checkerboard_fully_visible(rig, options.board, p,
+                                            sim::checkerboard_margin_px(rig, options)));
         zmin = std::min(zmin, p.centre[2]);
         zmax = std::max(zmax, p.centre[2]);
         xmin = std::min(xmin, p.centre[0]);

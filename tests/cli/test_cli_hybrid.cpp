@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <sstream>
 #include <string>
 
 namespace {
@@ -134,8 +135,9 @@ TEST(CliHybrid, BadInputExitsWithTwoAndWritesNothing) {
     const fs::path table = dir / "t.fpt", session = dir / "boards";
     fs::copy(m.boards, session, fs::copy_options::recursive);
     {
-        std::ifstream in(session / "board.yaml");
-        std::string text((std::istreambuf_iterator<char>(in)), {});
+        std::stringstream read;
+        read << std::ifstream(session / "board.yaml").rdbuf();
+        std::string text = read.str();
         const std::size_t at = text.find("square_size: 15");
         ASSERT_NE(at, std::string::npos) << text;
         text.replace(at, 15, "square_size: 14");

@@ -1,12 +1,11 @@
 // The whole story on the virtual scanner, with the product's two programs and
-// its board files (board/sim-*-session.yaml, board/sim.yaml) as a person runs
-// them: fpp-scanner records a checkerboard session and a
-// flat-board session in capture mode (the sim board moves the board on at
-// every scan), fpp-calib calibrates the stereo pair from the first and fits
-// the hybrid table from the second, fpp-scanner loads the table and scans the
-// composite scene, and the cloud is compared with the scene's ground truth
-// (rendered by fpp-calib simulate for the same rig). Camera binned 4 x 4
-// (400 x 300) to keep it to seconds.
+// its board files (board/sim-checkerboard-session.yaml, board/sim.yaml) as a
+// person runs them: fpp-scanner records a checkerboard session in capture
+// mode (the sim board moves the board on at every scan), fpp-calib
+// calibrates the stereo pair and fits the hybrid table from it, fpp-scanner
+// loads the table and scans the composite scene, and the cloud is compared
+// with the scene's ground truth (rendered by fpp-calib simulate for the same
+// rig). Camera binned 4 x 4 (400 x 300) to keep it to seconds.
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -55,40 +54,37 @@ std::vector<std::string> lines(const std::string& text) {
 
 TEST(ScannerToCalibration, SessionsRecordedByTheScannerCalibrateItToTheTruth) {
     TempDir dir;
-    const fs::path checkerboard = dir / "checkerboard";
-    const fs::path planes = dir / "planes";
+    const fs::path session = dir / "session";
     const fs::path scans = dir / "scans";
     std::ofstream(dir / "checkerboard.yaml") << sim_board("sim-checkerboard-session.yaml");
-    std::ofstream(dir / "planes.yaml") << sim_board("sim-plane-session.yaml");
     std::ofstream(dir / "scan.yaml") << sim_board("sim.yaml");
     auto scanner = [&](const std::string& args) {
         return run_tool(FPP_SCANNER_EXE, args, dir.path());
     };
     auto calib = [&](const std::string& args) { return run_tool(FPP_CALIB_EXE, args, dir.path()); };
 
-    // Sessions: one capture-mode scan per pose, into stores that become
-    // session folders (the sim board writes board.yaml beside the scans).
+    // The session: one capture-mode scan per pose, into a store that becomes
+    // a session folder (the sim board writes board.yaml beside the scans).
     const auto cb = scanner("--board " + shell_quote(dir / "checkerboard.yaml") +
-                            " --mode capture --scans 15 --store " + shell_quote(checkerboard));
+                            " --mode capture --scans 30 --store " + shell_quote(session));
     ASSERT_EQ(cb.exit_code, 0) << cb.output;
-    EXPECT_TRUE(fs::exists(checkerboard / "board.yaml"));
+    EXPECT_TRUE(fs::exists(session / "board.yaml"));
     int written = 0;
     for (const std::string& l : lines(cb.output))
         written += fs::exists(fs::path(l) / "capture" / "capture.yaml") ? 1 : 0;
-    EXPECT_EQ(written, 15) << cb.output;
-    const auto pl = scanner("--board " + shell_quote(dir / "planes.yaml") +
-                            " --mode capture --scans 30 --store " + shell_quote(planes));
-    ASSERT_EQ(pl.exit_code, 0) << pl.output;
+    EXPECT_EQ(written, 30) << cb.output;
 
-    // Host calibration from what the scanner recorded.
+    // Host calibration from what the scanner recorded: both from the session.
     const auto stereo =
-        calib("stereo " + shell_quote(checkerboard) + " --out " + shell_quote(dir / "calib.yaml"));
+        calib("stereo " + shell_quote(session) + " --out " + shell_quote(dir / "calib.yaml"));
     ASSERT_EQ(stereo.exit_code, 0) << stereo.output;
-    EXPECT_NE(stereo.output.find("from 15 of 15 poses"), std::string::npos) << stereo.output;
+    EXPECT_NE(stereo.output.find("from 30 of 30 poses"), std::string::npos) << stereo.output;
     const auto hybrid =
-        calib("hybrid " + shell_quote(planes) + " --calib " + shell_quote(dir / "calib.yaml") +
+        calib("hybrid " + shell_quote(session) + " --calib " + shell_quote(dir / "calib.yaml") +
               " --out " + shell_quote(dir / "table.fpt"));
     ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
+    EXPECT_NE(hybrid.output.find("checkerboards placed by the camera"), std::string::npos)
+        << hybrid.output;
 
     // A button press on the scanner with that table.
     const auto scan = scanner("--board " + shell_quote(dir / "scan.yaml") + " --once --store " +

@@ -74,6 +74,7 @@ template <class F> double largest_visible(F visible) {
 
 std::vector<Pose> checkerboard_poses(const Rig& rig, const SessionOptions& o) {
     Uniform uniform(o.seed);
+    const double margin = checkerboard_margin_px(rig, o);
     std::vector<Pose> poses;
     const int n = o.poses;
     for (int k = 0; k < n; ++k) {
@@ -103,7 +104,7 @@ std::vector<Pose> checkerboard_poses(const Rig& rig, const SessionOptions& o) {
                             R};
             };
             auto visible = [&](double s) {
-                return checkerboard_fully_visible(rig, o.board, pose_at(s), o.visibility_margin_px);
+                return checkerboard_fully_visible(rig, o.board, pose_at(s), margin);
             };
             if (!visible(0))
                 continue;
@@ -162,6 +163,11 @@ std::string format_reals(const double* v, int count) {
 }
 
 } // namespace
+
+double checkerboard_margin_px(const Rig& rig, const SessionOptions& options) {
+    const double scale = std::min(1.0, double(rig.camera_size.width) / 1600.0);
+    return std::max(8.0, options.visibility_margin_px * scale);
+}
 
 CheckerboardSpec session_checkerboard() {
     CheckerboardSpec spec;

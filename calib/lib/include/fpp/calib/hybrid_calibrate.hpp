@@ -105,9 +105,11 @@ struct HybridOptions {
     int min_board_samples = 3;
     int model_samples = 8;            // per pixel, evenly over its boards' depth range
     // The range extended by this on each side: the stereo model is a model
-    // of rays, as good a little beyond the boards' depths as between them
-    // (unlike beyond the projector pixels they lit).
-    double model_depth_margin_mm = 25;
+    // of rays, as good beyond the boards' depths as between them (unlike
+    // beyond the projector pixels they lit), and a pixel at the edge of the
+    // image saw the boards over a narrower range of depths than the volume
+    // they spanned.
+    double model_depth_margin_mm = 60;
     BrightBoardOptions bright;
     double max_sample_deviation_px = 1.0; // from the stereo model's column: not on the board
     double min_lit_fraction = 0.5;    // of the board's white squares' area decoded, else rejected

@@ -55,7 +55,9 @@ struct SessionOptions {
     double max_tilt_deg = 28;       // about the board's x and y axes
     double max_roll_deg = 8;        // about the board normal
     double max_plane_tilt_deg = 12; // kind plane
-    // Pixels every checker corner keeps from the border of both images.
+    // Pixels every checker corner keeps from the border of both images, for
+    // a camera 1600 px wide (checkerboard_margin_px scales it to smaller
+    // images: a binned camera sees the same margin in fewer pixels).
     double visibility_margin_px = 12;
 };
 
@@ -66,6 +68,11 @@ struct SessionOptions {
 // plane poses cover the whole camera field. Throws std::invalid_argument if
 // a pose cannot be placed (a board too large for the rig's field).
 std::vector<Pose> session_poses(const Rig& rig, const SessionOptions& options);
+
+// The margin the checkerboard poses keep for this rig: visibility_margin_px
+// scaled by the camera's width / 1600 (at most 1), at least 8 px (the
+// corner finder's window).
+double checkerboard_margin_px(const Rig& rig, const SessionOptions& options);
 
 // Whether the whole checker pattern at `pose` (every square plus a quarter
 // square of white around it) is inside both images with `margin_px` to spare,
