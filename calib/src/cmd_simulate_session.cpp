@@ -14,7 +14,7 @@ namespace fpp::calib {
 namespace {
 struct SimulateSessionArgs {
     std::string kind = "checkerboard";
-    int poses = 15;
+    int poses = 30;
     std::string out;
     std::string rig = sim::effects_rig_path().string();
     std::string sequence = "gray-xy";
@@ -60,9 +60,12 @@ Action add_simulate_session_command(CLI::App& app) {
         "Render a calibration session on the virtual scanner: board.yaml and one capture set per "
         "board pose (pose-01, ...), poses spread through the calibration volume (400-560 mm, tilts "
         "up to ~28 deg), each fully visible to camera and projector. Checkerboard: 11 x 8 inner "
-        "corners of 15 mm with a 15 mm white margin; plane: a white board filling the field");
+        "corners of 15 mm in the middle of a 420 x 375 mm white board (one session for the "
+        "stereo calibration and the hybrid table); plane: a white board filling the field (the "
+        "paper's hybrid session)");
     cmd->add_option("--kind", args->kind,
-                    "checkerboard (stereo calibration) or plane (hybrid model)")
+                    "checkerboard (stereo calibration and hybrid table) or plane (the paper's "
+                    "hybrid session)")
         ->capture_default_str()
         ->check(CLI::IsMember({"checkerboard", "plane"}));
     cmd->add_option("--poses", args->poses, "number of board poses")

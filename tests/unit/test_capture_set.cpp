@@ -1,4 +1,4 @@
-// Capture sets (spec/capture-set.md): strict reading (every rejection names
+// Capture sets (firmware/core/formats/capture-set.md): strict reading (every rejection names
 // the file and the field), exact writing, atomic folder output, board.yaml,
 // and the real capture sets under the shared datasets.
 
@@ -175,7 +175,7 @@ metadata: {exposure_us: 8000}
 }
 
 TEST(CaptureManifest, ParsesTheSpecExample) {
-    // The example of spec/capture-set.md with its comments, frames adjusted to
+    // The example of firmware/core/formats/capture-set.md with its comments, frames adjusted to
     // the block count (1 + 1 + 8 + 7 + 1 = 18).
     const std::string spec = R"(format: fpp-capture/1
 camera:    {width: 1600, height: 1200}

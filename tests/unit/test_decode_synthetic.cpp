@@ -33,7 +33,7 @@ using fpp::Size;
 constexpr double kPi = std::numbers::pi;
 
 // Ideal intensity in [0, 1] of frame `k` of a block at projector coordinate q
-// along the block's axis (spec/capture-set.md).
+// along the block's axis (firmware/core/formats/capture-set.md).
 double intensity(const fpp::PatternBlock& block, int k, double q) {
     if (std::holds_alternative<fpp::WhiteBlock>(block))
         return 1.0;

@@ -1,4 +1,4 @@
-// Pattern generation against the formulas of spec/capture-set.md, written out
+// Pattern generation against the formulas of firmware/core/formats/capture-set.md, written out
 // again here independently of the implementation, plus hand-worked values.
 
 #include "fpp/patterns.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// Capture sets, format fpp-capture/1 (spec/capture-set.md): a folder with
+// Capture sets, format fpp-capture/1 (firmware/core/formats/capture-set.md): a folder with
 // capture.yaml and one PNG per frame. The reader is strict: every rejection the
 // spec lists throws InputError naming the file and the field.
 //

@@ -4,7 +4,7 @@
 // time as they arrive) give bit-identical results.
 //
 // Conventions: projector coordinates in projector pixels, pixel centres on
-// integers (spec/capture-set.md); intensities in camera DN; NaN where invalid.
+// integers (firmware/core/formats/capture-set.md); intensities in camera DN; NaN where invalid.
 //
 // The unwrapping method of each axis follows from the sequence:
 //   phase + gray block of the same period  -> "gray" / "complementary-gray"

@@ -1,6 +1,6 @@
 #pragma once
 // The pattern blocks of the capture-set format fpp-capture/1
-// (spec/capture-set.md). A sequence is a list of blocks in capture order.
+// (firmware/core/formats/capture-set.md). A sequence is a list of blocks in capture order.
 
 #include <string>
 #include <variant>
