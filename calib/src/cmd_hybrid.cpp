@@ -56,6 +56,8 @@ int run_hybrid(const HybridArgs& args) {
         write_hybrid_report(args.report, result);
     }
     write_table(out, result.table);
+    std::cerr << "time per stage (s, summed over the threads running it): "
+              << result.time_split.summary() << "\n";
     std::cout << result.summary() << "wrote " << out.string() << "\n";
     return 0;
 }

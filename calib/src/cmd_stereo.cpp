@@ -102,6 +102,8 @@ int run_stereo(const StereoArgs& args) {
         calibration.poses.push_back(r);
     }
     save_calibration(out, calibration);
+    std::cerr << "time per stage (s, summed over the threads running it): "
+              << result.time_split.summary() << "\n";
 
     std::cout << std::fixed << std::setprecision(4) << "calibrated from "
               << result.calibrated.size() << " of " << result.poses.size() << " poses: camera RMS "

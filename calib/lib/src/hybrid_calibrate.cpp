@@ -439,6 +439,7 @@ std::vector<HybridResult> fit_hybrid_models(const HybridResult& common,
         result.poses = common.poses;
         result.usable_poses = common.usable_poses;
         result.seconds_poses = common.seconds_poses;
+        result.time_split = common.time_split;
         result.board = common.board;
         result.samples = common.samples;
         TableInfo info;
@@ -478,6 +479,7 @@ std::vector<HybridResult> fit_hybrid_models(const HybridResult& common,
         result.pixels_too_few_poses = pixels.too_few;
         result.pixels_ill_conditioned = pixels.ill_conditioned;
         result.seconds_fit = since(t_fit);
+        result.time_split.add("per-pixel fits", result.seconds_fit);
         result.seconds_total = result.seconds_poses + result.seconds_fit;
         results.push_back(std::move(result));
     }

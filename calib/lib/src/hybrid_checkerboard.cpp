@@ -4,6 +4,7 @@
 
 #include "fpp/calib/corners.hpp"
 #include "fpp/calib/stereo_session.hpp"
+#include "fpp/calib/time_split.hpp"
 #include "fpp/error.hpp"
 #include "bundle_adjustment.hpp"
 #include "hybrid_fit.hpp"
@@ -173,8 +174,14 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
     common.board = BoardDescription::Kind::checkerboard;
     common.samples = options.samples;
     std::vector<PoseSamples> samples;
-    auto read_pose = [](const fs::path& f) { return read_capture_set(f); };
-    std::future<CaptureSet> next = std::async(std::launch::async, read_pose, folder.poses.front());
+    std::vector<double> read_seconds(folder.poses.size());
+    auto read_pose = [&](std::size_t k) {
+        const auto start = std::chrono::steady_clock::now();
+        CaptureSet capture = read_capture_set(folder.poses[k]);
+        read_seconds[k] = since(start);
+        return capture;
+    };
+    std::future<CaptureSet> next = std::async(std::launch::async, read_pose, 0);
     PointCloud cloud;
     for (std::size_t k = 0; k < folder.poses.size(); ++k) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -185,11 +192,15 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
                         : pose.folder.filename().string();
         say("pose " + pose.name + " (" + std::to_string(k + 1) + "/" +
             std::to_string(folder.poses.size()) + ")");
+        StageTimer waiting(common.time_split, "waiting for reading");
         const CaptureSet capture = next.get();
+        waiting.stop();
+        common.time_split.add("reading", read_seconds[k]);
         if (k + 1 < folder.poses.size())
-            next = std::async(std::launch::async, read_pose, folder.poses[k + 1]);
+            next = std::async(std::launch::async, read_pose, k + 1);
         DecodeResult decoded;
         try {
+            StageTimer decoding(common.time_split, "decoding");
             decoded = decode(capture, options.decode);
         } catch (const std::invalid_argument& e) {
             throw InputError(pose.folder / "capture.yaml", "sequence",
@@ -201,12 +212,15 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
             pose.seconds = since(t0);
             common.poses.push_back(pose);
         };
+        StageTimer corner_stage(common.time_split, "corners");
         const CheckerboardCorners corners =
             find_checkerboard(corner_textures(capture, decoded), columns, rows);
+        corner_stage.stop();
         if (!corners.found) {
             reject("board not found: " + corners.failure);
             continue;
         }
+        StageTimer placement(common.time_split, "board placement");
         RigidPose placed;
         if (!camera_pose(calibration, board_points, corners.points, placed, pose.corner_rms_px)) {
             reject("the camera model cannot place the board (its corners do not undistort or "
@@ -231,8 +245,10 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
         pose.tilt_deg =
             std::acos(std::clamp(normal[2], -1.0, 1.0)) * 180.0 / std::numbers::pi;
 
+        placement.stop();
         // Samples: the bright parts where the decoded column is the stereo
         // model's for the camera's plane (else not on the board), smoothed.
+        StageTimer sampling(common.time_split, "samples");
         const Image<std::uint8_t> bright = bright_board_mask(decoded, false, options.bright);
         PoseSamples s;
         s.plane = pose.plane;
@@ -259,8 +275,10 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
             continue;
         }
 
+        sampling.stop();
         // The stereo model's view of the same board: its SV points on the
         // sampled pixels, against the camera's plane.
+        StageTimer sv_stage(common.time_split, "SV comparison (report)");
         sv.reconstruct(decoded, ReconstructAxes::x, cloud);
         std::vector<std::size_t> points;
         double sum2 = 0;

@@ -214,6 +214,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
     std::vector<cv::Mat> rvecs, tvecs, rvecs_p, tvecs_p;
     const cv::TermCriteria criteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200,
                                     DBL_EPSILON);
+    StageTimer initialisation(result.time_split, "OpenCV initialisation");
     try {
         say("initialising the camera (OpenCV calibrateCamera)");
         result.initial_camera_rms =
@@ -230,6 +231,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
     } catch (const cv::Exception& e) {
         throw std::runtime_error(std::string("OpenCV initialisation failed: ") + e.what());
     }
+    initialisation.stop();
     {
         std::ostringstream msg;
         msg.precision(4);
@@ -472,26 +474,33 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             free.camera_grid = !s.camera_grid.empty();
             free.skew = options.skew;
             free.camera_weight = 1 / square(noise.camera);
-            if (free.camera_grid && options.camera_grid_smoothness == 0)
+            if (free.camera_grid && options.camera_grid_smoothness == 0) {
+                StageTimer validation(result.time_split, "camera grid cross-validation");
                 regularisation.camera_smoothness =
                     choose_camera_smoothness(s, used, free, regularisation);
+            }
             result.camera_grid_smoothness = regularisation.camera_smoothness;
+            StageTimer camera_stage(result.time_split, "camera adjustment");
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                             options.max_iterations, options.progress);
+            camera_stage.stop();
             say("the projector with the camera and the boards held, from its corners "
                 "(intrinsics, distortion, R, T)");
             free = {};
             free.projector_lens = free.stereo = free.projector_observations = true;
             free.skew = options.skew;
             free.projector_weight = 1 / square(noise.projector);
+            StageTimer projector_stage(result.time_split, "projector adjustment (corners)");
             projector_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                                options.max_iterations, options.progress);
+            projector_stage.stop();
             result.iterations += camera_outcome.iterations + projector_outcome.iterations;
             // Then with the dense samples and the grid. Samples off the
             // model (decoded to the wrong fringe, the board's edge against a
             // wall behind it, a speck on the board) are dropped first against
             // the corners' model, then once more against the dense one:
             // squared residuals would let a few of them bend the projector.
+            StageTimer dense_stage(result.time_split, "projector adjustment (dense samples)");
             place_dense_samples(used);
             if (!dense.empty() || !s.projector_grid.empty()) {
                 const std::size_t placed = dense.size();
@@ -523,6 +532,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                                                    options.max_iterations, options.progress);
                 result.iterations += projector_outcome.iterations;
             }
+            dense_stage.stop();
         } else {
             say(round == 0 ? "joint bundle adjustment (both devices, skew " +
                                  std::string(options.skew ? "estimated" : "fixed at 0") + ")"
@@ -544,6 +554,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                 free.projector_weight =
                     1 / square(noise_floor(result.initial_projector_rms / std::sqrt(2.0)));
             }
+            StageTimer joint_stage(result.time_split, "joint adjustment");
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                             options.max_iterations, options.progress);
             if (grids) {
@@ -558,6 +569,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         }
 
         // Per-pose residuals and outliers among the used poses.
+        StageTimer residuals_stage(result.time_split, "residuals");
         StereoCalibration& c = result.calibration;
         c.camera_size = camera_size;
         c.projector_size = projector_size;

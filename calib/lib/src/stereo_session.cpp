@@ -4,6 +4,7 @@
 #include "fpp/calib/stereo_session.hpp"
 
 #include "fpp/calib/session_folder.hpp"
+#include "fpp/calib/time_split.hpp"
 
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
@@ -95,10 +96,13 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
         pose.name = folders[p].filename().string();
         say("pose " + pose.name + " (" + std::to_string(p + 1) + "/" +
             std::to_string(folders.size()) + "): decoding");
+        StageTimer reading(result.time_split, "reading");
         const CaptureSet capture = read_capture_set(folders[p]);
+        reading.stop();
         auto t0 = std::chrono::steady_clock::now();
         DecodeResult decoded;
         try {
+            StageTimer decoding(result.time_split, "decoding");
             decoded = decode(capture, options.decode);
         } catch (const std::invalid_argument& e) {
             throw InputError(folders[p] / "capture.yaml", "sequence",
@@ -108,6 +112,7 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
         result.seconds_decode += pose.decode_seconds;
 
         t0 = std::chrono::steady_clock::now();
+        StageTimer corners(result.time_split, "corners");
         const std::vector<CornerTexture> textures = corner_textures(capture, decoded);
         pose.corners = find_checkerboard(textures, columns, rows, options.finder);
         if (!textures.empty()) {
@@ -125,13 +130,20 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
             result.poses.push_back(std::move(pose));
             continue;
         }
-        if (dense)
+        corners.stop();
+        if (dense) {
+            StageTimer dense_samples(result.time_split, "dense samples");
             dense_projector_samples(decoded, bright_board_mask(decoded, true, options.bright),
                                     dense_step, per_pose[p].dense_camera,
                                     per_pose[p].dense_projector);
+        }
         for (int m = 0; m < kCornerMethods; ++m) {
             ProjectorCornerOptions o = options.corners;
             o.method = static_cast<CornerMethod>(m);
+            StageTimer projector(result.time_split,
+                                 o.method == options.corners.method
+                                     ? "projector corners"
+                                     : "projector corners of the other methods (report)");
             pose.projector[static_cast<std::size_t>(m)] = projector_corners(
                 decoded, pose.corners.points, columns, rows, pose.corners.origin_square_black, o);
         }
@@ -139,6 +151,7 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
         result.seconds_corners += pose.corner_seconds;
 
         // Ground truth of simulated captures: each method against truth_proj.
+        StageTimer truth_comparison(result.time_split, "ground truth (report)");
         if (capture.manifest.truth && !capture.manifest.truth->projector.empty()) {
             const Image<float> truth =
                 read_tiff_float(folders[p] / capture.manifest.truth->projector);
@@ -210,7 +223,9 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
     say("calibrating from " + std::to_string(observations.size()) + " poses");
     result.stereo =
         stereo_calibrate(observations, result.camera_size, result.projector_size, stereo);
+    result.time_split.add(result.stereo.time_split);
     if (options.compare_skew) {
+        StageTimer other_skew(result.time_split, "calibration with the other skew (report)");
         StereoOptions other = stereo;
         other.skew = !stereo.skew;
         other.progress = nullptr;

@@ -60,6 +60,7 @@
 #include "fpp/calib/pixel_fit.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
+#include "fpp/calib/time_split.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/decoder.hpp"
@@ -165,6 +166,7 @@ struct HybridResult {
     std::size_t pixels_too_few_poses = 0;
     std::size_t pixels_ill_conditioned = 0;
     double seconds_poses = 0, seconds_fit = 0, seconds_total = 0;
+    TimeSplit time_split; // reading, decoding, corners, ..., per-pixel fits
     BoardDescription::Kind board = BoardDescription::Kind::plane; // the procedure used
     HybridSamples samples = HybridSamples::boards; // what was fitted (checkerboard sessions)
 

@@ -30,6 +30,7 @@
 // of the corners.
 
 #include "fpp/calib/stereo_calibration.hpp"
+#include "fpp/calib/time_split.hpp"
 #include "fpp/image.hpp"
 #include "fpp/lens_model.hpp"
 
@@ -129,6 +130,7 @@ struct StereoResult {
     // equations and the residual variance); 0 for fixed parameters.
     LensModel camera_sigma;
     LensModel projector_sigma;
+    TimeSplit time_split; // initialisation, cross-validation, each adjustment
 };
 
 // Throws std::invalid_argument for fewer than 3 poses, a pose with fewer than

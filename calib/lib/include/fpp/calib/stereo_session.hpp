@@ -20,6 +20,7 @@
 #include "fpp/calib/corner_projector.hpp"
 #include "fpp/calib/corners.hpp"
 #include "fpp/calib/stereo_calibrate.hpp"
+#include "fpp/calib/time_split.hpp"
 #include "fpp/capture_set.hpp"
 
 #include <array>
@@ -79,6 +80,7 @@ struct SessionResult {
     std::optional<StereoResult> other_skew; // with the other skew setting (compare_skew)
     CornerMethod method = CornerMethod::poly;
     double seconds_decode = 0, seconds_corners = 0, seconds_calibration = 0, seconds_total = 0;
+    TimeSplit time_split; // reading, decoding, corners, ..., the calibration's stages
 };
 
 SessionResult calibrate_session(const std::filesystem::path& session,
