@@ -118,12 +118,19 @@ class Layout {
 };
 
 // The Jacobian of one observation's two residuals: (column, d r_u, d r_v)
-// for each free parameter it touches.
+// for each free lens and rigid-transform parameter it touches, and the
+// correction grid's control points that move it: a control point's u
+// displacement moves only the pixel's u, its v only the v, both by the
+// point's B-spline weight.
 struct JacobianRow {
-    static constexpr int kMax = 2 * kLensParameters + 6 + 6 + 2 * CorrectionGrid::kSupport;
+    static constexpr int kMax = kLensParameters + 6 + 6;
     int count = 0;
     int column[kMax];
     double du[kMax], dv[kMax];
+    int grid_count = 0;
+    int grid_u[CorrectionGrid::kSupport], grid_v[CorrectionGrid::kSupport];
+    double grid_weight[CorrectionGrid::kSupport];
+    void clear() { count = grid_count = 0; }
     void add(int col, double a, double b) {
         if (col < 0)
             return;
@@ -132,9 +139,19 @@ struct JacobianRow {
         dv[count] = b;
         ++count;
     }
+    // A grid's columns are free together or not at all.
+    void add_grid(int col_u, int col_v, double weight) {
+        if (col_u < 0)
+            return;
+        grid_u[grid_count] = col_u;
+        grid_v[grid_count] = col_v;
+        grid_weight[grid_count] = weight;
+        ++grid_count;
+    }
 };
 
-// Normal equations A x = -g of the free parameters and the cost.
+// Normal equations A x = -g of the free parameters (lower triangle of A)
+// and the cost.
 struct Normal {
     Eigen::MatrixXd A;
     Eigen::VectorXd g;
@@ -144,19 +161,43 @@ struct Normal {
         g.setZero(n);
         cost = 0;
     }
+    void add(int a, int b, double value) {
+        if (a >= b)
+            A(a, b) += value;
+        else
+            A(b, a) += value;
+    }
+    // The products of a grid's u column with a v residual, or of its v
+    // column with a u residual, are zero and skipped; the others are the
+    // same sums as over a full row (each element gets one term per row).
     void accumulate(const JacobianRow& j, double ru, double rv, double w) {
         for (int a = 0; a < j.count; ++a) {
             const int ca = j.column[a];
             g(ca) += w * (j.du[a] * ru + j.dv[a] * rv);
-            for (int b = 0; b <= a; ++b) {
-                const int cb = j.column[b];
-                const double v = w * (j.du[a] * j.du[b] + j.dv[a] * j.dv[b]);
-                if (ca >= cb)
-                    A(ca, cb) += v;
-                else
-                    A(cb, ca) += v;
+            for (int b = 0; b <= a; ++b)
+                add(ca, j.column[b], w * (j.du[a] * j.du[b] + j.dv[a] * j.dv[b]));
+        }
+        for (int k = 0; k < j.grid_count; ++k) {
+            const double wk = j.grid_weight[k];
+            const int cu = j.grid_u[k], cv = j.grid_v[k];
+            g(cu) += w * (wk * ru);
+            g(cv) += w * (wk * rv);
+            for (int a = 0; a < j.count; ++a) {
+                add(cu, j.column[a], w * (wk * j.du[a]));
+                add(cv, j.column[a], w * (wk * j.dv[a]));
+            }
+            for (int l = 0; l <= k; ++l) {
+                const double v = w * (wk * j.grid_weight[l]);
+                add(cu, j.grid_u[l], v);
+                add(cv, j.grid_v[l], v);
             }
         }
+    }
+    // Adds another set's terms.
+    void add(const Normal& other) {
+        A.triangularView<Eigen::Lower>() += other.A;
+        g += other.g;
+        cost += other.cost;
     }
 };
 
@@ -169,8 +210,7 @@ void add_device(JacobianRow& row, const Layout& layout, const Projection& p, int
         return;
     for (int k = 0; k < CorrectionGrid::kSupport; ++k) {
         const int c = grid_offset + 2 * p.grid_index[k];
-        row.add(layout.column(c), p.grid_weight[k], 0);
-        row.add(layout.column(c + 1), 0, p.grid_weight[k]);
+        row.add_grid(layout.column(c), layout.column(c + 1), p.grid_weight[k]);
     }
 }
 
@@ -191,38 +231,112 @@ void add_rigid(JacobianRow& row, const Layout& layout, int base, const double dX
         row.add(layout.column(base + 3 + k), dX[0][k], dX[1][k]);
 }
 
+// The data terms of some observations: weighted squared residuals, their
+// count, and whether a point fell behind a device.
+struct DataTerms {
+    double cost = 0;
+    int rows = 0;
+    bool behind = false;
+};
+
 class Problem {
   public:
     Problem(const RigState& start, const std::vector<CornerObservation>& corners,
             const std::vector<DenseObservation>& dense, const std::vector<bool>& pose_used,
-            const FreeParameters& free, const GridRegularisation& reg)
+            const FreeParameters& free, const GridRegularisation& reg, ThreadPool* pool)
         : corners_(corners), dense_(dense), used_(pose_used), free_(free), reg_(reg),
           camera_gauge_(gauge_fields(start.camera_grid, start.camera)),
-          projector_gauge_(gauge_fields(start.projector_grid, start.projector)) {}
+          projector_gauge_(gauge_fields(start.projector_grid, start.projector)), pool_(pool) {}
 
     // Cost of a state (data and regularisation); with `normal`, also the
     // normal equations. Returns +inf when a point falls behind a device.
+    // Many observations (dense samples) are taken in chunks, on the pool's
+    // threads when there is one, each into normal equations of its own that
+    // are then added in chunk order: the chunks depend on the observations
+    // alone, so the sums do not depend on the threads.
     double evaluate(const RigState& s, const Layout& layout, Normal* normal,
-                    int* residual_rows = nullptr) const {
-        double cost = 0;
-        int rows = 0;
+                    int* residual_rows = nullptr) {
+        const std::size_t count =
+            corners_.size() + (free_.projector_observations ? dense_.size() : 0);
+        const int chunks =
+            static_cast<int>(std::clamp<std::size_t>(count / kChunkObservations, 1, kMaxChunks));
+        DataTerms data;
+        if (chunks == 1) {
+            data = evaluate_observations(s, layout, 0, count, normal);
+        } else {
+            chunk_normals_.resize(std::size_t(chunks));
+            chunk_terms_.assign(std::size_t(chunks), {});
+            const auto run = [&](int begin, int end, int) {
+                for (int c = begin; c < end; ++c) {
+                    Normal* part = nullptr;
+                    if (normal) {
+                        part = &chunk_normals_[std::size_t(c)];
+                        part->reset(layout.columns());
+                    }
+                    chunk_terms_[std::size_t(c)] = evaluate_observations(
+                        s, layout, count * std::size_t(c) / std::size_t(chunks),
+                        count * std::size_t(c + 1) / std::size_t(chunks), part);
+                }
+            };
+            if (pool_)
+                pool_->parallel_for(chunks, 1, run);
+            else
+                run(0, chunks, 0);
+            for (int c = 0; c < chunks; ++c) {
+                const DataTerms& t = chunk_terms_[std::size_t(c)];
+                data.cost += t.cost;
+                data.rows += t.rows;
+                data.behind = data.behind || t.behind;
+                if (normal && !t.behind)
+                    normal->add(chunk_normals_[std::size_t(c)]);
+            }
+        }
+        if (data.behind)
+            return std::numeric_limits<double>::infinity();
+        double cost = data.cost;
+        if (normal)
+            normal->cost = cost;
+        if (residual_rows)
+            *residual_rows = data.rows;
+        if (free_.camera_grid)
+            cost += regularise(s.camera_grid, camera_gauge_, reg_.camera_smoothness, layout,
+                               layout.camera_grid(), normal);
+        if (free_.projector_grid)
+            cost += regularise(s.projector_grid, projector_gauge_, reg_.projector_smoothness,
+                               layout, layout.projector_grid(), normal);
+        return cost;
+    }
+
+  private:
+    static constexpr std::size_t kChunkObservations = 4096;
+    static constexpr std::size_t kMaxChunks = 8;
+
+    // Observations [begin, end): the corners (each with its camera and its
+    // projector observation), then the dense samples. Stops at a point
+    // behind a device.
+    DataTerms evaluate_observations(const RigState& s, const Layout& layout, std::size_t begin,
+                                    std::size_t end, Normal* normal) const {
+        DataTerms out;
         Projection p;
         JacobianRow row;
         const bool derivatives = normal != nullptr;
-        for (const CornerObservation& o : corners_) {
+        for (std::size_t i = begin; i < std::min(end, corners_.size()); ++i) {
+            const CornerObservation& o = corners_[i];
             if (!used_[std::size_t(o.pose)])
                 continue;
             const RigidPose& pose = s.poses[std::size_t(o.pose)];
             const Vec3 rotated = mul(pose.R, o.board);
             const Vec3 xc = add(rotated, pose.t);
             if (free_.camera_observations) {
-                if (!project_with_derivatives(s.camera, s.camera_grid, xc, p))
-                    return std::numeric_limits<double>::infinity();
+                if (!project_with_derivatives(s.camera, s.camera_grid, xc, p)) {
+                    out.behind = true;
+                    return out;
+                }
                 const double ru = p.pixel[0] - o.camera[0], rv = p.pixel[1] - o.camera[1];
-                cost += free_.camera_weight * (ru * ru + rv * rv);
-                rows += 2;
+                out.cost += free_.camera_weight * (ru * ru + rv * rv);
+                out.rows += 2;
                 if (derivatives) {
-                    row.count = 0;
+                    row.clear();
                     add_device(row, layout, p, layout.camera_lens(), layout.camera_grid(),
                                free_.camera_grid);
                     add_rigid(row, layout, layout.pose(o.pose), p.d_point, rotated);
@@ -233,13 +347,15 @@ class Problem {
                 std::isfinite(o.projector[1])) {
                 const Vec3 rc = mul(s.R, xc);
                 const Vec3 xp = add(rc, s.T);
-                if (!project_with_derivatives(s.projector, s.projector_grid, xp, p))
-                    return std::numeric_limits<double>::infinity();
+                if (!project_with_derivatives(s.projector, s.projector_grid, xp, p)) {
+                    out.behind = true;
+                    return out;
+                }
                 const double ru = p.pixel[0] - o.projector[0], rv = p.pixel[1] - o.projector[1];
-                cost += free_.projector_weight * (ru * ru + rv * rv);
-                rows += 2;
+                out.cost += free_.projector_weight * (ru * ru + rv * rv);
+                out.rows += 2;
                 if (derivatives) {
-                    row.count = 0;
+                    row.clear();
                     add_device(row, layout, p, layout.projector_lens(), layout.projector_grid(),
                                free_.projector_grid);
                     add_stereo(row, layout, p, rc);
@@ -251,37 +367,29 @@ class Problem {
                 }
             }
         }
-        if (free_.projector_observations)
-            for (const DenseObservation& o : dense_) {
-                if (o.pose >= 0 && !used_[std::size_t(o.pose)])
-                    continue;
-                const Vec3 rc = mul(s.R, o.camera_point);
-                const Vec3 xp = add(rc, s.T);
-                if (!project_with_derivatives(s.projector, s.projector_grid, xp, p))
-                    return std::numeric_limits<double>::infinity();
-                const double ru = p.pixel[0] - o.projector[0], rv = p.pixel[1] - o.projector[1];
-                const double weight = o.weight * free_.dense_weight;
-                cost += weight * (ru * ru + rv * rv);
-                rows += 2;
-                if (derivatives) {
-                    row.count = 0;
-                    add_device(row, layout, p, layout.projector_lens(), layout.projector_grid(),
-                               free_.projector_grid);
-                    add_stereo(row, layout, p, rc);
-                    normal->accumulate(row, ru, rv, weight);
-                }
+        for (std::size_t i = std::max(begin, corners_.size()); i < end; ++i) {
+            const DenseObservation& o = dense_[i - corners_.size()];
+            if (o.pose >= 0 && !used_[std::size_t(o.pose)])
+                continue;
+            const Vec3 rc = mul(s.R, o.camera_point);
+            const Vec3 xp = add(rc, s.T);
+            if (!project_with_derivatives(s.projector, s.projector_grid, xp, p)) {
+                out.behind = true;
+                return out;
             }
-        if (normal)
-            normal->cost = cost;
-        if (residual_rows)
-            *residual_rows = rows;
-        if (free_.camera_grid)
-            cost += regularise(s.camera_grid, camera_gauge_, reg_.camera_smoothness, layout,
-                               layout.camera_grid(), normal);
-        if (free_.projector_grid)
-            cost += regularise(s.projector_grid, projector_gauge_, reg_.projector_smoothness,
-                               layout, layout.projector_grid(), normal);
-        return cost;
+            const double ru = p.pixel[0] - o.projector[0], rv = p.pixel[1] - o.projector[1];
+            const double weight = o.weight * free_.dense_weight;
+            out.cost += weight * (ru * ru + rv * rv);
+            out.rows += 2;
+            if (derivatives) {
+                row.clear();
+                add_device(row, layout, p, layout.projector_lens(), layout.projector_grid(),
+                           free_.projector_grid);
+                add_stereo(row, layout, p, rc);
+                normal->accumulate(row, ru, rv, weight);
+            }
+        }
+        return out;
     }
 
   private:
@@ -457,6 +565,10 @@ class Problem {
     FreeParameters free_;
     GridRegularisation reg_;
     std::vector<std::vector<Vec2>> camera_gauge_, projector_gauge_;
+    ThreadPool* pool_;
+    // Scratch of evaluate(), kept from one evaluation to the next.
+    std::vector<Normal> chunk_normals_;
+    std::vector<DataTerms> chunk_terms_;
 };
 
 } // namespace
@@ -518,8 +630,8 @@ Linearisation linearise(const RigState& state, const std::vector<CornerObservati
                         const std::vector<bool>& pose_used, const FreeParameters& free,
                         const GridRegularisation& regularisation, const RigState* start) {
     const Layout layout(state, free, pose_used);
-    const Problem problem(start ? *start : state, corners, dense, pose_used, free,
-                          regularisation);
+    Problem problem(start ? *start : state, corners, dense, pose_used, free, regularisation,
+                    nullptr);
     Normal normal;
     normal.reset(layout.columns());
     Linearisation out;
@@ -542,13 +654,14 @@ AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& 
                          const std::vector<DenseObservation>& dense,
                          const std::vector<bool>& pose_used, const FreeParameters& free,
                          const GridRegularisation& regularisation, int max_iterations,
-                         const std::function<void(const std::string&)>& progress) {
+                         const std::function<void(const std::string&)>& progress,
+                         ThreadPool* pool) {
     const Layout layout(state, free, pose_used);
-    const Problem problem(state, corners, dense, pose_used, free, regularisation);
+    Problem problem(state, corners, dense, pose_used, free, regularisation, pool);
     const int n = layout.columns();
     AdjustmentOutcome out;
     out.parameters = n;
-    Normal normal;
+    Normal normal, trial_normal;
     normal.reset(n);
     double cost = problem.evaluate(state, layout, &normal, &out.residuals);
     if (!std::isfinite(cost))
@@ -588,7 +701,10 @@ AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& 
             RigState trial = state;
             full_step(step);
             layout.apply(trial, full);
-            const double trial_cost = problem.evaluate(trial, layout, nullptr);
+            // The normal equations at the trial too, in the same pass: most
+            // steps are accepted.
+            trial_normal.reset(n);
+            const double trial_cost = problem.evaluate(trial, layout, &trial_normal);
             if (trial_cost < cost) {
                 const double decrease = (cost - trial_cost) / cost;
                 state = std::move(trial);
@@ -596,8 +712,7 @@ AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& 
                 lambda = std::max(lambda / 3, 1e-12);
                 accepted = true;
                 out.iterations = it + 1;
-                normal.reset(n);
-                problem.evaluate(state, layout, &normal);
+                std::swap(normal, trial_normal);
                 if (progress && (it < 3 || it % 5 == 0)) {
                     std::ostringstream msg;
                     msg.precision(4);

@@ -12,6 +12,7 @@
 
 #include "fpp/calib/correction_grid.hpp"
 #include "fpp/calib/stereo_calibrate.hpp"
+#include "fpp/parallel.hpp"
 
 #include <Eigen/Dense>
 
@@ -85,12 +86,14 @@ struct AdjustmentOutcome {
 
 // Adjusts the free parameters of `state` in place. `pose_used[i]` false
 // leaves pose i's observations out. Throws std::runtime_error if the normal
-// equations cannot be solved at the start.
+// equations cannot be solved at the start. With a pool, many observations
+// (dense samples) are evaluated on its threads, to the same result.
 AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& corners,
                          const std::vector<DenseObservation>& dense,
                          const std::vector<bool>& pose_used, const FreeParameters& free,
                          const GridRegularisation& regularisation, int max_iterations,
-                         const std::function<void(const std::string&)>& progress);
+                         const std::function<void(const std::string&)>& progress,
+                         ThreadPool* pool = nullptr);
 
 // The cost (weighted squared residuals and regularisation) at `state` and
 // its gradient with respect to the free parameters, g = J^T W r (half the

@@ -5,12 +5,15 @@
 
 #include "bundle_adjustment.hpp"
 
+#include "fpp/parallel.hpp"
+
 #include <Eigen/Dense>
 #include <opencv2/calib3d.hpp>
 
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -151,6 +154,8 @@ void StereoOptions::validate() const {
         bad("outlier_factor", "must be above 1");
     if (max_iterations < 1)
         bad("max_iterations", "must be at least 1");
+    if (threads < 0)
+        bad("threads", "must not be negative (0: all cores)");
 }
 
 Vec2 project_camera(const StereoCalibration& c, const RigidPose& pose, const Vec3& board) {
@@ -210,20 +215,24 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
     }
     StereoResult result;
     result.skew_estimated = options.skew;
+    ThreadPool& pool = ThreadPool::shared(options.threads);
     cv::Mat Kc, Dc, Kp, Dp, Rs, Ts, E, F;
     std::vector<cv::Mat> rvecs, tvecs, rvecs_p, tvecs_p;
     const cv::TermCriteria criteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200,
                                     DBL_EPSILON);
     StageTimer initialisation(result.time_split, "OpenCV initialisation");
     try {
-        say("initialising the camera (OpenCV calibrateCamera)");
-        result.initial_camera_rms =
-            cv::calibrateCamera(obj_c, img_c, cv::Size(camera_size.width, camera_size.height), Kc,
-                                Dc, rvecs, tvecs, 0, criteria);
-        say("initialising the projector (OpenCV calibrateCamera)");
+        // The two devices apart from each other, at once.
+        say("initialising the camera and the projector (OpenCV calibrateCamera)");
+        std::future<double> camera_rms = std::async(std::launch::async, [&] {
+            return cv::calibrateCamera(obj_c, img_c,
+                                       cv::Size(camera_size.width, camera_size.height), Kc, Dc,
+                                       rvecs, tvecs, 0, criteria);
+        });
         result.initial_projector_rms = cv::calibrateCamera(
             obj_s, img_ps, cv::Size(projector_size.width, projector_size.height), Kp, Dp, rvecs_p,
             tvecs_p, 0, criteria);
+        result.initial_camera_rms = camera_rms.get();
         say("initialising camera-to-projector transform (OpenCV stereoCalibrate)");
         cv::stereoCalibrate(obj_s, img_cs, img_ps, Kc, Dc, Kp, Dp,
                             cv::Size(camera_size.width, camera_size.height), Rs, Ts, E, F,
@@ -400,7 +409,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
     const auto choose_camera_smoothness = [&](const detail::RigState& start,
                                               const std::vector<bool>& used_poses,
                                               const detail::FreeParameters& free,
-                                              detail::GridRegularisation reg) {
+                                              const detail::GridRegularisation& reg) {
         const std::vector<double>& choices = options.camera_grid_smoothness_choices;
         std::vector<int> in_use;
         for (std::size_t i = 0; i < used_poses.size(); ++i)
@@ -416,12 +425,15 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         detail::FreeParameters place;
         place.poses = place.camera_observations = true;
         place.camera_weight = free.camera_weight;
-        std::vector<double> rms;
-        for (const double choice : choices) {
-            reg.camera_smoothness = choice;
-            double sum = 0;
-            int rows = 0;
-            for (int f = 0; f < folds; ++f) {
+        // Each choice's folds are independent calibrations: all of them on
+        // the pool's threads, summed in order afterwards.
+        const int trials = static_cast<int>(choices.size()) * folds;
+        std::vector<detail::AdjustmentOutcome> held(static_cast<std::size_t>(trials));
+        pool.parallel_for(trials, 1, [&](int begin, int end, int) {
+            for (int t = begin; t < end; ++t) {
+                const int f = t % folds;
+                detail::GridRegularisation fold_reg = reg;
+                fold_reg.camera_smoothness = choices[std::size_t(t / folds)];
                 std::vector<bool> train = used_poses, test(used_poses.size(), false);
                 for (std::size_t k = 0; k < in_use.size(); ++k)
                     if (int(k) % folds == f) {
@@ -429,12 +441,21 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                         test[std::size_t(in_use[k])] = true;
                     }
                 detail::RigState trial = start;
-                detail::adjust(trial, corners, {}, train, free, reg, options.max_iterations,
-                               nullptr);
-                const detail::AdjustmentOutcome held = detail::adjust(
-                    trial, corners, {}, test, place, reg, options.max_iterations, nullptr);
-                sum += held.data_cost / place.camera_weight;
-                rows += held.residuals;
+                detail::adjust(trial, corners, {}, train, free, fold_reg, options.max_iterations,
+                               nullptr, &pool);
+                held[std::size_t(t)] = detail::adjust(trial, corners, {}, test, place, fold_reg,
+                                                      options.max_iterations, nullptr, &pool);
+            }
+        });
+        std::vector<double> rms;
+        for (std::size_t c = 0; c < choices.size(); ++c) {
+            const double choice = choices[c];
+            double sum = 0;
+            int rows = 0;
+            for (int f = 0; f < folds; ++f) {
+                const detail::AdjustmentOutcome& h = held[c * std::size_t(folds) + std::size_t(f)];
+                sum += h.data_cost / place.camera_weight;
+                rows += h.residuals;
             }
             rms.push_back(std::sqrt(sum / std::max(rows, 1)));
             result.camera_grid_validation.emplace_back(choice, rms.back());
@@ -482,7 +503,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             result.camera_grid_smoothness = regularisation.camera_smoothness;
             StageTimer camera_stage(result.time_split, "camera adjustment");
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
-                                            options.max_iterations, options.progress);
+                                            options.max_iterations, options.progress, &pool);
             camera_stage.stop();
             say("the projector with the camera and the boards held, from its corners "
                 "(intrinsics, distortion, R, T)");
@@ -492,7 +513,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             free.projector_weight = 1 / square(noise.projector);
             StageTimer projector_stage(result.time_split, "projector adjustment (corners)");
             projector_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
-                                               options.max_iterations, options.progress);
+                                               options.max_iterations, options.progress, &pool);
             projector_stage.stop();
             result.iterations += camera_outcome.iterations + projector_outcome.iterations;
             // Then with the dense samples and the grid. Samples off the
@@ -516,7 +537,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                 free.projector_weight = 1 / square(noise.projector);
                 free.dense_weight = 1 / square(noise.dense);
                 projector_outcome = detail::adjust(s, corners, dense, used, free, regularisation,
-                                                   options.max_iterations, options.progress);
+                                                   options.max_iterations, options.progress, &pool);
                 result.iterations += projector_outcome.iterations;
                 // Weighted again by the residuals of the grid's model, and
                 // without the samples that are still off it.
@@ -529,7 +550,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                 free.projector_weight = 1 / square(noise.projector);
                 free.dense_weight = 1 / square(noise.dense);
                 projector_outcome = detail::adjust(s, corners, dense, used, free, regularisation,
-                                                   options.max_iterations, options.progress);
+                                                   options.max_iterations, options.progress, &pool);
                 result.iterations += projector_outcome.iterations;
             }
             dense_stage.stop();
@@ -556,13 +577,13 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             }
             StageTimer joint_stage(result.time_split, "joint adjustment");
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
-                                            options.max_iterations, options.progress);
+                                            options.max_iterations, options.progress, &pool);
             if (grids) {
                 const ObservationNoise noise = observation_noise(s);
                 free.camera_weight = 1 / square(noise.camera);
                 free.projector_weight = 1 / square(noise.projector);
                 camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
-                                                options.max_iterations, options.progress);
+                                                options.max_iterations, options.progress, &pool);
             }
             projector_outcome = camera_outcome;
             result.iterations += camera_outcome.iterations;

@@ -5,6 +5,7 @@
 
 #include "fpp/calib/session_folder.hpp"
 #include "fpp/calib/time_split.hpp"
+#include "pose_pipeline.hpp"
 
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <sstream>
 #include <variant>
 
@@ -47,6 +49,117 @@ Image<std::uint8_t> to_8bit_view(const Image<float>& image) {
         out.data()[i] = static_cast<std::uint8_t>(std::clamp(s, 0.0f, 255.0f) + 0.5f);
     }
     return out;
+}
+
+// What processing a pose leaves besides its SessionPose: its progress
+// lines and times, reported in pose order.
+struct PoseOutcome {
+    std::vector<std::string> progress;
+    TimeSplit time_split;
+};
+
+struct PoseContext {
+    const StereoSessionOptions& options;
+    int columns, rows;
+    bool dense;
+    int dense_step;
+};
+
+// One pose: decode, corners, their projector coordinates by every method
+// (and against the simulator's truth), dense samples.
+PoseOutcome process_pose(const fs::path& folder, const PoseContext& context, SessionPose& pose,
+                         PoseObservations& observations) {
+    const StereoSessionOptions& options = context.options;
+    const int columns = context.columns, rows = context.rows;
+    PoseOutcome outcome;
+    TimeSplit& time = outcome.time_split;
+    pose.folder = folder;
+    pose.name = folder.filename().string();
+    StageTimer reading(time, "reading");
+    const CaptureSet capture = read_capture_set(folder);
+    reading.stop();
+    DecodeResult decoded;
+    try {
+        StageTimer decoding(time, "decoding");
+        decoded = decode(capture, options.decode);
+        pose.decode_seconds = decoding.stop();
+    } catch (const std::invalid_argument& e) {
+        throw InputError(folder / "capture.yaml", "sequence",
+                         std::string("cannot be decoded: ") + e.what());
+    }
+
+    StageTimer corners(time, "corners");
+    const std::vector<CornerTexture> textures = corner_textures(capture, decoded);
+    pose.corners = find_checkerboard(textures, columns, rows, options.finder);
+    if (!textures.empty()) {
+        const CornerTexture* used = &textures.front();
+        for (const CornerTexture& t : textures)
+            if (t.source == pose.corners.texture)
+                used = &t;
+        pose.texture = to_8bit_view(used->image);
+    }
+    pose.corner_seconds = corners.stop();
+    if (!pose.corners.found) {
+        pose.skip_reason = pose.corners.failure;
+        outcome.progress.push_back("  skipped " + pose.name + ": " + pose.skip_reason);
+        return outcome;
+    }
+    if (context.dense) {
+        StageTimer dense_samples(time, "dense samples");
+        dense_projector_samples(decoded, bright_board_mask(decoded, true, options.bright),
+                                context.dense_step, observations.dense_camera,
+                                observations.dense_projector);
+    }
+    for (int m = 0; m < kCornerMethods; ++m) {
+        ProjectorCornerOptions o = options.corners;
+        o.method = static_cast<CornerMethod>(m);
+        StageTimer projector(time, o.method == options.corners.method
+                                       ? "projector corners"
+                                       : "projector corners of the other methods (report)");
+        pose.projector[static_cast<std::size_t>(m)] = projector_corners(
+            decoded, pose.corners.points, columns, rows, pose.corners.origin_square_black, o);
+        pose.corner_seconds += projector.stop();
+    }
+
+    // Ground truth of simulated captures: each method against truth_proj.
+    if (capture.manifest.truth && !capture.manifest.truth->projector.empty()) {
+        StageTimer truth_comparison(time, "ground truth (report)");
+        const Image<float> truth = read_tiff_float(folder / capture.manifest.truth->projector);
+        for (int m = 0; m < kCornerMethods; ++m) {
+            double sum = 0;
+            int count = 0;
+            const ProjectorCorners& pc = pose.projector[static_cast<std::size_t>(m)];
+            for (std::size_t k = 0; k < pose.corners.points.size(); ++k) {
+                const Vec2& c = pose.corners.points[k];
+                const double tx = sample_bilinear(truth, c[0], c[1], 0);
+                const double ty = sample_bilinear(truth, c[0], c[1], 1);
+                if (!pc.valid[k] || !std::isfinite(tx) || !std::isfinite(ty))
+                    continue;
+                sum += std::pow(pc.points[k][0] - tx, 2) + std::pow(pc.points[k][1] - ty, 2);
+                ++count;
+            }
+            pose.truth_rms[static_cast<std::size_t>(m)] = count ? std::sqrt(sum / count) : -1;
+            pose.truth_points = count;
+        }
+    }
+
+    const ProjectorCorners& chosen = pose.projector[static_cast<std::size_t>(options.corners.method)];
+    const int valid = static_cast<int>(chosen.valid.size()) - chosen.failed;
+    std::ostringstream msg;
+    msg << "  " << pose.name << ": board found (" << pose.corners.finder << " finder on "
+        << pose.corners.texture << "), projector coordinates for " << valid << "/"
+        << chosen.valid.size() << " corners";
+    outcome.progress.push_back(msg.str());
+    if (valid < options.min_projector_corner_fraction * static_cast<double>(chosen.valid.size()) ||
+        valid < 6) {
+        pose.skip_reason = "projector coordinates for only " + std::to_string(valid) + " of " +
+                           std::to_string(chosen.valid.size()) +
+                           " corners (phase invalid around the board)";
+        outcome.progress.push_back("  skipped " + pose.name + ": " + pose.skip_reason);
+    } else {
+        pose.usable = true;
+    }
+    return outcome;
 }
 
 } // namespace
@@ -89,109 +202,30 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
             ? options.dense_step_px
             : std::max(2, static_cast<int>(std::lround(
                               std::sqrt(double(result.camera_size.area()) / 8000.0))));
+    // Each pose on its own thread, decoded there (poses rather than pixels
+    // in parallel: reading, corners and their projector coordinates are
+    // sequential per pose); lines and results in pose order.
     std::vector<PoseObservations> per_pose(folders.size());
-    for (std::size_t p = 0; p < folders.size(); ++p) {
-        SessionPose pose;
-        pose.folder = folders[p];
-        pose.name = folders[p].filename().string();
-        say("pose " + pose.name + " (" + std::to_string(p + 1) + "/" +
-            std::to_string(folders.size()) + "): decoding");
-        StageTimer reading(result.time_split, "reading");
-        const CaptureSet capture = read_capture_set(folders[p]);
-        reading.stop();
-        auto t0 = std::chrono::steady_clock::now();
-        DecodeResult decoded;
-        try {
-            StageTimer decoding(result.time_split, "decoding");
-            decoded = decode(capture, options.decode);
-        } catch (const std::invalid_argument& e) {
-            throw InputError(folders[p] / "capture.yaml", "sequence",
-                             std::string("cannot be decoded: ") + e.what());
-        }
-        pose.decode_seconds = since(t0);
-        result.seconds_decode += pose.decode_seconds;
-
-        t0 = std::chrono::steady_clock::now();
-        StageTimer corners(result.time_split, "corners");
-        const std::vector<CornerTexture> textures = corner_textures(capture, decoded);
-        pose.corners = find_checkerboard(textures, columns, rows, options.finder);
-        if (!textures.empty()) {
-            const CornerTexture* used = &textures.front();
-            for (const CornerTexture& t : textures)
-                if (t.source == pose.corners.texture)
-                    used = &t;
-            pose.texture = to_8bit_view(used->image);
-        }
-        if (!pose.corners.found) {
-            pose.skip_reason = pose.corners.failure;
-            say("  skipped " + pose.name + ": " + pose.skip_reason);
-            pose.corner_seconds = since(t0);
-            result.seconds_corners += pose.corner_seconds;
-            result.poses.push_back(std::move(pose));
-            continue;
-        }
-        corners.stop();
-        if (dense) {
-            StageTimer dense_samples(result.time_split, "dense samples");
-            dense_projector_samples(decoded, bright_board_mask(decoded, true, options.bright),
-                                    dense_step, per_pose[p].dense_camera,
-                                    per_pose[p].dense_projector);
-        }
-        for (int m = 0; m < kCornerMethods; ++m) {
-            ProjectorCornerOptions o = options.corners;
-            o.method = static_cast<CornerMethod>(m);
-            StageTimer projector(result.time_split,
-                                 o.method == options.corners.method
-                                     ? "projector corners"
-                                     : "projector corners of the other methods (report)");
-            pose.projector[static_cast<std::size_t>(m)] = projector_corners(
-                decoded, pose.corners.points, columns, rows, pose.corners.origin_square_black, o);
-        }
-        pose.corner_seconds = since(t0);
-        result.seconds_corners += pose.corner_seconds;
-
-        // Ground truth of simulated captures: each method against truth_proj.
-        StageTimer truth_comparison(result.time_split, "ground truth (report)");
-        if (capture.manifest.truth && !capture.manifest.truth->projector.empty()) {
-            const Image<float> truth =
-                read_tiff_float(folders[p] / capture.manifest.truth->projector);
-            for (int m = 0; m < kCornerMethods; ++m) {
-                double sum = 0;
-                int count = 0;
-                const ProjectorCorners& pc = pose.projector[static_cast<std::size_t>(m)];
-                for (std::size_t k = 0; k < pose.corners.points.size(); ++k) {
-                    const Vec2& c = pose.corners.points[k];
-                    const double tx = sample_bilinear(truth, c[0], c[1], 0);
-                    const double ty = sample_bilinear(truth, c[0], c[1], 1);
-                    if (!pc.valid[k] || !std::isfinite(tx) || !std::isfinite(ty))
-                        continue;
-                    sum += std::pow(pc.points[k][0] - tx, 2) + std::pow(pc.points[k][1] - ty, 2);
-                    ++count;
-                }
-                pose.truth_rms[static_cast<std::size_t>(m)] = count ? std::sqrt(sum / count) : -1;
-                pose.truth_points = count;
-            }
-        }
-
-        const ProjectorCorners& chosen = pose.projector[static_cast<std::size_t>(result.method)];
-        const int valid = static_cast<int>(chosen.valid.size()) - chosen.failed;
-        std::ostringstream msg;
-        msg << "  " << pose.name << ": board found (" << pose.corners.finder << " finder on "
-            << pose.corners.texture << "), projector coordinates for " << valid << "/"
-            << chosen.valid.size() << " corners";
-        say(msg.str());
-        if (valid <
-                options.min_projector_corner_fraction * static_cast<double>(chosen.valid.size()) ||
-            valid < 6) {
-            pose.skip_reason = "projector coordinates for only " + std::to_string(valid) + " of " +
-                               std::to_string(chosen.valid.size()) +
-                               " corners (phase invalid around the board)";
-            say("  skipped " + pose.name + ": " + pose.skip_reason);
-        } else {
-            pose.usable = true;
-        }
-        result.poses.push_back(std::move(pose));
-    }
+    std::vector<PoseOutcome> outcomes(folders.size());
+    result.poses.resize(folders.size());
+    PoseContext context{options, columns, rows, dense, dense_step};
+    detail::for_each_pose(
+        ThreadPool::shared(options.decode.threads), static_cast<int>(folders.size()),
+        [&](int p) {
+            outcomes[std::size_t(p)] =
+                process_pose(folders[std::size_t(p)], context, result.poses[std::size_t(p)],
+                             per_pose[std::size_t(p)]);
+        },
+        [&](int p) {
+            const PoseOutcome& o = outcomes[std::size_t(p)];
+            say("pose " + result.poses[std::size_t(p)].name + " (" + std::to_string(p + 1) + "/" +
+                std::to_string(folders.size()) + ")");
+            for (const std::string& line : o.progress)
+                say(line);
+            result.time_split.add(o.time_split);
+            result.seconds_decode += result.poses[std::size_t(p)].decode_seconds;
+            result.seconds_corners += result.poses[std::size_t(p)].corner_seconds;
+        });
 
     std::string skipped;
     std::vector<PoseObservations> used_observations;
@@ -221,18 +255,29 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
     StereoOptions stereo = options.stereo;
     stereo.progress = options.progress;
     say("calibrating from " + std::to_string(observations.size()) + " poses");
-    result.stereo =
-        stereo_calibrate(observations, result.camera_size, result.projector_size, stereo);
-    result.time_split.add(result.stereo.time_split);
+    // The other skew setting's calibration (for the report) on its own
+    // thread meanwhile: the two share no state.
+    std::future<StereoResult> other_skew;
     if (options.compare_skew) {
-        StageTimer other_skew(result.time_split, "calibration with the other skew (report)");
         StereoOptions other = stereo;
         other.skew = !stereo.skew;
         other.progress = nullptr;
-        say(std::string("for comparison: calibrating with skew ") +
+        say(std::string("for comparison, alongside: calibrating with skew ") +
             (other.skew ? "estimated" : "fixed at 0"));
-        result.other_skew =
-            stereo_calibrate(observations, result.camera_size, result.projector_size, other);
+        other_skew = std::async(std::launch::async, [&observations, camera = result.camera_size,
+                                                     projector = result.projector_size, other] {
+            return stereo_calibrate(observations, camera, projector, other);
+        });
+    }
+    result.stereo =
+        stereo_calibrate(observations, result.camera_size, result.projector_size, stereo);
+    result.time_split.add(result.stereo.time_split);
+    if (other_skew.valid()) {
+        StageTimer waiting(result.time_split, "waiting for the other skew's calibration");
+        result.other_skew = other_skew.get();
+        waiting.stop();
+        for (const auto& [stage, seconds] : result.other_skew->time_split.stages())
+            result.time_split.add(stage + " (other skew, report)", seconds);
     }
     result.seconds_calibration = since(t_cal);
     result.stereo.calibration.origin = "fpp-calib stereo " + session.string();

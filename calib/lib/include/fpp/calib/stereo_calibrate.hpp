@@ -97,6 +97,9 @@ struct StereoOptions {
     // exceeds this multiple of the median pose RMS.
     double outlier_factor = 2.5;
     int max_iterations = 100;
+    // Threads of the adjustments (dense samples, cross-validation folds);
+    // 0: all cores. The result does not depend on it.
+    int threads = 0;
 
     // Throws std::invalid_argument naming the first bad field.
     void validate() const;
