@@ -606,8 +606,7 @@ bool project_with_derivatives(const LensModel& lens, const CorrectionGrid& grid,
     Mat2 G{0, 0, 0, 0};
     Vec2 delta{0, 0};
     if (!grid.empty()) {
-        G = grid.jacobian(model);
-        grid.support(model, out.grid_index, out.grid_weight);
+        grid.support_and_jacobian(model, out.grid_index, out.grid_weight, G);
         for (int k = 0; k < CorrectionGrid::kSupport; ++k) {
             const Vec2& c = grid.values()[std::size_t(out.grid_index[k])];
             delta[0] += out.grid_weight[k] * c[0];

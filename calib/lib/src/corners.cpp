@@ -151,6 +151,15 @@ double origin_black_evidence(const std::vector<Vec2>& p, int columns, int rows,
     return evidence;
 }
 
+// The classic finder takes seconds on a large image whose board its first
+// binarisation (by the histogram) misses, as it then tries adaptive
+// thresholds at every dilation, and milliseconds on a reduced copy: it looks
+// at one reduced to at most this many pixels a side first, and at the image
+// itself only when that fails. Its corners are starting points only: the
+// refinements on the full texture end where they would from the full
+// image's, to 1e-4 px (1e-5 px RMS; the corners' noise is ~3e-3 px).
+constexpr int kClassicFinderSide = 1000;
+
 bool try_finder(const cv::Mat& image8, int columns, int rows, bool sector,
                 std::vector<cv::Point2f>& found) {
     found.clear();
@@ -158,9 +167,23 @@ bool try_finder(const cv::Mat& image8, int columns, int rows, bool sector,
     if (sector)
         return cv::findChessboardCornersSB(image8, pattern, found,
                                            cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
-    return cv::findChessboardCorners(image8, pattern, found,
-                                     cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE |
-                                         cv::CALIB_CB_FAST_CHECK);
+    const int flags =
+        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
+    const int factor =
+        (std::max(image8.cols, image8.rows) + kClassicFinderSide - 1) / kClassicFinderSide;
+    if (factor > 1) {
+        cv::Mat reduced;
+        cv::resize(image8, reduced, cv::Size(image8.cols / factor, image8.rows / factor), 0, 0,
+                   cv::INTER_AREA);
+        if (cv::findChessboardCorners(reduced, pattern, found, flags)) {
+            // Pixel centres on integers at both scales.
+            const float f = static_cast<float>(factor);
+            for (cv::Point2f& p : found)
+                p = {(p.x + 0.5f) * f - 0.5f, (p.y + 0.5f) * f - 0.5f};
+            return true;
+        }
+    }
+    return cv::findChessboardCorners(image8, pattern, found, flags);
 }
 
 // Below this fitted blur (px, median over a board) the corners are fitted

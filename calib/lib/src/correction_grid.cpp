@@ -87,29 +87,70 @@ Vec2 CorrectionGrid::displacement(Vec2 pixel) const {
     return d;
 }
 
+// The spline's basis at a pixel: first control point and the weights
+// along each axis, and their derivatives per pixel.
+struct CorrectionGrid::Basis {
+    int i0 = 0, j0 = 0;
+    double bx[4], by[4], dx[4], dy[4];
+};
+
+CorrectionGrid::Basis CorrectionGrid::basis_at(Vec2 pixel) const {
+    Basis b;
+    double fx, fy;
+    locate(pixel[0], spacing_x_, columns_ - 3, b.i0, fx);
+    locate(pixel[1], spacing_y_, rows_ - 3, b.j0, fy);
+    basis(fx, b.bx);
+    basis(fy, b.by);
+    basis_derivative(fx, b.dx);
+    basis_derivative(fy, b.dy);
+    return b;
+}
+
 Mat2 CorrectionGrid::jacobian(Vec2 pixel) const {
     if (empty())
         return {0, 0, 0, 0};
-    int i0, j0;
-    double fx, fy;
-    locate(pixel[0], spacing_x_, columns_ - 3, i0, fx);
-    locate(pixel[1], spacing_y_, rows_ - 3, j0, fy);
-    double bx[4], by[4], dx[4], dy[4];
-    basis(fx, bx);
-    basis(fy, by);
-    basis_derivative(fx, dx);
-    basis_derivative(fy, dy);
-    Mat2 J{0, 0, 0, 0};
+    Vec2 delta;
+    Mat2 J;
+    displacement_and_jacobian(pixel, delta, J);
+    return J;
+}
+
+void CorrectionGrid::displacement_and_jacobian(Vec2 pixel, Vec2& delta, Mat2& J) const {
+    delta = {0, 0};
+    J = {0, 0, 0, 0};
+    if (empty())
+        return;
+    const Basis s = basis_at(pixel);
     for (int b = 0; b < 4; ++b)
         for (int a = 0; a < 4; ++a) {
-            const Vec2& c = values_[std::size_t((j0 + b) * columns_ + i0 + a)];
-            const double wu = dx[a] * by[b] / spacing_x_, wv = bx[a] * dy[b] / spacing_y_;
+            const Vec2& c = values_[std::size_t((s.j0 + b) * columns_ + s.i0 + a)];
+            const double w = s.bx[a] * s.by[b];
+            delta[0] += w * c[0];
+            delta[1] += w * c[1];
+            const double wu = s.dx[a] * s.by[b] / spacing_x_, wv = s.bx[a] * s.dy[b] / spacing_y_;
             J[0] += wu * c[0];
             J[1] += wv * c[0];
             J[2] += wu * c[1];
             J[3] += wv * c[1];
         }
-    return J;
+}
+
+void CorrectionGrid::support_and_jacobian(Vec2 pixel, int index[kSupport],
+                                          double weight[kSupport], Mat2& J) const {
+    J = {0, 0, 0, 0};
+    const Basis s = basis_at(pixel);
+    for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a) {
+            const int k = (s.j0 + b) * columns_ + s.i0 + a;
+            index[b * 4 + a] = k;
+            weight[b * 4 + a] = s.bx[a] * s.by[b];
+            const Vec2& c = values_[std::size_t(k)];
+            const double wu = s.dx[a] * s.by[b] / spacing_x_, wv = s.bx[a] * s.dy[b] / spacing_y_;
+            J[0] += wu * c[0];
+            J[1] += wv * c[0];
+            J[2] += wu * c[1];
+            J[3] += wv * c[1];
+        }
 }
 
 Vec2 CorrectionGrid::apply(Vec2 model_pixel) const {

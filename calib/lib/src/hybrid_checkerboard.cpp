@@ -9,13 +9,13 @@
 #include "bundle_adjustment.hpp"
 #include "hybrid_fit.hpp"
 #include "phase_smoothing.hpp"
+#include "pose_pipeline.hpp"
 
 #include <opencv2/calib3d.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <future>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -128,6 +128,160 @@ double lit_fraction(const DecodeResult& decoded, const std::vector<Vec2>& corner
     return inside ? std::min(1.0, 2.0 * double(lit) / double(inside)) : 0.0;
 }
 
+
+// What the poses share: the calibration, its SV reconstructor (and camera
+// rays), the board and the options.
+struct PoseContext {
+    const StereoCalibration& calibration;
+    const SvReconstructor& sv;
+    const HybridOptions& options;
+    const std::vector<Vec3>& board_points;
+    Vec3 board_centre;
+    int columns, rows;
+    ThreadPool& pool;
+};
+
+// What processing a pose leaves: its entry in the result, its samples when
+// it is usable, its progress lines and times (reported in pose order).
+struct PoseOutcome {
+    HybridPose pose;
+    PoseSamples samples;
+    std::vector<std::string> progress;
+    TimeSplit time_split;
+};
+
+// One pose: decode, find and place the board, sample its bright parts, and
+// compare the SV reconstruction of the samples with the camera's plane.
+// `cloud` is scratch for the SV points.
+void process_pose(const fs::path& folder, const PoseContext& context, PointCloud& cloud,
+                  PoseOutcome& outcome) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const HybridOptions& options = context.options;
+    const Image<float>& rays = context.sv.camera_rays();
+    const Size camera = rays.size();
+    TimeSplit& time = outcome.time_split;
+    HybridPose& pose = outcome.pose;
+    pose.folder = folder;
+    pose.name = folder.filename() == "capture" ? folder.parent_path().filename().string()
+                                               : folder.filename().string();
+    const auto reject = [&](const std::string& why) {
+        pose.skip_reason = why;
+        outcome.progress.push_back("  rejected " + pose.name + ": " + why);
+        pose.seconds = since(t0);
+    };
+    StageTimer reading(time, "reading");
+    const CaptureSet capture = read_capture_set(folder);
+    reading.stop();
+    DecodeResult decoded;
+    try {
+        StageTimer decoding(time, "decoding");
+        decoded = decode(capture, options.decode);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(folder / "capture.yaml", "sequence",
+                         std::string("cannot be decoded: ") + e.what());
+    }
+    StageTimer corner_stage(time, "corners");
+    const CheckerboardCorners corners =
+        find_checkerboard(corner_textures(capture, decoded), context.columns, context.rows);
+    corner_stage.stop();
+    if (!corners.found)
+        return reject("board not found: " + corners.failure);
+    StageTimer placement(time, "board placement");
+    RigidPose placed;
+    if (!camera_pose(context.calibration, context.board_points, corners.points, placed, pose.corner_rms_px))
+        return reject("the camera model cannot place the board (its corners do not undistort or "
+                      "the pose does not converge)");
+    pose.lit_fraction = lit_fraction(decoded, corners.points, context.columns, context.rows);
+    if (pose.lit_fraction < options.min_lit_fraction)
+        return reject("the projector lights only " + fixed(100 * pose.lit_fraction, 1) +
+                      " % of the board's squares (need " + fixed(100 * options.min_lit_fraction, 0) +
+                      " %): the board is outside the projector's image or in its shadow");
+    Vec3 normal{placed.R[2], placed.R[5], placed.R[8]};
+    double d = normal[0] * placed.t[0] + normal[1] * placed.t[1] + normal[2] * placed.t[2];
+    if (normal[2] < 0) {
+        normal = {-normal[0], -normal[1], -normal[2]};
+        d = -d;
+    }
+    pose.plane = {normal, d};
+    pose.distance_mm = d / normal[2];
+    pose.tilt_deg = std::acos(std::clamp(normal[2], -1.0, 1.0)) * 180.0 / std::numbers::pi;
+    placement.stop();
+
+    // Samples: the bright parts where the decoded column is the stereo
+    // model's for the camera's plane (else not on the board), smoothed.
+    StageTimer sampling(time, "samples");
+    const Image<std::uint8_t> bright = bright_board_mask(decoded, false, options.bright);
+    PoseSamples& s = outcome.samples;
+    s.plane = pose.plane;
+    s.phase = Image<float>(camera, 1, kNaN);
+    context.pool.parallel_for(camera.height, 8, [&](int v0, int v1, int) {
+        for (int v = v0; v < v1; ++v)
+            for (int u = 0; u < camera.width; ++u) {
+                const float p = decoded.proj_x.at(u, v);
+                const double xn = rays.at(u, v, 0), yn = rays.at(u, v, 1);
+                if (!bright.at(u, v) || !std::isfinite(p) || !std::isfinite(xn))
+                    continue;
+                const double z = d / (normal[0] * xn + normal[1] * yn + normal[2]);
+                const Vec2 q = context.calibration.projector_pixel({xn * z, yn * z, z});
+                if (std::fabs(q[0] - double(p)) <= options.max_sample_deviation_px)
+                    s.phase.at(u, v) = p;
+            }
+    });
+    smooth_phase(s.phase, options.phase_smoothing_radius, context.pool);
+    for (std::size_t i = 0; i < camera.area(); ++i)
+        pose.samples += std::isfinite(s.phase.data()[i]) ? 1 : 0;
+    sampling.stop();
+    if (double(pose.samples) < 0.01 * double(camera.area()))
+        return reject("only " + std::to_string(pose.samples) +
+                      " pixels sample the board's bright parts (need 1 % of the image)");
+
+    // The stereo model's view of the same board: its SV points on the
+    // sampled pixels (the others' are not used), against the camera's plane.
+    StageTimer sv_stage(time, "SV comparison (report)");
+    for (std::size_t i = 0; i < camera.area(); ++i)
+        if (!std::isfinite(s.phase.data()[i]))
+            decoded.proj_x.data()[i] = kNaN;
+    context.sv.reconstruct(decoded, ReconstructAxes::x, cloud);
+    std::vector<std::size_t> points;
+    double sum2 = 0;
+    for (std::size_t i = 0; i < camera.area(); ++i) {
+        const float* q = cloud.xyz.data() + 3 * i;
+        if (!std::isfinite(s.phase.data()[i]) || !std::isfinite(q[2]))
+            continue;
+        const double dist =
+            normal[0] * double(q[0]) + normal[1] * double(q[1]) + normal[2] * double(q[2]) - d;
+        sum2 += dist * dist;
+        pose.plane_max_mm = std::max(pose.plane_max_mm, std::fabs(dist));
+        points.push_back(i);
+    }
+    pose.points = points.size();
+    pose.plane_rms_mm = points.empty() ? 0 : std::sqrt(sum2 / double(points.size()));
+    Image<float> sv_points(camera, 3, kNaN);
+    for (const std::size_t i : points)
+        for (int c = 0; c < 3; ++c)
+            sv_points.data()[3 * i + std::size_t(c)] = cloud.xyz.data()[3 * i + std::size_t(c)];
+    BoardPlane sv_plane;
+    PlaneFitStats stats;
+    if (fit_board_plane(sv_points, options, sv_plane, stats, false)) {
+        const Vec3 rc = mul(placed.R, context.board_centre);
+        const Vec3 centre{rc[0] + placed.t[0], rc[1] + placed.t[1], rc[2] + placed.t[2]};
+        // > 0: SV's plane lies beyond the board's centre (seen from the camera).
+        pose.sv_offset_mm = sv_plane.d - (sv_plane.normal[0] * centre[0] +
+                                          sv_plane.normal[1] * centre[1] +
+                                          sv_plane.normal[2] * centre[2]);
+        const double c = std::fabs(sv_plane.normal[0] * normal[0] +
+                                   sv_plane.normal[1] * normal[1] +
+                                   sv_plane.normal[2] * normal[2]);
+        pose.sv_angle_deg = std::acos(std::min(1.0, c)) * 180.0 / std::numbers::pi;
+    }
+    pose.usable = true;
+    pose.seconds = since(t0);
+    outcome.progress.push_back("  " + pose.name + ": board at " + fixed(pose.distance_mm, 1) + " mm, tilt " +
+        fixed(pose.tilt_deg, 1) + " deg, corners " + fixed(pose.corner_rms_px, 4) + " px, " +
+        std::to_string(pose.samples) + " samples; SV plane " +
+        fixed(1000 * pose.sv_offset_mm, 1) + " um, " + fixed(pose.sv_angle_deg, 4) +
+        " deg from the camera's");
+}
 } // namespace
 
 std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& folder,
@@ -158,7 +312,6 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
                              "would place every board at the wrong depth");
     const SvReconstructor sv(calibration, options.sv);
     const Image<float>& rays = sv.camera_rays();
-    const Size camera = folder.camera_size;
     const int columns = board.inner_columns, rows = board.inner_rows;
     const std::vector<Vec3> board_points = checkerboard_points(columns, rows, board.square_size);
     const Vec3 board_centre{(columns - 1) * 0.5 * board.square_size,
@@ -173,155 +326,31 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
     HybridResult common;
     common.board = BoardDescription::Kind::checkerboard;
     common.samples = options.samples;
+    // Each pose on its own thread (poses rather than pixels in parallel:
+    // reading and finding the board are sequential per pose); lines and
+    // results in pose order.
+    const PoseContext context{calibration,  sv,      options, board_points,
+                              board_centre, columns, rows,    pool};
+    std::vector<PoseOutcome> outcomes(folder.poses.size());
+    std::vector<PointCloud> clouds(std::size_t(pool.size())); // SV points, per thread
     std::vector<PoseSamples> samples;
-    std::vector<double> read_seconds(folder.poses.size());
-    auto read_pose = [&](std::size_t k) {
-        const auto start = std::chrono::steady_clock::now();
-        CaptureSet capture = read_capture_set(folder.poses[k]);
-        read_seconds[k] = since(start);
-        return capture;
-    };
-    std::future<CaptureSet> next = std::async(std::launch::async, read_pose, 0);
-    PointCloud cloud;
-    for (std::size_t k = 0; k < folder.poses.size(); ++k) {
-        const auto t0 = std::chrono::steady_clock::now();
-        HybridPose pose;
-        pose.folder = folder.poses[k];
-        pose.name = pose.folder.filename() == "capture"
-                        ? pose.folder.parent_path().filename().string()
-                        : pose.folder.filename().string();
-        say("pose " + pose.name + " (" + std::to_string(k + 1) + "/" +
-            std::to_string(folder.poses.size()) + ")");
-        StageTimer waiting(common.time_split, "waiting for reading");
-        const CaptureSet capture = next.get();
-        waiting.stop();
-        common.time_split.add("reading", read_seconds[k]);
-        if (k + 1 < folder.poses.size())
-            next = std::async(std::launch::async, read_pose, k + 1);
-        DecodeResult decoded;
-        try {
-            StageTimer decoding(common.time_split, "decoding");
-            decoded = decode(capture, options.decode);
-        } catch (const std::invalid_argument& e) {
-            throw InputError(pose.folder / "capture.yaml", "sequence",
-                             std::string("cannot be decoded: ") + e.what());
-        }
-        const auto reject = [&](const std::string& why) {
-            pose.skip_reason = why;
-            say("  rejected " + pose.name + ": " + why);
-            pose.seconds = since(t0);
-            common.poses.push_back(pose);
-        };
-        StageTimer corner_stage(common.time_split, "corners");
-        const CheckerboardCorners corners =
-            find_checkerboard(corner_textures(capture, decoded), columns, rows);
-        corner_stage.stop();
-        if (!corners.found) {
-            reject("board not found: " + corners.failure);
-            continue;
-        }
-        StageTimer placement(common.time_split, "board placement");
-        RigidPose placed;
-        if (!camera_pose(calibration, board_points, corners.points, placed, pose.corner_rms_px)) {
-            reject("the camera model cannot place the board (its corners do not undistort or "
-                   "the pose does not converge)");
-            continue;
-        }
-        pose.lit_fraction = lit_fraction(decoded, corners.points, columns, rows);
-        if (pose.lit_fraction < options.min_lit_fraction) {
-            reject("the projector lights only " + fixed(100 * pose.lit_fraction, 1) +
-                   " % of the board's squares (need " + fixed(100 * options.min_lit_fraction, 0) +
-                   " %): the board is outside the projector's image or in its shadow");
-            continue;
-        }
-        Vec3 normal{placed.R[2], placed.R[5], placed.R[8]};
-        double d = normal[0] * placed.t[0] + normal[1] * placed.t[1] + normal[2] * placed.t[2];
-        if (normal[2] < 0) {
-            normal = {-normal[0], -normal[1], -normal[2]};
-            d = -d;
-        }
-        pose.plane = {normal, d};
-        pose.distance_mm = d / normal[2];
-        pose.tilt_deg =
-            std::acos(std::clamp(normal[2], -1.0, 1.0)) * 180.0 / std::numbers::pi;
-
-        placement.stop();
-        // Samples: the bright parts where the decoded column is the stereo
-        // model's for the camera's plane (else not on the board), smoothed.
-        StageTimer sampling(common.time_split, "samples");
-        const Image<std::uint8_t> bright = bright_board_mask(decoded, false, options.bright);
-        PoseSamples s;
-        s.plane = pose.plane;
-        s.phase = Image<float>(camera, 1, kNaN);
-        pool.parallel_for(camera.height, 8, [&](int v0, int v1, int) {
-            for (int v = v0; v < v1; ++v)
-                for (int u = 0; u < camera.width; ++u) {
-                    const float p = decoded.proj_x.at(u, v);
-                    const double xn = rays.at(u, v, 0), yn = rays.at(u, v, 1);
-                    if (!bright.at(u, v) || !std::isfinite(p) || !std::isfinite(xn))
-                        continue;
-                    const double z = d / (normal[0] * xn + normal[1] * yn + normal[2]);
-                    const Vec2 q = calibration.projector_pixel({xn * z, yn * z, z});
-                    if (std::fabs(q[0] - double(p)) <= options.max_sample_deviation_px)
-                        s.phase.at(u, v) = p;
-                }
+    for_each_pose(
+        pool, static_cast<int>(folder.poses.size()),
+        [&](int k, int worker) {
+            process_pose(folder.poses[std::size_t(k)], context, clouds[std::size_t(worker)],
+                         outcomes[std::size_t(k)]);
+        },
+        [&](int k) {
+            PoseOutcome& o = outcomes[std::size_t(k)];
+            say("pose " + o.pose.name + " (" + std::to_string(k + 1) + "/" +
+                std::to_string(folder.poses.size()) + ")");
+            for (const std::string& line : o.progress)
+                say(line);
+            common.time_split.add(o.time_split);
+            if (o.pose.usable)
+                samples.push_back(std::move(o.samples));
+            common.poses.push_back(std::move(o.pose));
         });
-        smooth_phase(s.phase, options.phase_smoothing_radius, pool);
-        for (std::size_t i = 0; i < camera.area(); ++i)
-            pose.samples += std::isfinite(s.phase.data()[i]) ? 1 : 0;
-        if (double(pose.samples) < 0.01 * double(camera.area())) {
-            reject("only " + std::to_string(pose.samples) +
-                   " pixels sample the board's bright parts (need 1 % of the image)");
-            continue;
-        }
-
-        sampling.stop();
-        // The stereo model's view of the same board: its SV points on the
-        // sampled pixels, against the camera's plane.
-        StageTimer sv_stage(common.time_split, "SV comparison (report)");
-        sv.reconstruct(decoded, ReconstructAxes::x, cloud);
-        std::vector<std::size_t> points;
-        double sum2 = 0;
-        for (std::size_t i = 0; i < camera.area(); ++i) {
-            const float* q = cloud.xyz.data() + 3 * i;
-            if (!std::isfinite(s.phase.data()[i]) || !std::isfinite(q[2]))
-                continue;
-            const double dist =
-                normal[0] * double(q[0]) + normal[1] * double(q[1]) + normal[2] * double(q[2]) - d;
-            sum2 += dist * dist;
-            pose.plane_max_mm = std::max(pose.plane_max_mm, std::fabs(dist));
-            points.push_back(i);
-        }
-        pose.points = points.size();
-        pose.plane_rms_mm = points.empty() ? 0 : std::sqrt(sum2 / double(points.size()));
-        Image<float> sv_points(camera, 3, kNaN);
-        for (const std::size_t i : points)
-            for (int c = 0; c < 3; ++c)
-                sv_points.data()[3 * i + std::size_t(c)] = cloud.xyz.data()[3 * i + std::size_t(c)];
-        BoardPlane sv_plane;
-        PlaneFitStats stats;
-        if (fit_board_plane(sv_points, options, sv_plane, stats, false)) {
-            const Vec3 rc = mul(placed.R, board_centre);
-            const Vec3 centre{rc[0] + placed.t[0], rc[1] + placed.t[1], rc[2] + placed.t[2]};
-            // > 0: SV's plane lies beyond the board's centre (seen from the camera).
-            pose.sv_offset_mm = sv_plane.d - (sv_plane.normal[0] * centre[0] +
-                                              sv_plane.normal[1] * centre[1] +
-                                              sv_plane.normal[2] * centre[2]);
-            const double c = std::fabs(sv_plane.normal[0] * normal[0] +
-                                       sv_plane.normal[1] * normal[1] +
-                                       sv_plane.normal[2] * normal[2]);
-            pose.sv_angle_deg = std::acos(std::min(1.0, c)) * 180.0 / std::numbers::pi;
-        }
-        pose.usable = true;
-        pose.seconds = since(t0);
-        say("  " + pose.name + ": board at " + fixed(pose.distance_mm, 1) + " mm, tilt " +
-            fixed(pose.tilt_deg, 1) + " deg, corners " + fixed(pose.corner_rms_px, 4) + " px, " +
-            std::to_string(pose.samples) + " samples; SV plane " +
-            fixed(1000 * pose.sv_offset_mm, 1) + " um, " + fixed(pose.sv_angle_deg, 4) +
-            " deg from the camera's");
-        common.poses.push_back(std::move(pose));
-        samples.push_back(std::move(s));
-    }
     common.usable_poses = static_cast<int>(samples.size());
     common.seconds_poses = since(t_start);
     if (common.usable_poses < options.min_usable_poses) {

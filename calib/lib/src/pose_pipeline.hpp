@@ -13,8 +13,9 @@
 
 namespace fpp::calib::detail {
 
-// Runs process(k) for every pose k in [0, count) on the threads of `pool`
-// (nested parallel_for calls on `pool` run inline), and finish(k) in
+// Runs process(k, worker) for every pose k in [0, count) on the threads of
+// `pool` (`worker` in [0, pool.size()) for per-thread scratch; nested
+// parallel_for calls on `pool` run inline), and finish(k) in
 // increasing k, each as soon as process(0..k) have returned, one at a time.
 // When a call throws, the poses not yet begun are skipped, the earlier
 // ones still finish, and the exception of the lowest pose is rethrown.
@@ -25,7 +26,7 @@ void for_each_pose(ThreadPool& pool, int count, Process&& process, Finish&& fini
     std::mutex mutex; // guards processed, errors, next_to_finish and every finish() call
     int next_to_finish = 0;
     bool failed = false;
-    pool.parallel_for(count, 1, [&](int begin, int end, int) {
+    pool.parallel_for(count, 1, [&](int begin, int end, int worker) {
         for (int k = begin; k < end; ++k) {
             {
                 std::lock_guard lock(mutex);
@@ -34,7 +35,7 @@ void for_each_pose(ThreadPool& pool, int count, Process&& process, Finish&& fini
             }
             std::exception_ptr error;
             try {
-                process(k);
+                process(k, worker);
             } catch (...) {
                 error = std::current_exception();
             }

@@ -67,11 +67,10 @@ struct PoseContext {
 
 // One pose: decode, corners, their projector coordinates by every method
 // (and against the simulator's truth), dense samples.
-PoseOutcome process_pose(const fs::path& folder, const PoseContext& context, SessionPose& pose,
-                         PoseObservations& observations) {
+void process_pose(const fs::path& folder, const PoseContext& context, SessionPose& pose,
+                  PoseObservations& observations, PoseOutcome& outcome) {
     const StereoSessionOptions& options = context.options;
     const int columns = context.columns, rows = context.rows;
-    PoseOutcome outcome;
     TimeSplit& time = outcome.time_split;
     pose.folder = folder;
     pose.name = folder.filename().string();
@@ -102,7 +101,7 @@ PoseOutcome process_pose(const fs::path& folder, const PoseContext& context, Ses
     if (!pose.corners.found) {
         pose.skip_reason = pose.corners.failure;
         outcome.progress.push_back("  skipped " + pose.name + ": " + pose.skip_reason);
-        return outcome;
+        return;
     }
     if (context.dense) {
         StageTimer dense_samples(time, "dense samples");
@@ -159,7 +158,6 @@ PoseOutcome process_pose(const fs::path& folder, const PoseContext& context, Ses
     } else {
         pose.usable = true;
     }
-    return outcome;
 }
 
 } // namespace
@@ -211,10 +209,9 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
     PoseContext context{options, columns, rows, dense, dense_step};
     detail::for_each_pose(
         ThreadPool::shared(options.decode.threads), static_cast<int>(folders.size()),
-        [&](int p) {
-            outcomes[std::size_t(p)] =
-                process_pose(folders[std::size_t(p)], context, result.poses[std::size_t(p)],
-                             per_pose[std::size_t(p)]);
+        [&](int p, int) {
+            process_pose(folders[std::size_t(p)], context, result.poses[std::size_t(p)],
+                         per_pose[std::size_t(p)], outcomes[std::size_t(p)]);
         },
         [&](int p) {
             const PoseOutcome& o = outcomes[std::size_t(p)];

@@ -150,13 +150,16 @@ struct Geometry {
                 *dcol_dw = du_dw;
             return u;
         }
-        const Vec2 d = correction->displacement({u, v});
-        row = v + d[1];
+        Vec2 d{};
         if (dcol_dw) {
+            Mat2 G{};
+            correction->displacement_and_jacobian({u, v}, d, G);
             const double dv_dw = projector.fv * (J[2] + J[3] * b);
-            const Mat2 G = correction->jacobian({u, v});
             *dcol_dw = (1 + G[0]) * du_dw + G[1] * dv_dw;
+        } else {
+            d = correction->displacement({u, v});
         }
+        row = v + d[1];
         return u + d[0];
     }
 

@@ -54,6 +54,12 @@ class CorrectionGrid {
     Vec2 displacement(Vec2 pixel) const;
     // d delta / d pixel, row-major [ddu/du, ddu/dv, ddv/du, ddv/dv].
     Mat2 jacobian(Vec2 pixel) const;
+    // displacement() and jacobian() at once, to the same values (the
+    // spline is located once); {0, 0} and zeros when empty.
+    void displacement_and_jacobian(Vec2 pixel, Vec2& delta, Mat2& J) const;
+    // support() and jacobian() at once, to the same values.
+    void support_and_jacobian(Vec2 pixel, int index[kSupport], double weight[kSupport],
+                              Mat2& J) const;
     // model pixel -> observed pixel.
     Vec2 apply(Vec2 model_pixel) const;
     // observed pixel -> model pixel, by Newton iterations (the field bends
@@ -65,6 +71,8 @@ class CorrectionGrid {
     // Spline coordinates of a pixel: first control point index and the
     // fraction within the interval, per axis.
     void locate(double pixel, double spacing, int intervals, int& first, double& f) const;
+    struct Basis;
+    Basis basis_at(Vec2 pixel) const;
 
     Size image_;
     int columns_ = 0, rows_ = 0;
