@@ -44,11 +44,15 @@ bool fit_homography(const std::vector<Vec2>& src, const std::vector<Vec2>& dst,
     for (std::size_t k = 0; k < n; ++k) {
         const Eigen::Vector3d s = Ts * Eigen::Vector3d(src[k][0], src[k][1], 1);
         const Eigen::Vector3d d = Td * Eigen::Vector3d(dst[k][0], dst[k][1], 1);
-        Eigen::Matrix<double, 2, 9> rows;
-        rows << s.x(), s.y(), 1, 0, 0, 0, -d.x() * s.x(), -d.x() * s.y(), -d.x(), //
-            0, 0, 0, s.x(), s.y(), 1, -d.y() * s.x(), -d.y() * s.y(), -d.y();
-        AtA.noalias() += rows.transpose() * rows;
+        const double rows[2][9] = {
+            {s.x(), s.y(), 1, 0, 0, 0, -d.x() * s.x(), -d.x() * s.y(), -d.x()},
+            {0, 0, 0, s.x(), s.y(), 1, -d.y() * s.x(), -d.y() * s.y(), -d.y()}};
+        // The lower triangle (the upper one is the same sums).
+        for (int i = 0; i < 9; ++i)
+            for (int j = 0; j <= i; ++j)
+                AtA(i, j) += rows[0][i] * rows[0][j] + rows[1][i] * rows[1][j];
     }
+    AtA.triangularView<Eigen::StrictlyUpper>() = AtA.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> eig(AtA);
     if (eig.info() != Eigen::Success)
         return false;

@@ -53,57 +53,80 @@ double CorrectionGrid::largest_control_value() const {
 void CorrectionGrid::locate(double pixel, double spacing, int intervals, int& first,
                             double& f) const {
     const double s = (pixel + 0.5) / spacing;
-    first = std::clamp(static_cast<int>(std::floor(s)), 0, intervals - 1);
+    // Truncation is the floor wherever the clamp does not decide (s >= 0),
+    // without a call to floor() on a processor without SSE4.1.
+    first = std::clamp(static_cast<int>(s), 0, intervals - 1);
     f = s - first; // outside [0, 1] beyond the image: the edge polynomial continues
 }
 
-void CorrectionGrid::support(Vec2 pixel, int index[kSupport], double weight[kSupport]) const {
-    int i0, j0;
-    double fx, fy;
-    locate(pixel[0], spacing_x_, columns_ - 3, i0, fx);
-    locate(pixel[1], spacing_y_, rows_ - 3, j0, fy);
-    double bx[4], by[4];
-    basis(fx, bx);
-    basis(fy, by);
-    for (int b = 0; b < 4; ++b)
-        for (int a = 0; a < 4; ++a) {
-            index[b * 4 + a] = (j0 + b) * columns_ + i0 + a;
-            weight[b * 4 + a] = bx[a] * by[b];
-        }
-}
-
-Vec2 CorrectionGrid::displacement(Vec2 pixel) const {
-    if (empty())
-        return {0, 0};
-    int index[kSupport];
-    double weight[kSupport];
-    support(pixel, index, weight);
-    Vec2 d{0, 0};
-    for (int k = 0; k < kSupport; ++k) {
-        const Vec2& c = values_[std::size_t(index[k])];
-        d[0] += weight[k] * c[0];
-        d[1] += weight[k] * c[1];
-    }
-    return d;
-}
-
 // The spline's basis at a pixel: first control point and the weights
-// along each axis, and their derivatives per pixel.
+// along each axis (and, when asked, their derivatives per pixel).
 struct CorrectionGrid::Basis {
     int i0 = 0, j0 = 0;
     double bx[4], by[4], dx[4], dy[4];
 };
 
-CorrectionGrid::Basis CorrectionGrid::basis_at(Vec2 pixel) const {
+CorrectionGrid::Basis CorrectionGrid::basis_at(Vec2 pixel, bool derivatives) const {
     Basis b;
     double fx, fy;
     locate(pixel[0], spacing_x_, columns_ - 3, b.i0, fx);
     locate(pixel[1], spacing_y_, rows_ - 3, b.j0, fy);
     basis(fx, b.bx);
     basis(fy, b.by);
-    basis_derivative(fx, b.dx);
-    basis_derivative(fy, b.dy);
+    if (derivatives) {
+        basis_derivative(fx, b.dx);
+        basis_derivative(fy, b.dy);
+        for (int k = 0; k < 4; ++k) {
+            b.dx[k] /= spacing_x_;
+            b.dy[k] /= spacing_y_;
+        }
+    }
     return b;
+}
+
+// The field and its derivatives at a basis, summed row by row of control
+// points (the spline is a tensor product: 4 sums of 4 per row, then one of
+// 4, in short independent chains).
+void CorrectionGrid::evaluate(const Basis& s, bool derivatives, Vec2& delta, Mat2& J) const {
+    delta = {0, 0};
+    J = {0, 0, 0, 0};
+    for (int b = 0; b < 4; ++b) {
+        const Vec2* c = &values_[std::size_t((s.j0 + b) * columns_ + s.i0)];
+        const double u = s.bx[0] * c[0][0] + s.bx[1] * c[1][0] + s.bx[2] * c[2][0] +
+                         s.bx[3] * c[3][0];
+        const double v = s.bx[0] * c[0][1] + s.bx[1] * c[1][1] + s.bx[2] * c[2][1] +
+                         s.bx[3] * c[3][1];
+        delta[0] += s.by[b] * u;
+        delta[1] += s.by[b] * v;
+        if (!derivatives)
+            continue;
+        const double du = s.dx[0] * c[0][0] + s.dx[1] * c[1][0] + s.dx[2] * c[2][0] +
+                          s.dx[3] * c[3][0];
+        const double dv = s.dx[0] * c[0][1] + s.dx[1] * c[1][1] + s.dx[2] * c[2][1] +
+                          s.dx[3] * c[3][1];
+        J[0] += s.by[b] * du;
+        J[1] += s.dy[b] * u;
+        J[2] += s.by[b] * dv;
+        J[3] += s.dy[b] * v;
+    }
+}
+
+void CorrectionGrid::support(Vec2 pixel, int index[kSupport], double weight[kSupport]) const {
+    const Basis s = basis_at(pixel, false);
+    for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a) {
+            index[b * 4 + a] = (s.j0 + b) * columns_ + s.i0 + a;
+            weight[b * 4 + a] = s.bx[a] * s.by[b];
+        }
+}
+
+Vec2 CorrectionGrid::displacement(Vec2 pixel) const {
+    if (empty())
+        return {0, 0};
+    Vec2 delta;
+    Mat2 J;
+    evaluate(basis_at(pixel, false), false, delta, J);
+    return delta;
 }
 
 Mat2 CorrectionGrid::jacobian(Vec2 pixel) const {
@@ -111,46 +134,29 @@ Mat2 CorrectionGrid::jacobian(Vec2 pixel) const {
         return {0, 0, 0, 0};
     Vec2 delta;
     Mat2 J;
-    displacement_and_jacobian(pixel, delta, J);
+    evaluate(basis_at(pixel, true), true, delta, J);
     return J;
 }
 
 void CorrectionGrid::displacement_and_jacobian(Vec2 pixel, Vec2& delta, Mat2& J) const {
-    delta = {0, 0};
-    J = {0, 0, 0, 0};
-    if (empty())
+    if (empty()) {
+        delta = {0, 0};
+        J = {0, 0, 0, 0};
         return;
-    const Basis s = basis_at(pixel);
-    for (int b = 0; b < 4; ++b)
-        for (int a = 0; a < 4; ++a) {
-            const Vec2& c = values_[std::size_t((s.j0 + b) * columns_ + s.i0 + a)];
-            const double w = s.bx[a] * s.by[b];
-            delta[0] += w * c[0];
-            delta[1] += w * c[1];
-            const double wu = s.dx[a] * s.by[b] / spacing_x_, wv = s.bx[a] * s.dy[b] / spacing_y_;
-            J[0] += wu * c[0];
-            J[1] += wv * c[0];
-            J[2] += wu * c[1];
-            J[3] += wv * c[1];
-        }
+    }
+    evaluate(basis_at(pixel, true), true, delta, J);
 }
 
 void CorrectionGrid::support_and_jacobian(Vec2 pixel, int index[kSupport],
                                           double weight[kSupport], Mat2& J) const {
-    J = {0, 0, 0, 0};
-    const Basis s = basis_at(pixel);
+    const Basis s = basis_at(pixel, true);
     for (int b = 0; b < 4; ++b)
         for (int a = 0; a < 4; ++a) {
-            const int k = (s.j0 + b) * columns_ + s.i0 + a;
-            index[b * 4 + a] = k;
+            index[b * 4 + a] = (s.j0 + b) * columns_ + s.i0 + a;
             weight[b * 4 + a] = s.bx[a] * s.by[b];
-            const Vec2& c = values_[std::size_t(k)];
-            const double wu = s.dx[a] * s.by[b] / spacing_x_, wv = s.bx[a] * s.dy[b] / spacing_y_;
-            J[0] += wu * c[0];
-            J[1] += wv * c[0];
-            J[2] += wu * c[1];
-            J[3] += wv * c[1];
         }
+    Vec2 delta;
+    evaluate(s, true, delta, J);
 }
 
 Vec2 CorrectionGrid::apply(Vec2 model_pixel) const {

@@ -55,7 +55,7 @@ class CorrectionGrid {
     // d delta / d pixel, row-major [ddu/du, ddu/dv, ddv/du, ddv/dv].
     Mat2 jacobian(Vec2 pixel) const;
     // displacement() and jacobian() at once, to the same values (the
-    // spline is located once); {0, 0} and zeros when empty.
+    // spline is located once); zeros when empty.
     void displacement_and_jacobian(Vec2 pixel, Vec2& delta, Mat2& J) const;
     // support() and jacobian() at once, to the same values.
     void support_and_jacobian(Vec2 pixel, int index[kSupport], double weight[kSupport],
@@ -72,7 +72,8 @@ class CorrectionGrid {
     // fraction within the interval, per axis.
     void locate(double pixel, double spacing, int intervals, int& first, double& f) const;
     struct Basis;
-    Basis basis_at(Vec2 pixel) const;
+    Basis basis_at(Vec2 pixel, bool derivatives) const;
+    void evaluate(const Basis& basis, bool derivatives, Vec2& delta, Mat2& J) const;
 
     Size image_;
     int columns_ = 0, rows_ = 0;
