@@ -17,6 +17,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -459,6 +460,31 @@ TEST(CaptureSetRejects, MissingFrameFile) {
     fs::remove(folder / "f3.png");
     expect_input_error([&] { fpp::read_capture_set(folder); }, folder / "f3.png", "frames[3]",
                        "not found");
+}
+
+TEST(CaptureSet, ReadsOnlyTheFramesOfTheKeptBlocks) {
+    TempDir dir;
+    const fs::path folder = make_set(dir);
+    const auto all = fpp::read_capture_set(folder);
+    // The gray block's frames (f4..f7) are neither checked nor read.
+    fs::remove(folder / "f5.png");
+    const auto not_gray = [](const fpp::PatternBlock& b) {
+        return !std::holds_alternative<fpp::GrayBlock>(b);
+    };
+    const auto some = fpp::read_capture_set(folder, not_gray);
+    ASSERT_EQ(some.manifest.sequence.size(), 2u);
+    EXPECT_TRUE(std::holds_alternative<fpp::WhiteBlock>(some.manifest.sequence[0]));
+    EXPECT_TRUE(std::holds_alternative<fpp::PhaseBlock>(some.manifest.sequence[1]));
+    EXPECT_EQ(some.manifest.frames,
+              (std::vector<std::string>{"f0.png", "f1.png", "f2.png", "f3.png"}));
+    expect_same_frames(some.frames, std::vector<fpp::Frame>(all.frames.begin(),
+                                                            all.frames.begin() + 4));
+    // A kept frame's error names its place in capture.yaml.
+    const auto not_phase = [](const fpp::PatternBlock& b) {
+        return !std::holds_alternative<fpp::PhaseBlock>(b);
+    };
+    expect_input_error([&] { fpp::read_capture_set(folder, not_phase); }, folder / "f5.png",
+                       "frames[5]", "not found");
 }
 
 TEST(CaptureSetRejects, FrameOfTheWrongSize) {

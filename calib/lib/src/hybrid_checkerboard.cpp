@@ -18,6 +18,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <variant>
 #include <sstream>
 
 namespace fpp::calib::detail {
@@ -129,6 +130,27 @@ double lit_fraction(const DecodeResult& decoded, const std::vector<Vec2>& corner
 }
 
 
+// A pose's frames that the procedure uses. It needs the projector's column
+// alone (the column, modulation and mean decode the same without the y
+// blocks) and finds the board on the white frame; without a white frame it
+// finds it on the mean of every phase frame, and then reads them all.
+CaptureSet read_x_capture(const fs::path& folder) {
+    const Sequence sequence = read_manifest(folder / "capture.yaml").sequence;
+    const auto white = [](const PatternBlock& b) { return std::holds_alternative<WhiteBlock>(b); };
+    if (std::none_of(sequence.begin(), sequence.end(), white))
+        return read_capture_set(folder);
+    return read_capture_set(folder, [](const PatternBlock& block) {
+        return std::visit(
+            [](const auto& b) {
+                if constexpr (requires { b.axis; })
+                    return b.axis != Axis::y;
+                else
+                    return true;
+            },
+            block);
+    });
+}
+
 // What the poses share: the calibration, its SV reconstructor (and camera
 // rays), the board and the options.
 struct PoseContext {
@@ -170,7 +192,7 @@ void process_pose(const fs::path& folder, const PoseContext& context, PointCloud
         pose.seconds = since(t0);
     };
     StageTimer reading(time, "reading");
-    const CaptureSet capture = read_capture_set(folder);
+    const CaptureSet capture = read_x_capture(folder);
     reading.stop();
     DecodeResult decoded;
     try {

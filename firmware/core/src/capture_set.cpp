@@ -542,9 +542,36 @@ Sequence read_sequence(const std::filesystem::path& path) {
 }
 
 CaptureSet read_capture_set(const std::filesystem::path& folder) {
+    return read_capture_set(folder, [](const PatternBlock&) { return true; });
+}
+
+CaptureSet read_capture_set(const std::filesystem::path& folder,
+                            const std::function<bool(const PatternBlock&)>& keep) {
     CaptureSet set;
     set.folder = folder;
     set.manifest = read_manifest(folder / kManifestName);
+    // The kept blocks and their frames; listed[i]: where frame i is listed
+    // in capture.yaml (errors name that field).
+    std::vector<std::size_t> listed;
+    {
+        CaptureManifest& all = set.manifest;
+        Sequence sequence;
+        std::vector<std::string> frames;
+        std::size_t first = 0;
+        for (const PatternBlock& block : all.sequence) {
+            const std::size_t count = static_cast<std::size_t>(frame_count(block));
+            if (keep(block)) {
+                sequence.push_back(block);
+                for (std::size_t k = first; k < first + count && k < all.frames.size(); ++k) {
+                    frames.push_back(all.frames[k]);
+                    listed.push_back(k);
+                }
+            }
+            first += count;
+        }
+        all.sequence = std::move(sequence);
+        all.frames = std::move(frames);
+    }
     const CaptureManifest& m = set.manifest;
     const std::size_t n = m.frames.size();
 
@@ -552,7 +579,7 @@ CaptureSet read_capture_set(const std::filesystem::path& folder) {
     std::vector<PngInfo> infos(n);
     for (std::size_t i = 0; i < n; ++i) {
         const fs::path path = folder / m.frames[i];
-        const std::string field = item("frames", i);
+        const std::string field = item("frames", listed[i]);
         if (!fs::is_regular_file(path)) {
             throw InputError(path, field, "frame file not found (listed in " +
                                               (folder / kManifestName).string() + ")");
@@ -578,7 +605,8 @@ CaptureSet read_capture_set(const std::filesystem::path& folder) {
         }
         if (info.bit_depth != infos[0].bit_depth) {
             throw InputError(path, field,
-                             "frame is " + std::to_string(info.bit_depth) + "-bit but frames[0] is " +
+                             "frame is " + std::to_string(info.bit_depth) + "-bit but " +
+                                 item("frames", listed[0]) + " is " +
                                  std::to_string(infos[0].bit_depth) +
                                  "-bit (all frames of a set share one bit depth)");
         }
@@ -602,11 +630,11 @@ CaptureSet read_capture_set(const std::filesystem::path& folder) {
         try {
             set.frames[i] = read_png_gray(path);
         } catch (const InputError& e) {
-            throw InputError(path, item("frames", i), bare_message(e));
+            throw InputError(path, item("frames", listed[i]), bare_message(e));
         }
         // The file may have changed since its header was read.
         if (set.frames[i].size() != m.camera || set.frames[i].bit_depth != infos[0].bit_depth) {
-            throw InputError(path, item("frames", i), "frame changed while the set was read");
+            throw InputError(path, item("frames", listed[i]), "frame changed while the set was read");
         }
     });
     return set;

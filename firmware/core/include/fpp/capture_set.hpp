@@ -23,6 +23,7 @@
 #include "fpp/pattern_block.hpp"
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,6 +67,11 @@ CaptureManifest parse_manifest(const std::string& yaml_text, const std::filesyst
 // Reads a capture folder: manifest plus every frame, checked for existence,
 // size and uniform bit depth; truth files, when listed, must exist.
 CaptureSet read_capture_set(const std::filesystem::path& folder);
+// Same, reading only the frames of the blocks `keep` accepts (for a reader
+// that needs, say, the projector's x alone): the set's manifest lists just
+// those blocks and their frames, and only those frames are checked and read.
+CaptureSet read_capture_set(const std::filesystem::path& folder,
+                            const std::function<bool(const PatternBlock&)>& keep);
 // Serialises a manifest exactly as the spec lays it out: format, camera,
 // projector, frames, sequence (every field written, defaults included), truth
 // if any, metadata. Numbers are written so that they read back bit-exactly.
