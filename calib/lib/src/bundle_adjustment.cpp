@@ -150,6 +150,53 @@ struct JacobianRow {
     }
 };
 
+// Neighbouring observations fall in one cell of a correction grid, so
+// their grid products go to the same elements of the normal matrix: a run
+// of such rows is summed here, in small contiguous arrays, and added to the
+// matrix once (adds scattered over a matrix of a few hundred columns were
+// most of an observation's time).
+struct GridRun {
+    static constexpr int kGrid = CorrectionGrid::kSupport;
+    bool active = false;
+    int shared_count = 0;
+    int shared_column[JacobianRow::kMax];
+    int grid_u[kGrid], grid_v[kGrid];
+    double grid_grid[kGrid][kGrid];                     // sum of w w_k w_l, l <= k
+    double grid_u_shared[kGrid][JacobianRow::kMax];     // sum of w w_k du_a
+    double grid_v_shared[kGrid][JacobianRow::kMax];     // sum of w w_k dv_a
+
+    // Whether a row moves the same grid cell and lens and rigid parameters.
+    bool matches(const JacobianRow& j) const {
+        if (!active || j.grid_u[0] != grid_u[0] || j.count != shared_count)
+            return false;
+        for (int a = 0; a < j.count; ++a)
+            if (j.column[a] != shared_column[a])
+                return false;
+        return true;
+    }
+    void start(const JacobianRow& j) {
+        active = true;
+        shared_count = j.count;
+        std::copy(j.column, j.column + j.count, shared_column);
+        std::copy(j.grid_u, j.grid_u + kGrid, grid_u);
+        std::copy(j.grid_v, j.grid_v + kGrid, grid_v);
+        std::fill(&grid_grid[0][0], &grid_grid[0][0] + kGrid * kGrid, 0.0);
+        std::fill(&grid_u_shared[0][0], &grid_u_shared[0][0] + kGrid * JacobianRow::kMax, 0.0);
+        std::fill(&grid_v_shared[0][0], &grid_v_shared[0][0] + kGrid * JacobianRow::kMax, 0.0);
+    }
+    void add(const JacobianRow& j, double w) {
+        for (int k = 0; k < kGrid; ++k) {
+            const double wk = w * j.grid_weight[k];
+            for (int l = 0; l <= k; ++l)
+                grid_grid[k][l] += wk * j.grid_weight[l];
+            for (int a = 0; a < shared_count; ++a) {
+                grid_u_shared[k][a] += wk * j.du[a];
+                grid_v_shared[k][a] += wk * j.dv[a];
+            }
+        }
+    }
+};
+
 // Normal equations A x = -g of the free parameters (lower triangle of A)
 // and the cost.
 struct Normal {
@@ -160,6 +207,7 @@ struct Normal {
         A.setZero(n, n);
         g.setZero(n);
         cost = 0;
+        run_.active = false;
     }
     void add(int a, int b, double value) {
         if (a >= b)
@@ -168,8 +216,8 @@ struct Normal {
             A(b, a) += value;
     }
     // The products of a grid's u column with a v residual, or of its v
-    // column with a u residual, are zero and skipped; the others are the
-    // same sums as over a full row (each element gets one term per row).
+    // column with a u residual, are zero and skipped. A row's grid products
+    // join the current run (flush() before A is read).
     void accumulate(const JacobianRow& j, double ru, double rv, double w) {
         for (int a = 0; a < j.count; ++a) {
             const int ca = j.column[a];
@@ -177,28 +225,44 @@ struct Normal {
             for (int b = 0; b <= a; ++b)
                 add(ca, j.column[b], w * (j.du[a] * j.du[b] + j.dv[a] * j.dv[b]));
         }
+        if (j.grid_count == 0)
+            return;
         for (int k = 0; k < j.grid_count; ++k) {
             const double wk = j.grid_weight[k];
-            const int cu = j.grid_u[k], cv = j.grid_v[k];
-            g(cu) += w * (wk * ru);
-            g(cv) += w * (wk * rv);
-            for (int a = 0; a < j.count; ++a) {
-                add(cu, j.column[a], w * (wk * j.du[a]));
-                add(cv, j.column[a], w * (wk * j.dv[a]));
-            }
+            g(j.grid_u[k]) += w * (wk * ru);
+            g(j.grid_v[k]) += w * (wk * rv);
+        }
+        if (!run_.matches(j)) {
+            flush();
+            run_.start(j);
+        }
+        run_.add(j, w);
+    }
+    // Adds the current run's sums to A.
+    void flush() {
+        if (!run_.active)
+            return;
+        for (int k = 0; k < GridRun::kGrid; ++k) {
             for (int l = 0; l <= k; ++l) {
-                const double v = w * (wk * j.grid_weight[l]);
-                add(cu, j.grid_u[l], v);
-                add(cv, j.grid_v[l], v);
+                add(run_.grid_u[k], run_.grid_u[l], run_.grid_grid[k][l]);
+                add(run_.grid_v[k], run_.grid_v[l], run_.grid_grid[k][l]);
+            }
+            for (int a = 0; a < run_.shared_count; ++a) {
+                add(run_.grid_u[k], run_.shared_column[a], run_.grid_u_shared[k][a]);
+                add(run_.grid_v[k], run_.shared_column[a], run_.grid_v_shared[k][a]);
             }
         }
+        run_.active = false;
     }
-    // Adds another set's terms.
+    // Adds another (flushed) set's terms.
     void add(const Normal& other) {
         A.triangularView<Eigen::Lower>() += other.A;
         g += other.g;
         cost += other.cost;
     }
+
+  private:
+    GridRun run_;
 };
 
 // The device-side part of an observation's Jacobian: lens and grid.
@@ -389,6 +453,8 @@ class Problem {
                 normal->accumulate(row, ru, rv, weight);
             }
         }
+        if (normal)
+            normal->flush();
         return out;
     }
 
