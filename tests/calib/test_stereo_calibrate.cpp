@@ -126,6 +126,31 @@ TEST(StereoCalibrate, NoisyObservationsGiveNoiseLevelRmsAndHonestSigmas) {
     }
 }
 
+TEST(StereoCalibrate, FromASharedStartTheSameAsAlone) {
+    const sim::Rig rig = model_rig();
+    const auto obs = observe(rig, 8, 0.05);
+    const calib::StereoStart start =
+        calib::initialise_stereo(obs, rig.camera_size, rig.projector_size);
+    for (const bool skew : {true, false}) {
+        calib::StereoOptions options;
+        options.skew = skew;
+        const calib::StereoResult alone =
+            calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size, options);
+        const calib::StereoResult shared =
+            calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size, options, start);
+        EXPECT_EQ(shared.initial_camera_rms, alone.initial_camera_rms);
+        EXPECT_EQ(shared.calibration.camera.fu, alone.calibration.camera.fu);
+        EXPECT_EQ(shared.calibration.projector.fu, alone.calibration.projector.fu);
+        EXPECT_EQ(shared.calibration.T, alone.calibration.T);
+        EXPECT_EQ(shared.calibration.projector_rms, alone.calibration.projector_rms);
+    }
+    calib::StereoStart short_start = start;
+    short_start.board_poses.pop_back();
+    EXPECT_THROW(
+        calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size, {}, short_start),
+        std::invalid_argument);
+}
+
 TEST(StereoCalibrate, SkewOffKeepsSkewZeroAndFitsWorse) {
     const sim::Rig rig = model_rig();
     const auto obs = observe(rig, 10, 0.0);

@@ -166,13 +166,10 @@ Vec2 project_projector(const StereoCalibration& c, const RigidPose& pose, const 
     return c.projector_pixel(add(mul(pose.R, board), pose.t));
 }
 
-StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size camera_size,
-                              Size projector_size, const StereoOptions& options) {
-    const auto say = [&](const std::string& s) {
-        if (options.progress)
-            options.progress(s);
-    };
-    options.validate();
+namespace {
+
+// Throws std::invalid_argument for what no calibration can start from.
+void check_observations(const std::vector<PoseObservations>& poses) {
     if (poses.size() < 3)
         throw std::invalid_argument("stereo calibration needs at least 3 poses, got " +
                                     std::to_string(poses.size()));
@@ -187,8 +184,18 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             throw std::invalid_argument("pose " + p.name +
                                         ": fewer than 4 corners seen by both devices");
     }
+}
 
-    // OpenCV initialisation (skew 0, 5 distortion coefficients).
+} // namespace
+
+StereoStart initialise_stereo(const std::vector<PoseObservations>& poses, Size camera_size,
+                              Size projector_size,
+                              const std::function<void(const std::string&)>& progress) {
+    const auto say = [&](const std::string& s) {
+        if (progress)
+            progress(s);
+    };
+    check_observations(poses);
     std::vector<std::vector<cv::Point3f>> obj_c, obj_s;
     std::vector<std::vector<cv::Point2f>> img_c, img_cs, img_ps;
     for (const PoseObservations& p : poses) {
@@ -213,14 +220,11 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             }
         }
     }
-    StereoResult result;
-    result.skew_estimated = options.skew;
-    ThreadPool& pool = ThreadPool::shared(options.threads);
+    StereoStart start;
     cv::Mat Kc, Dc, Kp, Dp, Rs, Ts, E, F;
     std::vector<cv::Mat> rvecs, tvecs, rvecs_p, tvecs_p;
     const cv::TermCriteria criteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200,
                                     DBL_EPSILON);
-    StageTimer initialisation(result.time_split, "OpenCV initialisation");
     try {
         // The two devices apart from each other, at once.
         say("initialising the camera and the projector (OpenCV calibrateCamera)");
@@ -229,10 +233,10 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                                        cv::Size(camera_size.width, camera_size.height), Kc, Dc,
                                        rvecs, tvecs, 0, criteria);
         });
-        result.initial_projector_rms = cv::calibrateCamera(
+        start.projector_rms = cv::calibrateCamera(
             obj_s, img_ps, cv::Size(projector_size.width, projector_size.height), Kp, Dp, rvecs_p,
             tvecs_p, 0, criteria);
-        result.initial_camera_rms = camera_rms.get();
+        start.camera_rms = camera_rms.get();
         say("initialising camera-to-projector transform (OpenCV stereoCalibrate)");
         cv::stereoCalibrate(obj_s, img_cs, img_ps, Kc, Dc, Kp, Dp,
                             cv::Size(camera_size.width, camera_size.height), Rs, Ts, E, F,
@@ -240,22 +244,62 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
     } catch (const cv::Exception& e) {
         throw std::runtime_error(std::string("OpenCV initialisation failed: ") + e.what());
     }
-    initialisation.stop();
     {
         std::ostringstream msg;
         msg.precision(4);
-        msg << "  OpenCV initial RMS: camera " << result.initial_camera_rms << " px, projector "
-            << result.initial_projector_rms << " px";
+        msg << "  OpenCV initial RMS: camera " << start.camera_rms << " px, projector "
+            << start.projector_rms << " px";
         say(msg.str());
     }
+    start.camera = lens_from_cv(Kc, Dc);
+    start.projector = lens_from_cv(Kp, Dp);
+    start.R = from_cv_rotation(Rs);
+    start.T = from_cv_vec(Ts);
+    for (std::size_t i = 0; i < poses.size(); ++i)
+        start.board_poses.push_back({from_cv_rotation(rvecs[i]), from_cv_vec(tvecs[i])});
+    return start;
+}
+
+StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size camera_size,
+                              Size projector_size, const StereoOptions& options) {
+    options.validate();
+    check_observations(poses);
+    TimeSplit initialisation;
+    StageTimer timer(initialisation, "OpenCV initialisation");
+    const StereoStart start =
+        initialise_stereo(poses, camera_size, projector_size, options.progress);
+    timer.stop();
+    StereoResult result = stereo_calibrate(poses, camera_size, projector_size, options, start);
+    initialisation.add(result.time_split);
+    result.time_split = std::move(initialisation);
+    return result;
+}
+
+StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size camera_size,
+                              Size projector_size, const StereoOptions& options,
+                              const StereoStart& start) {
+    const auto say = [&](const std::string& s) {
+        if (options.progress)
+            options.progress(s);
+    };
+    options.validate();
+    check_observations(poses);
+    if (start.board_poses.size() != poses.size())
+        throw std::invalid_argument("stereo calibration: the start has " +
+                                    std::to_string(start.board_poses.size()) +
+                                    " board poses for " + std::to_string(poses.size()) + " poses");
+    StereoResult result;
+    result.skew_estimated = options.skew;
+    result.initial_camera_rms = start.camera_rms;
+    result.initial_projector_rms = start.projector_rms;
+    ThreadPool& pool = ThreadPool::shared(options.threads);
 
     detail::RigState s;
-    s.camera = lens_from_cv(Kc, Dc);
-    s.projector = lens_from_cv(Kp, Dp);
-    s.R = from_cv_rotation(Rs);
-    s.T = from_cv_vec(Ts);
-    for (std::size_t i = 0; i < poses.size(); ++i)
-        s.poses.push_back({from_cv_rotation(rvecs[i]), from_cv_vec(tvecs[i])});
+    s.camera = start.camera;
+    s.projector = start.projector;
+    s.R = start.R;
+    s.T = start.T;
+    s.poses = start.board_poses;
     if (!options.camera_grid.empty())
         s.camera_grid =
             CorrectionGrid(camera_size, options.camera_grid.columns, options.camera_grid.rows);
@@ -406,7 +450,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
     };
 
     // The camera grid's smoothness by K-fold cross-validation over the poses.
-    const auto choose_camera_smoothness = [&](const detail::RigState& start,
+    const auto choose_camera_smoothness = [&](const detail::RigState& from,
                                               const std::vector<bool>& used_poses,
                                               const detail::FreeParameters& free,
                                               const detail::GridRegularisation& reg) {
@@ -440,7 +484,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                         train[std::size_t(in_use[k])] = false;
                         test[std::size_t(in_use[k])] = true;
                     }
-                detail::RigState trial = start;
+                detail::RigState trial = from;
                 detail::adjust(trial, corners, {}, train, free, fold_reg, options.max_iterations,
                                nullptr, &pool);
                 held[std::size_t(t)] = detail::adjust(trial, corners, {}, test, place, fold_reg,

@@ -252,8 +252,12 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
     StereoOptions stereo = options.stereo;
     stereo.progress = options.progress;
     say("calibrating from " + std::to_string(observations.size()) + " poses");
+    StageTimer initialisation(result.time_split, "OpenCV initialisation");
+    const StereoStart start = initialise_stereo(observations, result.camera_size,
+                                                result.projector_size, options.progress);
+    initialisation.stop();
     // The other skew setting's calibration (for the report) on its own
-    // thread meanwhile: the two share no state.
+    // thread meanwhile, from the same start: the two share no other state.
     std::future<StereoResult> other_skew;
     if (options.compare_skew) {
         StereoOptions other = stereo;
@@ -261,13 +265,14 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
         other.progress = nullptr;
         say(std::string("for comparison, alongside: calibrating with skew ") +
             (other.skew ? "estimated" : "fixed at 0"));
-        other_skew = std::async(std::launch::async, [&observations, camera = result.camera_size,
+        other_skew = std::async(std::launch::async, [&observations, &start,
+                                                     camera = result.camera_size,
                                                      projector = result.projector_size, other] {
-            return stereo_calibrate(observations, camera, projector, other);
+            return stereo_calibrate(observations, camera, projector, other, start);
         });
     }
     result.stereo =
-        stereo_calibrate(observations, result.camera_size, result.projector_size, stereo);
+        stereo_calibrate(observations, result.camera_size, result.projector_size, stereo, start);
     result.time_split.add(result.stereo.time_split);
     if (other_skew.valid()) {
         StageTimer waiting(result.time_split, "waiting for the other skew's calibration");

@@ -142,6 +142,26 @@ struct StereoResult {
 StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size camera_size,
                               Size projector_size, const StereoOptions& options = {});
 
+// OpenCV's initialisation, where every bundle adjustment starts whatever
+// the options (skew 0): each device from its own points, then the
+// camera-to-projector transform with their intrinsics held.
+struct StereoStart {
+    LensModel camera, projector;
+    Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    Vec3 T{0, 0, 0};
+    std::vector<RigidPose> board_poses; // per pose, placed by the camera
+    double camera_rms = -1, projector_rms = -1; // OpenCV's reprojection RMS, px
+};
+// Throws as stereo_calibrate.
+StereoStart initialise_stereo(const std::vector<PoseObservations>& poses, Size camera_size,
+                              Size projector_size,
+                              const std::function<void(const std::string&)>& progress = {});
+// stereo_calibrate from a start of the same poses (calibrations of one
+// session with different options share it): the same result.
+StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size camera_size,
+                              Size projector_size, const StereoOptions& options,
+                              const StereoStart& start);
+
 // Reprojection of board points through a calibration (camera and projector
 // pixels), for reports and tests.
 Vec2 project_camera(const StereoCalibration& calibration, const RigidPose& pose, const Vec3& board);
