@@ -146,9 +146,8 @@ TEST(StereoCalibrate, FromASharedStartTheSameAsAlone) {
     }
     calib::StereoStart short_start = start;
     short_start.board_poses.pop_back();
-    EXPECT_THROW(
-        calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size, {}, short_start),
-        std::invalid_argument);
+    EXPECT_THROW(calib::stereo_calibrate(obs, rig.camera_size, rig.projector_size, {}, short_start),
+                 std::invalid_argument);
 }
 
 TEST(StereoCalibrate, SkewOffKeepsSkewZeroAndFitsWorse) {

@@ -477,8 +477,8 @@ TEST(CaptureSet, ReadsOnlyTheFramesOfTheKeptBlocks) {
     EXPECT_TRUE(std::holds_alternative<fpp::PhaseBlock>(some.manifest.sequence[1]));
     EXPECT_EQ(some.manifest.frames,
               (std::vector<std::string>{"f0.png", "f1.png", "f2.png", "f3.png"}));
-    expect_same_frames(some.frames, std::vector<fpp::Frame>(all.frames.begin(),
-                                                            all.frames.begin() + 4));
+    expect_same_frames(some.frames,
+                       std::vector<fpp::Frame>(all.frames.begin(), all.frames.begin() + 4));
     // A kept frame's error names its place in capture.yaml.
     const auto not_phase = [](const fpp::PatternBlock& b) {
         return !std::holds_alternative<fpp::PhaseBlock>(b);

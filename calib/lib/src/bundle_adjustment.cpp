@@ -161,9 +161,9 @@ struct GridRun {
     int shared_count = 0;
     int shared_column[JacobianRow::kMax];
     int grid_u[kGrid], grid_v[kGrid];
-    double grid_grid[kGrid][kGrid];                     // sum of w w_k w_l, l <= k
-    double grid_u_shared[kGrid][JacobianRow::kMax];     // sum of w w_k du_a
-    double grid_v_shared[kGrid][JacobianRow::kMax];     // sum of w w_k dv_a
+    double grid_grid[kGrid][kGrid];                 // sum of w w_k w_l, l <= k
+    double grid_u_shared[kGrid][JacobianRow::kMax]; // sum of w w_k du_a
+    double grid_v_shared[kGrid][JacobianRow::kMax]; // sum of w w_k dv_a
 
     // Whether a row moves the same grid cell and lens and rigid parameters.
     bool matches(const JacobianRow& j) const {

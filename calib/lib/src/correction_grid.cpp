@@ -92,18 +92,18 @@ void CorrectionGrid::evaluate(const Basis& s, bool derivatives, Vec2& delta, Mat
     J = {0, 0, 0, 0};
     for (int b = 0; b < 4; ++b) {
         const Vec2* c = &values_[std::size_t((s.j0 + b) * columns_ + s.i0)];
-        const double u = s.bx[0] * c[0][0] + s.bx[1] * c[1][0] + s.bx[2] * c[2][0] +
-                         s.bx[3] * c[3][0];
-        const double v = s.bx[0] * c[0][1] + s.bx[1] * c[1][1] + s.bx[2] * c[2][1] +
-                         s.bx[3] * c[3][1];
+        const double u =
+            s.bx[0] * c[0][0] + s.bx[1] * c[1][0] + s.bx[2] * c[2][0] + s.bx[3] * c[3][0];
+        const double v =
+            s.bx[0] * c[0][1] + s.bx[1] * c[1][1] + s.bx[2] * c[2][1] + s.bx[3] * c[3][1];
         delta[0] += s.by[b] * u;
         delta[1] += s.by[b] * v;
         if (!derivatives)
             continue;
-        const double du = s.dx[0] * c[0][0] + s.dx[1] * c[1][0] + s.dx[2] * c[2][0] +
-                          s.dx[3] * c[3][0];
-        const double dv = s.dx[0] * c[0][1] + s.dx[1] * c[1][1] + s.dx[2] * c[2][1] +
-                          s.dx[3] * c[3][1];
+        const double du =
+            s.dx[0] * c[0][0] + s.dx[1] * c[1][0] + s.dx[2] * c[2][0] + s.dx[3] * c[3][0];
+        const double dv =
+            s.dx[0] * c[0][1] + s.dx[1] * c[1][1] + s.dx[2] * c[2][1] + s.dx[3] * c[3][1];
         J[0] += s.by[b] * du;
         J[1] += s.dy[b] * u;
         J[2] += s.by[b] * dv;
@@ -147,8 +147,8 @@ void CorrectionGrid::displacement_and_jacobian(Vec2 pixel, Vec2& delta, Mat2& J)
     evaluate(basis_at(pixel, true), true, delta, J);
 }
 
-void CorrectionGrid::support_and_jacobian(Vec2 pixel, int index[kSupport],
-                                          double weight[kSupport], Mat2& J) const {
+void CorrectionGrid::support_and_jacobian(Vec2 pixel, int index[kSupport], double weight[kSupport],
+                                          Mat2& J) const {
     const Basis s = basis_at(pixel, true);
     for (int b = 0; b < 4; ++b)
         for (int a = 0; a < 4; ++a) {

@@ -2,11 +2,11 @@
 // camera alone, samples on their bright parts, the stereo model between
 // them (see fpp/calib/hybrid_calibrate.hpp).
 
+#include "bundle_adjustment.hpp"
 #include "fpp/calib/corners.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/calib/time_split.hpp"
 #include "fpp/error.hpp"
-#include "bundle_adjustment.hpp"
 #include "hybrid_fit.hpp"
 #include "phase_smoothing.hpp"
 #include "pose_pipeline.hpp"
@@ -18,8 +18,8 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
-#include <variant>
 #include <sstream>
+#include <variant>
 
 namespace fpp::calib::detail {
 
@@ -129,7 +129,6 @@ double lit_fraction(const DecodeResult& decoded, const std::vector<Vec2>& corner
     return inside ? std::min(1.0, 2.0 * double(lit) / double(inside)) : 0.0;
 }
 
-
 // A pose's frames that the procedure uses. It needs the projector's column
 // alone (the column, modulation and mean decode the same without the y
 // blocks) and finds the board on the white frame; without a white frame it
@@ -210,13 +209,15 @@ void process_pose(const fs::path& folder, const PoseContext& context, PointCloud
         return reject("board not found: " + corners.failure);
     StageTimer placement(time, "board placement");
     RigidPose placed;
-    if (!camera_pose(context.calibration, context.board_points, corners.points, placed, pose.corner_rms_px))
+    if (!camera_pose(context.calibration, context.board_points, corners.points, placed,
+                     pose.corner_rms_px))
         return reject("the camera model cannot place the board (its corners do not undistort or "
                       "the pose does not converge)");
     pose.lit_fraction = lit_fraction(decoded, corners.points, context.columns, context.rows);
     if (pose.lit_fraction < options.min_lit_fraction)
         return reject("the projector lights only " + fixed(100 * pose.lit_fraction, 1) +
-                      " % of the board's squares (need " + fixed(100 * options.min_lit_fraction, 0) +
+                      " % of the board's squares (need " +
+                      fixed(100 * options.min_lit_fraction, 0) +
                       " %): the board is outside the projector's image or in its shadow");
     Vec3 normal{placed.R[2], placed.R[5], placed.R[8]};
     double d = normal[0] * placed.t[0] + normal[1] * placed.t[1] + normal[2] * placed.t[2];
@@ -288,22 +289,22 @@ void process_pose(const fs::path& folder, const PoseContext& context, PointCloud
         const Vec3 rc = mul(placed.R, context.board_centre);
         const Vec3 centre{rc[0] + placed.t[0], rc[1] + placed.t[1], rc[2] + placed.t[2]};
         // > 0: SV's plane lies beyond the board's centre (seen from the camera).
-        pose.sv_offset_mm = sv_plane.d - (sv_plane.normal[0] * centre[0] +
-                                          sv_plane.normal[1] * centre[1] +
-                                          sv_plane.normal[2] * centre[2]);
-        const double c = std::fabs(sv_plane.normal[0] * normal[0] +
-                                   sv_plane.normal[1] * normal[1] +
+        pose.sv_offset_mm =
+            sv_plane.d - (sv_plane.normal[0] * centre[0] + sv_plane.normal[1] * centre[1] +
+                          sv_plane.normal[2] * centre[2]);
+        const double c = std::fabs(sv_plane.normal[0] * normal[0] + sv_plane.normal[1] * normal[1] +
                                    sv_plane.normal[2] * normal[2]);
         pose.sv_angle_deg = std::acos(std::min(1.0, c)) * 180.0 / std::numbers::pi;
     }
     pose.usable = true;
     pose.seconds = since(t0);
-    outcome.progress.push_back("  " + pose.name + ": board at " + fixed(pose.distance_mm, 1) + " mm, tilt " +
+    outcome.progress.push_back(
+        "  " + pose.name + ": board at " + fixed(pose.distance_mm, 1) + " mm, tilt " +
         fixed(pose.tilt_deg, 1) + " deg, corners " + fixed(pose.corner_rms_px, 4) + " px, " +
-        std::to_string(pose.samples) + " samples; SV plane " +
-        fixed(1000 * pose.sv_offset_mm, 1) + " um, " + fixed(pose.sv_angle_deg, 4) +
-        " deg from the camera's");
+        std::to_string(pose.samples) + " samples; SV plane " + fixed(1000 * pose.sv_offset_mm, 1) +
+        " um, " + fixed(pose.sv_angle_deg, 4) + " deg from the camera's");
 }
+
 } // namespace
 
 std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& folder,

@@ -286,8 +286,8 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
     check_observations(poses);
     if (start.board_poses.size() != poses.size())
         throw std::invalid_argument("stereo calibration: the start has " +
-                                    std::to_string(start.board_poses.size()) +
-                                    " board poses for " + std::to_string(poses.size()) + " poses");
+                                    std::to_string(start.board_poses.size()) + " board poses for " +
+                                    std::to_string(poses.size()) + " poses");
     StereoResult result;
     result.skew_estimated = options.skew;
     result.initial_camera_rms = start.camera_rms;

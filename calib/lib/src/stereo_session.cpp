@@ -142,7 +142,8 @@ void process_pose(const fs::path& folder, const PoseContext& context, SessionPos
         }
     }
 
-    const ProjectorCorners& chosen = pose.projector[static_cast<std::size_t>(options.corners.method)];
+    const ProjectorCorners& chosen =
+        pose.projector[static_cast<std::size_t>(options.corners.method)];
     const int valid = static_cast<int>(chosen.valid.size()) - chosen.failed;
     std::ostringstream msg;
     msg << "  " << pose.name << ": board found (" << pose.corners.finder << " finder on "
@@ -265,11 +266,11 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
         other.progress = nullptr;
         say(std::string("for comparison, alongside: calibrating with skew ") +
             (other.skew ? "estimated" : "fixed at 0"));
-        other_skew = std::async(std::launch::async, [&observations, &start,
-                                                     camera = result.camera_size,
-                                                     projector = result.projector_size, other] {
-            return stereo_calibrate(observations, camera, projector, other, start);
-        });
+        other_skew =
+            std::async(std::launch::async, [&observations, &start, camera = result.camera_size,
+                                            projector = result.projector_size, other] {
+                return stereo_calibrate(observations, camera, projector, other, start);
+            });
     }
     result.stereo =
         stereo_calibrate(observations, result.camera_size, result.projector_size, stereo, start);

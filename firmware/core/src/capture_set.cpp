@@ -634,7 +634,8 @@ CaptureSet read_capture_set(const std::filesystem::path& folder,
         }
         // The file may have changed since its header was read.
         if (set.frames[i].size() != m.camera || set.frames[i].bit_depth != infos[0].bit_depth) {
-            throw InputError(path, item("frames", listed[i]), "frame changed while the set was read");
+            throw InputError(path, item("frames", listed[i]),
+                             "frame changed while the set was read");
         }
     });
     return set;

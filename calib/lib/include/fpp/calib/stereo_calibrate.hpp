@@ -149,7 +149,7 @@ struct StereoStart {
     LensModel camera, projector;
     Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
     Vec3 T{0, 0, 0};
-    std::vector<RigidPose> board_poses; // per pose, placed by the camera
+    std::vector<RigidPose> board_poses;         // per pose, placed by the camera
     double camera_rms = -1, projector_rms = -1; // OpenCV's reprojection RMS, px
 };
 // Throws as stereo_calibrate.
