@@ -26,6 +26,7 @@
 #include "test_support.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
+#include "fpp/calib/shape_fit.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/capture_set.hpp"
@@ -85,6 +86,7 @@ Session& setup() {
 
 struct Error {
     double rms = 0, mean = 0, shape = 0; // shape: RMS about the mean
+    double flatness = 0; // RMS residual of a least-squares plane through the points
     std::size_t n = 0;
 };
 
@@ -104,6 +106,13 @@ Error depth_error(const PointCloud& cloud, const Image<float>& truth) {
         e.rms = std::sqrt(sum2 / double(e.n));
         e.shape = std::sqrt(std::max(0.0, e.rms * e.rms - e.mean * e.mean));
     }
+    std::vector<Vec3> points;
+    for (std::size_t i = 0; i < truth.pixel_count(); ++i)
+        if (std::isfinite(cloud.xyz.data()[3 * i + 2]))
+            points.push_back({double(cloud.xyz.data()[3 * i]), double(cloud.xyz.data()[3 * i + 1]),
+                              double(cloud.xyz.data()[3 * i + 2])});
+    if (points.size() > 3)
+        e.flatness = calib::fit_plane(points).fit.rms;
     return e;
 }
 
@@ -129,11 +138,12 @@ Scan scan(const std::string& scene, const CoefficientTable& table) {
     apply_table(table, decoded.proj_x, hybrid);
     Scan out{depth_error(joint, capture.truth_xyz), depth_error(sv, capture.truth_xyz),
              depth_error(hybrid, capture.truth_xyz)};
-    std::printf("%s: joint SV %.4f (mean %+.4f, shape %.4f), our SV %.4f (mean %+.4f, shape "
-                "%.4f), table %.4f (mean %+.4f, shape %.4f), %zu / %zu px\n",
-                scene.c_str(), out.joint.rms, out.joint.mean, out.joint.shape, out.sv.rms,
-                out.sv.mean, out.sv.shape, out.table.rms, out.table.mean, out.table.shape,
-                out.table.n, out.sv.n);
+    std::printf("%s: joint SV %.4f (mean %+.4f, shape %.4f, plane fit %.4f), our SV %.4f (mean "
+                "%+.4f, shape %.4f, plane fit %.4f), table %.4f (mean %+.4f, shape %.4f, plane "
+                "fit %.4f), %zu / %zu px\n",
+                scene.c_str(), out.joint.rms, out.joint.mean, out.joint.shape, out.joint.flatness,
+                out.sv.rms, out.sv.mean, out.sv.shape, out.sv.flatness, out.table.rms,
+                out.table.mean, out.table.shape, out.table.flatness, out.table.n, out.sv.n);
     return out;
 }
 
@@ -170,12 +180,15 @@ TEST(HybridCheckerboard, OneSessionGivesATableTrueInShapeAndCloseToItsStereoMode
         // Pixels the boards did not reach get no point from the table.
         EXPECT_GT(double(sc->table.n), 0.95 * double(sc->sv.n));
         // Against the paper's joint calibration of the same session, the
-        // shape of the error is less than half.
+        // error against the truth is less than a third, its shape less than
+        // half. (At 400 x 300 what is left is mostly the calibration's noise:
+        // focal lengths to about 100 ppm, 0.03 mm of depth at 480 mm.)
+        EXPECT_LT(sc->table.rms, 0.33 * sc->joint.rms);
         EXPECT_LT(sc->table.shape, 0.5 * sc->joint.shape);
     }
     // The lens defect bends the joint SV's plane; ours stays flat.
-    EXPECT_LT(plane.table.shape, 0.025);
-    EXPECT_GT(plane.joint.shape, 0.05);
+    EXPECT_LT(plane.table.flatness, 0.012);
+    EXPECT_GT(plane.joint.flatness, 0.05);
 
     // The boards' samples alone reach fewer pixels than with the stereo
     // model between them; the model's alone are the stereo model.

@@ -184,6 +184,7 @@ struct Acceptance {
     ProjectionCheck intrinsics;
     PlaneCheck plane;
     PlaneCheck plane_rig_model; // reconstructed with the rig's own 5-coefficient model
+    ProjectionCheck intrinsics_rig_model; // the rig's own 5-coefficient model: the floor
     double origin_max_px = 0;   // corner 0 against the board's corner (0, 0), over the poses
     double seconds_session = 0, seconds_calibration = 0;
 };
@@ -214,6 +215,7 @@ Acceptance run_acceptance(int binning) {
     a.intrinsics = check_intrinsics(rig, c);
     a.plane = check_plane(rig, c);
     a.plane_rig_model = check_plane(rig, rig_five_coefficient_model(rig));
+    a.intrinsics_rig_model = check_intrinsics(rig, rig_five_coefficient_model(rig));
     // Corner 0 of every pose against the true corner (0, 0) (metadata pose).
     for (const calib::SessionPose& p : a.result.poses) {
         const YAML::Node meta = YAML::Load(read_manifest(p.folder / "capture.yaml").metadata_yaml);
@@ -227,6 +229,7 @@ Acceptance run_acceptance(int binning) {
         a.origin_max_px = std::max(a.origin_max_px, std::hypot(truth[0] - p.corners.points[0][0],
                                                                truth[1] - p.corners.points[0][1]));
     }
+    const LensModel& sigma = a.result.stereo.camera_sigma;
     std::cout << "camera " << rig.camera_size.width << " x " << rig.camera_size.height
               << ": session " << a.seconds_session << " s, calibration " << a.seconds_calibration
               << " s\n"
@@ -235,10 +238,18 @@ Acceptance run_acceptance(int binning) {
               << "intrinsics vs truth over the volume: camera " << a.intrinsics.camera_rms
               << " px RMS (max " << a.intrinsics.camera_max << "), projector "
               << a.intrinsics.projector_rms << " px RMS (max " << a.intrinsics.projector_max << ", "
-              << a.intrinsics.projector_points << " points)\n"
+              << a.intrinsics.projector_points << " points); the rig's own 5-coefficient "
+              << "model: camera " << a.intrinsics_rig_model.camera_rms << " (max "
+              << a.intrinsics_rig_model.camera_max << "), projector "
+              << a.intrinsics_rig_model.projector_rms << " (max "
+              << a.intrinsics_rig_model.projector_max << ")\n"
               << "plane vs true plane: " << a.plane.rms_mm << " mm RMS (mean " << a.plane.mean_mm
               << ", " << a.plane.points << " points); with the rig's own 5-coefficient model "
               << a.plane_rig_model.rms_mm << " mm\n"
+              << "camera - truth: principal point " << c.camera.cu - rig.camera.cu << ", "
+              << c.camera.cv - rig.camera.cv << " px (sigma " << sigma.cu << ", " << sigma.cv
+              << "), focal " << c.camera.fu - rig.camera.fu << ", " << c.camera.fv - rig.camera.fv
+              << " px (sigma " << sigma.fu << ", " << sigma.fv << ")\n"
               << "skew: camera " << c.camera.skew << " (true " << rig.camera.skew << "), projector "
               << c.projector.skew << " (true " << rig.projector.skew << ")\n";
     return a;
@@ -252,8 +263,21 @@ void expect_acceptance(const Acceptance& a, const sim::Rig& rig) {
         EXPECT_TRUE(p.usable) << p.name << ": " << p.skip_reason;
     EXPECT_LE(c.camera_rms, 0.1);
     EXPECT_LE(c.projector_rms, 0.1);
-    EXPECT_LE(a.intrinsics.camera_rms, 0.1);
-    EXPECT_LE(a.intrinsics.projector_rms, 0.1);
+    // The camera against the truth: focal lengths and principal point within
+    // three of their own reported sigmas (at 800 x 600 about 0.037 and
+    // 0.11 px), and over the volume no farther off than the principal
+    // point's three-sigma circle. The over-volume error is mostly the
+    // principal point's (measured 0.09 px at 800 x 600, under one sigma): a
+    // fixed 0.1 px bound would sit inside the calibration's own noise.
+    const LensModel& sigma = a.result.stereo.camera_sigma;
+    EXPECT_LE(std::fabs(c.camera.fu - rig.camera.fu), 3 * sigma.fu);
+    EXPECT_LE(std::fabs(c.camera.fv - rig.camera.fv), 3 * sigma.fv);
+    EXPECT_LE(std::fabs(c.camera.cu - rig.camera.cu), 3 * sigma.cu);
+    EXPECT_LE(std::fabs(c.camera.cv - rig.camera.cv), 3 * sigma.cv);
+    EXPECT_LE(a.intrinsics.camera_max, 3 * std::hypot(sigma.cu, sigma.cv));
+    // The projector: within 0.05 px of the rig's own 5-coefficient model,
+    // whose unmodelled k4 and prism terms leave 0.072 px RMS.
+    EXPECT_LE(a.intrinsics.projector_rms, a.intrinsics_rig_model.projector_rms + 0.05);
     EXPECT_GT(a.intrinsics.projector_points, 500);
     EXPECT_LE(a.plane.rms_mm, 0.05);
     EXPECT_LE(std::fabs(a.plane.mean_mm), rig.camera_size.width >= 1600 ? 0.015 : 0.03);
@@ -279,8 +303,7 @@ TEST(StereoSimAcceptance, FullSize) {
     const Acceptance a = run_acceptance(1);
     const sim::Rig rig = sim::load_rig(sim::effects_rig_path());
     expect_acceptance(a, rig);
-    // At full size the recovered models hold everywhere in the volume.
-    EXPECT_LE(a.intrinsics.camera_max, 0.1);
+    // At full size the projector's model holds everywhere in the volume.
     EXPECT_LE(a.intrinsics.projector_max, 0.1);
 #endif
 }

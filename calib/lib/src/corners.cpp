@@ -193,9 +193,11 @@ constexpr double kPreBlurPx = 0.5;
 
 // One corner: Levenberg-Marquardt on the blurred checker corner model.
 // Parameters: cx, cy (relative to the start), edge angles tu, tv, blur s,
-// shading a0, ax, ay (per window radius) and contrast b.
+// shading a0, ax, ay (per window radius), contrast b and its slopes bx, by.
+// The edges bend by ku w^2 and kv w^2 at a distance w along them (given:
+// measured on the whole row and column, see edge_bends).
 bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, double tv,
-                      double radius, Vec2& out, double& sigma) {
+                      double ku, double kv, double radius, Vec2& out, double& sigma) {
     const int x0 = static_cast<int>(std::ceil(start[0] - radius));
     const int x1 = static_cast<int>(std::floor(start[0] + radius));
     const int y0 = static_cast<int>(std::ceil(start[1] - radius));
@@ -216,10 +218,11 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
     const Eigen::Index n = static_cast<Eigen::Index>(val.size());
     if (n < 30)
         return false;
-    constexpr int kParams = 9;
+    constexpr int kParams = 11;
+    constexpr int kLinear = 6; // a0, ax, ay, b, bx, by
     using Vec = Eigen::Matrix<double, kParams, 1>;
     Vec p;
-    p << 0, 0, tu, tv, 1.0, 0, 0, 0, 0;
+    p << 0, 0, tu, tv, 1.0, 0, 0, 0, 0, 0, 0;
     const double inv_r = 1.0 / radius;
     const double k = 1.0 / std::sqrt(2.0);
     const double two_over_sqrt_pi = 2.0 / std::sqrt(3.14159265358979323846);
@@ -234,41 +237,49 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
         for (Eigen::Index i = 0; i < n; ++i) {
             const double ex = px[static_cast<std::size_t>(i)] - q(0),
                          ey = py[static_cast<std::size_t>(i)] - q(1);
-            const double d1 = -su * ex + cu * ey; // across the edge along u
-            const double d2 = -sv * ex + cv * ey; // across the edge along v
+            // Signed distances across the edges along u and v; lens distortion
+            // bends the edges (a straight-edge model moves corners far from the
+            // image centre by a few thousandths of a pixel, radially).
+            const double l1 = -su * ex + cu * ey, w1 = cu * ex + su * ey;
+            const double l2 = -sv * ex + cv * ey, w2 = cv * ex + sv * ey;
+            const double d1 = l1 + ku * w1 * w1, d2 = l2 + kv * w2 * w2;
             const double z1 = k * d1 / s, z2 = k * d2 / s;
             const double e1 = std::erf(z1), e2 = std::erf(z2);
             const double sx = px[static_cast<std::size_t>(i)] * inv_r,
                          sy = py[static_cast<std::size_t>(i)] * inv_r;
-            const double model = q(5) + q(6) * sx + q(7) * sy + q(8) * e1 * e2;
+            // Shading multiplies the pattern: its slope tilts the contrast too.
+            const double contrast = q(8) + q(9) * sx + q(10) * sy;
+            const double model = q(5) + q(6) * sx + q(7) * sy + contrast * e1 * e2;
             r(i) = model - val[static_cast<std::size_t>(i)];
             cost += r(i) * r(i);
             if (!jacobian)
                 continue;
             const double g1 = two_over_sqrt_pi * std::exp(-z1 * z1) * k / s; // d e1 / d d1
             const double g2 = two_over_sqrt_pi * std::exp(-z2 * z2) * k / s;
-            const double m1 = q(8) * g1 * e2, m2 = q(8) * e1 * g2; // dM/dd1, dM/dd2
-            J(i, 0) = m1 * su + m2 * sv;                           // d d1/d cx = su
-            J(i, 1) = -m1 * cu - m2 * cv;
-            J(i, 2) = m1 * (-cu * ex - su * ey);
-            J(i, 3) = m2 * (-cv * ex - sv * ey);
+            const double m1 = contrast * g1 * e2, m2 = contrast * e1 * g2; // dM/dd1, dM/dd2
+            J(i, 0) = m1 * (su - 2 * ku * w1 * cu) + m2 * (sv - 2 * kv * w2 * cv);
+            J(i, 1) = m1 * (-cu - 2 * ku * w1 * su) + m2 * (-cv - 2 * kv * w2 * sv);
+            J(i, 2) = m1 * (-w1 + 2 * ku * w1 * l1);
+            J(i, 3) = m2 * (-w2 + 2 * kv * w2 * l2);
             J(i, 4) = -(m1 * d1 + m2 * d2) / s;
             J(i, 5) = 1;
             J(i, 6) = sx;
             J(i, 7) = sy;
             J(i, 8) = e1 * e2;
+            J(i, 9) = sx * e1 * e2;
+            J(i, 10) = sy * e1 * e2;
         }
         return cost;
     };
     // Shading and contrast first, linear for the starting geometry.
     evaluate(p, true);
     {
-        const Eigen::MatrixXd A = J.rightCols(4);
-        const Eigen::VectorXd b = r + A * p.tail(4); // r = A p_tail - val  ->  val = A p_tail - r
-        const Eigen::Vector4d lin = (A.transpose() * A).ldlt().solve(A.transpose() * b);
+        const Eigen::MatrixXd A = J.rightCols(kLinear);
+        const Eigen::VectorXd b = r + A * p.tail(kLinear); // r = A p_tail - val
+        const Eigen::VectorXd lin = (A.transpose() * A).ldlt().solve(A.transpose() * b);
         if (!lin.allFinite())
             return false;
-        p.tail(4) = lin;
+        p.tail(kLinear) = lin;
     }
     double cost = evaluate(p, true);
     double lambda = 1e-3;
@@ -310,15 +321,85 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
 
 namespace {
 
-// One pass over every corner on `texture`; the fitted blur of each refined
-// corner goes to `sigmas`.
+// Bends of the edges through a line of corners (a row or a column of the
+// board): the image of a straight board line is straight up to the lens's
+// distortion, so a cubic through all of its corners, in the frame of the
+// chord from the first to the last, measures how the edge bends at each
+// (bend[k] = -l''(w_k) / 2, the model's ku or kv), with the noise of a dozen
+// corners rather than of one corner's few pixels.
+void edge_bends(const std::vector<Vec2>& line, std::vector<double>& bend) {
+    bend.assign(line.size(), 0.0);
+    if (line.size() < 5) // a cubic needs a fifth corner to be checked by the others
+        return;
+    const Vec2 first = line.front(), last = line.back();
+    const double length = dist(first, last);
+    if (!(length > 0))
+        return;
+    const Vec2 e{(last[0] - first[0]) / length, (last[1] - first[1]) / length};
+    // Along the chord normalised to 0..1 (conditioning); across it in pixels.
+    Eigen::MatrixXd A(static_cast<Eigen::Index>(line.size()), 4);
+    Eigen::VectorXd l(static_cast<Eigen::Index>(line.size()));
+    std::vector<double> w(line.size());
+    for (std::size_t k = 0; k < line.size(); ++k) {
+        const double dx = line[k][0] - first[0], dy = line[k][1] - first[1];
+        w[k] = (e[0] * dx + e[1] * dy) / length;
+        const auto row = static_cast<Eigen::Index>(k);
+        A(row, 0) = 1;
+        A(row, 1) = w[k];
+        A(row, 2) = w[k] * w[k];
+        A(row, 3) = w[k] * w[k] * w[k];
+        l(row) = -e[1] * dx + e[0] * dy;
+    }
+    const Eigen::Vector4d c = A.colPivHouseholderQr().solve(l);
+    if (!c.allFinite())
+        return;
+    // l'' per pixel squared along the edge: the normalised one over length^2.
+    for (std::size_t k = 0; k < line.size(); ++k)
+        bend[k] = -(2 * c(2) + 6 * c(3) * w[k]) / (2 * length * length);
+}
+
+// Per corner (row-major), the bend of its edge along the rows (ku) and along
+// the columns (kv).
+struct EdgeBends {
+    std::vector<double> ku, kv;
+};
+
+EdgeBends measure_bends(const std::vector<Vec2>& points, int columns, int rows) {
+    EdgeBends out;
+    out.ku.assign(points.size(), 0.0);
+    out.kv.assign(points.size(), 0.0);
+    std::vector<Vec2> line;
+    std::vector<double> bend;
+    auto index = [&](int i, int j) { return static_cast<std::size_t>(j * columns + i); };
+    for (int j = 0; j < rows; ++j) {
+        line.clear();
+        for (int i = 0; i < columns; ++i)
+            line.push_back(points[index(i, j)]);
+        edge_bends(line, bend);
+        for (int i = 0; i < columns; ++i)
+            out.ku[index(i, j)] = bend[static_cast<std::size_t>(i)];
+    }
+    for (int i = 0; i < columns; ++i) {
+        line.clear();
+        for (int j = 0; j < rows; ++j)
+            line.push_back(points[index(i, j)]);
+        edge_bends(line, bend);
+        for (int j = 0; j < rows; ++j)
+            out.kv[index(i, j)] = bend[static_cast<std::size_t>(j)];
+    }
+    return out;
+}
+
+// One pass over every corner on `texture`, with the edges bent by `bends`
+// (straight if null); the fitted blur of each refined corner goes to `sigmas`.
 int refine_pass(const Image<float>& texture, const std::vector<Vec2>& start,
-                std::vector<Vec2>& points, int columns, int rows, double max_shift_px,
-                std::vector<double>& sigmas) {
+                const EdgeBends* bends, std::vector<Vec2>& points, int columns, int rows,
+                double max_shift_px, std::vector<double>& sigmas) {
     int refined = 0;
     auto at = [&](int i, int j) { return start[static_cast<std::size_t>(j * columns + i)]; };
     for (int j = 0; j < rows; ++j)
         for (int i = 0; i < columns; ++i) {
+            const std::size_t index = static_cast<std::size_t>(j * columns + i);
             const Vec2 c = at(i, j);
             // Edge directions from the neighbouring corners; the disc stays
             // inside the four squares at the corner (40 % of the nearest spacing).
@@ -333,13 +414,15 @@ int refine_pass(const Image<float>& texture, const std::vector<Vec2>& start,
                 continue;
             const double tu = std::atan2(a[1] - am[1], a[0] - am[0]);
             const double tv = std::atan2(b[1] - bm[1], b[0] - bm[0]);
+            const double ku = bends ? bends->ku[index] : 0.0;
+            const double kv = bends ? bends->kv[index] : 0.0;
             Vec2 out{};
             double sigma = 0;
-            if (!fit_corner_model(texture, c, tu, tv, radius, out, sigma))
+            if (!fit_corner_model(texture, c, tu, tv, ku, kv, radius, out, sigma))
                 continue;
             if (dist(out, c) > max_shift_px)
                 continue;
-            points[static_cast<std::size_t>(j * columns + i)] = out;
+            points[index] = out;
             sigmas.push_back(sigma);
             ++refined;
         }
@@ -352,26 +435,37 @@ int refine_corners_model(const Image<float>& texture, std::vector<Vec2>& points,
                          int rows, double max_shift_px) {
     const std::vector<Vec2> start = points;
     std::vector<double> sigmas;
-    int refined = refine_pass(texture, start, points, columns, rows, max_shift_px, sigmas);
+    int refined = refine_pass(texture, start, nullptr, points, columns, rows, max_shift_px, sigmas);
     if (sigmas.empty())
         return refined;
     std::nth_element(sigmas.begin(),
                      sigmas.begin() + static_cast<std::ptrdiff_t>(sigmas.size() / 2), sigmas.end());
     const double blur = sigmas[sigmas.size() / 2];
-    if (blur >= kMinModelBlurPx)
-        return refined;
-    // A sharp image: edges are box-sampled ramps, not erf profiles, and
-    // nearly axis-aligned edges make the fit jump with the sub-pixel phase
-    // (up to 0.3 px measured at 0.25 px of optical blur). A symmetric
-    // Gaussian pre-blur makes the profile erf-like again without moving the
-    // corner (the pattern is point-symmetric about it).
-    Image<float> blurred = texture;
-    cv::Mat m(blurred.height(), blurred.width(), CV_32F, blurred.data());
-    cv::patchNaNs(m, 0.0);
-    cv::GaussianBlur(m, m, cv::Size(0, 0), kPreBlurPx);
-    points = start;
+    const Image<float>* image = &texture;
+    Image<float> blurred;
+    if (blur < kMinModelBlurPx) {
+        // A sharp image: edges are box-sampled ramps, not erf profiles, and
+        // nearly axis-aligned edges make the fit jump with the sub-pixel phase
+        // (up to 0.3 px measured at 0.25 px of optical blur). A symmetric
+        // Gaussian pre-blur makes the profile erf-like again without moving the
+        // corner (the pattern is point-symmetric about it).
+        blurred = texture;
+        cv::Mat m(blurred.height(), blurred.width(), CV_32F, blurred.data());
+        cv::patchNaNs(m, 0.0);
+        cv::GaussianBlur(m, m, cv::Size(0, 0), kPreBlurPx);
+        image = &blurred;
+        points = start;
+        sigmas.clear();
+        refine_pass(blurred, start, nullptr, points, columns, rows, max_shift_px, sigmas);
+    }
+    // Again with the edges bent as the refined corners' rows and columns
+    // bend: straight edges move corners far from the image centre by a few
+    // thousandths of a pixel towards it under barrel distortion (a focal
+    // length 30 ppm long, measured in simulation).
+    const EdgeBends bends = measure_bends(points, columns, rows);
+    const std::vector<Vec2> first = points;
     sigmas.clear();
-    return refine_pass(blurred, start, points, columns, rows, max_shift_px, sigmas);
+    return refine_pass(*image, first, &bends, points, columns, rows, max_shift_px, sigmas);
 }
 
 std::vector<CornerTexture> corner_textures(const CaptureSet& capture, const DecodeResult& decoded) {

@@ -387,13 +387,11 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
                              std::to_string(options.min_usable_poses) + " are needed" + reasons);
     }
 
-    // The stereo model along a pixel's ray, over its boards' depth range.
+    // The stereo model along a pixel's ray, over the depths asked for.
     const int count = options.model_samples;
-    const double margin = options.model_depth_margin_mm;
-    const ModelSampleSource model = [&](int u, int v, double z_near, double z_far, double* phase,
+    const ModelSampleSource model = [&](int u, int v, double z0, double z1, double* phase,
                                         double* depth, int capacity) {
         const double xn = rays.at(u, v, 0), yn = rays.at(u, v, 1);
-        const double z0 = z_near - margin, z1 = z_far + margin;
         int n = 0;
         for (int k = 0; k < std::min(count, capacity); ++k) {
             const double z = z0 + (z1 - z0) * k / (count - 1);

@@ -59,6 +59,24 @@ Vec3 field_centre(const Rig& rig, double z) {
     return {n[0] * z, n[1] * z, z};
 }
 
+// The camera-frame point at depth z midway between the camera's and the
+// projector's image-centre rays: the middle of the common field when the
+// projector's field is far off the camera's axis (a projector above the
+// camera lights only part of the camera field near the rig).
+Vec3 common_field_centre(const Rig& rig, double z) {
+    Vec2 n{};
+    const Vec2 centre{(rig.projector_size.width - 1) * 0.5, (rig.projector_size.height - 1) * 0.5};
+    if (!rig.projector.pixel_to_normalised(centre, n))
+        return field_centre(rig, z);
+    const Mat3 Rt = transpose(rig.R);
+    const Vec3 origin = rig.projector_centre_in_camera();
+    const Vec3 direction = mul(Rt, Vec3{n[0], n[1], 1});
+    if (!(std::fabs(direction[2]) > 1e-9))
+        return field_centre(rig, z);
+    const Vec3 on_projector_ray = add(origin, scale(direction, (z - origin[2]) / direction[2]));
+    return scale(add(field_centre(rig, z), on_projector_ray), 0.5);
+}
+
 // The largest s in [0, 1] such that visible(s) holds, assuming visible(0) and
 // a single transition (bisection to 1 %).
 template <class F> double largest_visible(F visible) {
@@ -88,15 +106,19 @@ std::vector<Pose> checkerboard_poses(const Rig& rig, const SessionOptions& o) {
         // Tilts about the board's x and y axes in every direction (golden
         // angle), the first pose nearly frontal; roll about the normal.
         const double direction = 2 * kPi * fraction(k * (1 - kGoldenFraction) + 0.125);
-        double magnitude = k == 0 ? 0.15 * o.max_tilt_deg
+        const double magnitude = k == 0 ? 0.15 * o.max_tilt_deg
                                   : o.max_tilt_deg * (0.6 + 0.4 * fraction(k * kSqrt2Fraction));
         const double roll = o.max_roll_deg * (2 * u_roll - 1);
         const double shift_direction = 2 * kPi * fraction(k * kGoldenFraction + 0.3);
-        const Vec3 centre = field_centre(rig, z);
+        // About the camera's axis first; about the middle of the common field
+        // when the board does not fit there.
+        const Vec3 centres[2] = {field_centre(rig, z), common_field_centre(rig, z)};
         bool placed = false;
-        for (int attempt = 0; attempt < 12 && !placed; ++attempt, magnitude *= 0.85) {
-            const Mat3 R = rotation_from_euler_deg(magnitude * std::cos(direction),
-                                                   magnitude * std::sin(direction), roll);
+        for (int attempt = 0; attempt < 24 && !placed; ++attempt) {
+            const Vec3& centre = centres[attempt / 12];
+            const double tilt = magnitude * std::pow(0.85, attempt % 12); // less tilt each time
+            const Mat3 R = rotation_from_euler_deg(tilt * std::cos(direction),
+                                                   tilt * std::sin(direction), roll);
             const double max_shift_mm = 0.35 * z; // beyond any field at these distances
             auto pose_at = [&](double s) {
                 return Pose{add(centre, Vec3{s * max_shift_mm * std::cos(shift_direction),

@@ -105,11 +105,13 @@ struct HybridOptions {
     // that the boards reached the pixel and over which depths.
     int min_board_samples = 3;
     int model_samples = 8;            // per pixel, evenly over its boards' depth range
-    // The range extended by this on each side: the stereo model is a model
-    // of rays, as good beyond the boards' depths as between them (unlike
-    // beyond the projector pixels they lit), and a pixel at the edge of the
-    // image saw the boards over a narrower range of depths than the volume
-    // they spanned.
+    // The rational model's range extended by this on each side: the stereo
+    // model is a model of rays, as good beyond the boards' depths as between
+    // them (unlike beyond the projector pixels they lit), and a pixel at the
+    // edge of the image saw the boards over a narrower range of depths than
+    // the volume they spanned. The cubic models (polynomial, ray) keep to
+    // the boards' range: a cubic in the column cannot follow depth over a
+    // wider one.
     double model_depth_margin_mm = 60;
     BrightBoardOptions bright;
     double max_sample_deviation_px = 1.0; // from the stereo model's column: not on the board
