@@ -193,16 +193,24 @@ TEST(CliPaperExperiments, RunsWritesItsOutputsAndKeepsTheAccuracyRelations) {
     EXPECT_NEAR(figure("cylinder.diameter.boards-rational"), 168.0, 0.5);
     EXPECT_NEAR(figure("sphere.diameter.boards-rational"), 120.0, 0.5);
     // Ball bars at seven places: every method but the board-only table
-    // (fewer pixels) fits both spheres.
-    for (int k = 1; k <= 7; ++k)
-        for (const std::string& m : methods()) {
-            if (m == "boards-only-rational")
+    // (fewer pixels) fits both spheres; the cubic tables from the boards keep
+    // to the boards' depths, and give no spheres where a ball bar leaves them
+    // (one place of seven here).
+    for (const std::string& m : methods()) {
+        if (m == "boards-only-rational")
+            continue;
+        const bool cubic_from_boards = m == "boards-polynomial" || m == "boards-ray";
+        int measured = 0;
+        for (int k = 1; k <= 7; ++k) {
+            const double error = figure("ball_bar." + std::to_string(k) + "." + m +
+                                        ".spacing_error_noise_free");
+            if (cubic_from_boards && std::isnan(error))
                 continue;
-            EXPECT_LT(std::fabs(figure("ball_bar." + std::to_string(k) + "." + m +
-                                       ".spacing_error_noise_free")),
-                      0.2)
-                << k << " " << m;
+            ++measured;
+            EXPECT_LT(std::fabs(error), 0.2) << k << " " << m;
         }
+        EXPECT_GE(measured, cubic_from_boards ? 5 : 7) << m;
+    }
 
     // The relief is sized to ~680,000 pixels at full size (/ 16 here).
     EXPECT_NEAR(figure("relief.pixels_seen"), 680000.0 / 16.0, 0.1 * 680000.0 / 16.0);

@@ -401,8 +401,12 @@ class Run {
         add("calibration.boards.seconds", seconds_since(start), "s");
         const std::size_t first = count();
         add_tables(boards, Procedure::boards, "boards", "our procedure");
-        for (std::size_t m = first; m < count(); ++m)
+        for (std::size_t m = first; m < count(); ++m) {
             methods()[m].is_default = methods()[m].model == HybridOptions{}.model;
+            // Cubic models keep to the boards' depth range (no margin beyond
+            // it, see HybridOptions::model_depth_margin_mm): fewer depths.
+            methods()[m].in_common = methods()[m].model == TableModel::rational;
+        }
         // The same session's tables fitted to the boards' samples alone,
         // and to the stereo model's alone, for comparison.
         for (const HybridSamples samples : {HybridSamples::boards, HybridSamples::model}) {
