@@ -1,7 +1,8 @@
 #pragma once
 // Internal to fpp-calib paper-experiments (paper_experiments.hpp): what a run
-// measures, shared by the run itself (paper_experiments.cpp) and its report
-// and targets (paper_report.cpp).
+// measures, shared by the run itself (paper_stages.hpp: paper_experiments.cpp,
+// paper_scans.cpp, paper_timing.cpp) and its report and targets
+// (paper_report.cpp).
 
 #include "fpp/calib/evaluation.hpp"
 #include "fpp/calib/paper_experiments.hpp"
