@@ -191,13 +191,23 @@ bool try_finder(const cv::Mat& image8, int columns, int rows, bool sector,
 constexpr double kMinModelBlurPx = 0.4;
 constexpr double kPreBlurPx = 0.5;
 
+// What a corner's fit is given, measured on its neighbours: the bends of its
+// edges (ku, kv: an edge bends by k w^2 at a distance w along it, see
+// edge_bends) and the relative gradient of the contrast (gx, gy per px:
+// shading multiplies the pattern). Zero for a first pass.
+struct CornerPrior {
+    double ku = 0, kv = 0, gx = 0, gy = 0;
+};
+
 // One corner: Levenberg-Marquardt on the blurred checker corner model.
 // Parameters: cx, cy (relative to the start), edge angles tu, tv, blur s,
-// shading a0, ax, ay (per window radius), contrast b and its slopes bx, by.
-// The edges bend by ku w^2 and kv w^2 at a distance w along them (given:
-// measured on the whole row and column, see edge_bends).
+// shading a0, ax, ay (per window radius) and contrast b; the contrast's
+// slope is given (a fitted one trades with the corner's position in a small
+// window: at 400 x 300 it tripled the spread of the focal lengths).
 bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, double tv,
-                      double ku, double kv, double radius, Vec2& out, double& sigma) {
+                      const CornerPrior& prior, double radius, Vec2& out, double& sigma,
+                      double& contrast_out) {
+    const double ku = prior.ku, kv = prior.kv;
     const int x0 = static_cast<int>(std::ceil(start[0] - radius));
     const int x1 = static_cast<int>(std::floor(start[0] + radius));
     const int y0 = static_cast<int>(std::ceil(start[1] - radius));
@@ -218,11 +228,11 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
     const Eigen::Index n = static_cast<Eigen::Index>(val.size());
     if (n < 30)
         return false;
-    constexpr int kParams = 11;
-    constexpr int kLinear = 6; // a0, ax, ay, b, bx, by
+    constexpr int kParams = 9;
+    constexpr int kLinear = 4; // a0, ax, ay, b
     using Vec = Eigen::Matrix<double, kParams, 1>;
     Vec p;
-    p << 0, 0, tu, tv, 1.0, 0, 0, 0, 0, 0, 0;
+    p << 0, 0, tu, tv, 1.0, 0, 0, 0, 0;
     const double inv_r = 1.0 / radius;
     const double k = 1.0 / std::sqrt(2.0);
     const double two_over_sqrt_pi = 2.0 / std::sqrt(3.14159265358979323846);
@@ -248,7 +258,9 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
             const double sx = px[static_cast<std::size_t>(i)] * inv_r,
                          sy = py[static_cast<std::size_t>(i)] * inv_r;
             // Shading multiplies the pattern: its slope tilts the contrast too.
-            const double contrast = q(8) + q(9) * sx + q(10) * sy;
+            const double tilt = 1 + prior.gx * px[static_cast<std::size_t>(i)] +
+                                prior.gy * py[static_cast<std::size_t>(i)];
+            const double contrast = q(8) * tilt;
             const double model = q(5) + q(6) * sx + q(7) * sy + contrast * e1 * e2;
             r(i) = model - val[static_cast<std::size_t>(i)];
             cost += r(i) * r(i);
@@ -265,9 +277,7 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
             J(i, 5) = 1;
             J(i, 6) = sx;
             J(i, 7) = sy;
-            J(i, 8) = e1 * e2;
-            J(i, 9) = sx * e1 * e2;
-            J(i, 10) = sy * e1 * e2;
+            J(i, 8) = tilt * e1 * e2;
         }
         return cost;
     };
@@ -314,6 +324,7 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
     }
     out = {start[0] + p(0), start[1] + p(1)};
     sigma = p(4);
+    contrast_out = p(8);
     return std::isfinite(out[0]) && std::isfinite(out[1]) && std::fabs(p(8)) > 0;
 }
 
@@ -358,16 +369,15 @@ void edge_bends(const std::vector<Vec2>& line, std::vector<double>& bend) {
         bend[k] = -(2 * c(2) + 6 * c(3) * w[k]) / (2 * length * length);
 }
 
-// Per corner (row-major), the bend of its edge along the rows (ku) and along
-// the columns (kv).
-struct EdgeBends {
-    std::vector<double> ku, kv;
-};
-
-EdgeBends measure_bends(const std::vector<Vec2>& points, int columns, int rows) {
-    EdgeBends out;
-    out.ku.assign(points.size(), 0.0);
-    out.kv.assign(points.size(), 0.0);
+// Per corner (row-major): the bends of its edges along the rows (ku) and the
+// columns (kv) from the whole lines of corners, and its contrast's relative
+// gradient from its neighbours' contrasts (neighbouring corners' contrasts
+// have opposite signs: their magnitudes are compared; NaN where a corner was
+// not refined).
+std::vector<CornerPrior> measure_priors(const std::vector<Vec2>& points,
+                                        const std::vector<double>& contrasts, int columns,
+                                        int rows) {
+    std::vector<CornerPrior> out(points.size());
     std::vector<Vec2> line;
     std::vector<double> bend;
     auto index = [&](int i, int j) { return static_cast<std::size_t>(j * columns + i); };
@@ -377,7 +387,7 @@ EdgeBends measure_bends(const std::vector<Vec2>& points, int columns, int rows) 
             line.push_back(points[index(i, j)]);
         edge_bends(line, bend);
         for (int i = 0; i < columns; ++i)
-            out.ku[index(i, j)] = bend[static_cast<std::size_t>(i)];
+            out[index(i, j)].ku = bend[static_cast<std::size_t>(i)];
     }
     for (int i = 0; i < columns; ++i) {
         line.clear();
@@ -385,17 +395,49 @@ EdgeBends measure_bends(const std::vector<Vec2>& points, int columns, int rows) 
             line.push_back(points[index(i, j)]);
         edge_bends(line, bend);
         for (int j = 0; j < rows; ++j)
-            out.kv[index(i, j)] = bend[static_cast<std::size_t>(j)];
+            out[index(i, j)].kv = bend[static_cast<std::size_t>(j)];
     }
+    for (int j = 0; j < rows; ++j)
+        for (int i = 0; i < columns; ++i) {
+            const double c0 = std::fabs(contrasts[index(i, j)]);
+            if (!(c0 > 0))
+                continue;
+            // Least squares over the (up to four) neighbours: |b_n| - |b_0| = g . (p_n - p_0).
+            double a11 = 0, a12 = 0, a22 = 0, r1 = 0, r2 = 0;
+            const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
+            for (int k = 0; k < 4; ++k) {
+                const int ni = i + di[k], nj = j + dj[k];
+                if (ni < 0 || nj < 0 || ni >= columns || nj >= rows)
+                    continue;
+                const double cn = std::fabs(contrasts[index(ni, nj)]);
+                if (!(cn > 0))
+                    continue;
+                const double dx = points[index(ni, nj)][0] - points[index(i, j)][0];
+                const double dy = points[index(ni, nj)][1] - points[index(i, j)][1];
+                a11 += dx * dx;
+                a12 += dx * dy;
+                a22 += dy * dy;
+                r1 += dx * (cn - c0);
+                r2 += dy * (cn - c0);
+            }
+            const double det = a11 * a22 - a12 * a12;
+            if (!(det > 1e-6 * (a11 + a22) * (a11 + a22)))
+                continue; // fewer than two independent directions
+            out[index(i, j)].gx = (a22 * r1 - a12 * r2) / det / c0;
+            out[index(i, j)].gy = (a11 * r2 - a12 * r1) / det / c0;
+        }
     return out;
 }
 
-// One pass over every corner on `texture`, with the edges bent by `bends`
-// (straight if null); the fitted blur of each refined corner goes to `sigmas`.
+// One pass over every corner on `texture`, each fit given its prior (none:
+// straight edges, flat contrast); the fitted blur and contrast of each corner
+// go to `sigmas` and `contrasts` (NaN where not refined).
 int refine_pass(const Image<float>& texture, const std::vector<Vec2>& start,
-                const EdgeBends* bends, std::vector<Vec2>& points, int columns, int rows,
-                double max_shift_px, std::vector<double>& sigmas) {
+                const std::vector<CornerPrior>* priors, std::vector<Vec2>& points, int columns,
+                int rows, double max_shift_px, std::vector<double>& sigmas,
+                std::vector<double>& contrasts) {
     int refined = 0;
+    contrasts.assign(start.size(), std::numeric_limits<double>::quiet_NaN());
     auto at = [&](int i, int j) { return start[static_cast<std::size_t>(j * columns + i)]; };
     for (int j = 0; j < rows; ++j)
         for (int i = 0; i < columns; ++i) {
@@ -414,16 +456,16 @@ int refine_pass(const Image<float>& texture, const std::vector<Vec2>& start,
                 continue;
             const double tu = std::atan2(a[1] - am[1], a[0] - am[0]);
             const double tv = std::atan2(b[1] - bm[1], b[0] - bm[0]);
-            const double ku = bends ? bends->ku[index] : 0.0;
-            const double kv = bends ? bends->kv[index] : 0.0;
+            const CornerPrior prior = priors ? (*priors)[index] : CornerPrior{};
             Vec2 out{};
-            double sigma = 0;
-            if (!fit_corner_model(texture, c, tu, tv, ku, kv, radius, out, sigma))
+            double sigma = 0, contrast = 0;
+            if (!fit_corner_model(texture, c, tu, tv, prior, radius, out, sigma, contrast))
                 continue;
             if (dist(out, c) > max_shift_px)
                 continue;
             points[index] = out;
             sigmas.push_back(sigma);
+            contrasts[index] = contrast;
             ++refined;
         }
     return refined;
@@ -434,8 +476,9 @@ int refine_pass(const Image<float>& texture, const std::vector<Vec2>& start,
 int refine_corners_model(const Image<float>& texture, std::vector<Vec2>& points, int columns,
                          int rows, double max_shift_px) {
     const std::vector<Vec2> start = points;
-    std::vector<double> sigmas;
-    int refined = refine_pass(texture, start, nullptr, points, columns, rows, max_shift_px, sigmas);
+    std::vector<double> sigmas, contrasts;
+    int refined = refine_pass(texture, start, nullptr, points, columns, rows, max_shift_px,
+                              sigmas, contrasts);
     if (sigmas.empty())
         return refined;
     std::nth_element(sigmas.begin(),
@@ -456,16 +499,20 @@ int refine_corners_model(const Image<float>& texture, std::vector<Vec2>& points,
         image = &blurred;
         points = start;
         sigmas.clear();
-        refine_pass(blurred, start, nullptr, points, columns, rows, max_shift_px, sigmas);
+        refine_pass(blurred, start, nullptr, points, columns, rows, max_shift_px, sigmas,
+                    contrasts);
     }
     // Again with the edges bent as the refined corners' rows and columns
-    // bend: straight edges move corners far from the image centre by a few
-    // thousandths of a pixel towards it under barrel distortion (a focal
-    // length 30 ppm long, measured in simulation).
-    const EdgeBends bends = measure_bends(points, columns, rows);
+    // bend, and the contrast tilted as the neighbours' contrasts say: straight
+    // edges move corners far from the image centre by a few thousandths of a
+    // pixel towards it under barrel distortion (a focal length 30 ppm long),
+    // and a shading gradient moves every corner a little the same way
+    // (measured in simulation).
+    const std::vector<CornerPrior> priors = measure_priors(points, contrasts, columns, rows);
     const std::vector<Vec2> first = points;
     sigmas.clear();
-    return refine_pass(*image, first, &bends, points, columns, rows, max_shift_px, sigmas);
+    return refine_pass(*image, first, &priors, points, columns, rows, max_shift_px, sigmas,
+                       contrasts);
 }
 
 std::vector<CornerTexture> corner_textures(const CaptureSet& capture, const DecodeResult& decoded) {
