@@ -477,8 +477,8 @@ int refine_corners_model(const Image<float>& texture, std::vector<Vec2>& points,
                          int rows, double max_shift_px) {
     const std::vector<Vec2> start = points;
     std::vector<double> sigmas, contrasts;
-    int refined = refine_pass(texture, start, nullptr, points, columns, rows, max_shift_px,
-                              sigmas, contrasts);
+    int refined = refine_pass(texture, start, nullptr, points, columns, rows, max_shift_px, sigmas,
+                              contrasts);
     if (sigmas.empty())
         return refined;
     std::nth_element(sigmas.begin(),
