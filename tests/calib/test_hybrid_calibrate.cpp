@@ -152,16 +152,16 @@ double median(const Image<float>& image) {
 // Measured (Release; noise-free scans, depth error along the ray, mm):
 //                       inclined plane          sphere        cylinder
 //                       vs truth  plane fit     vs truth      vs truth
-//   SV                  0.039     0.027         0.0300        0.0310
-//   rational (default)  0.031     0.0074        0.0301        0.0304
-//   ray (cubic)         0.033     0.018         0.0235        0.0359
-//   polynomial (paper)  0.033     0.018         0.0235        0.0358
-// The joint SV calibration from 400 x 300 images leaves about -0.028 mm of
+//   SV                  0.035     0.031         0.0196        0.0205
+//   rational (default)  0.020     0.0075        0.0194        0.0201
+//   ray (cubic)         0.024     0.018         0.0174        0.0259
+//   polynomial (paper)  0.024     0.019         0.0174        0.0259
+// The joint SV calibration from 400 x 300 images leaves about -0.016 mm of
 // depth offset: planes stay planes under such an error, so the SV-placed
 // plane poses carry it into every hybrid table (the mean error is the same
 // for all; the checkerboard procedure's tests show it removed). What the
 // hybrid model removes is the unmodelled part: the plane's flatness improves
-// 3.7x with the rational model; a cubic's own fit error (median 0.019 mm)
+// 4x with the rational model; a cubic's own fit error (median 0.019 mm)
 // keeps it from halving.
 TEST(HybridCalibrate, RationalModelFlattensThePlaneAndIsNoWorseAgainstTruth) {
     struct Row {

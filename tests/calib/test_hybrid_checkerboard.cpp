@@ -58,6 +58,7 @@ struct Session {
     TempDir dir;
     fs::path session;
     calib::StereoCalibration calibration; // ours
+    double focal_sigma = 0;               // its camera focal length's reported sigma, relative
     calib::StereoCalibration joint;       // the paper's procedure on the same session
 };
 
@@ -73,7 +74,9 @@ Session& setup() {
                            standard_sequence("gray-xy", out->rig.projector_size), options);
         calib::StereoSessionOptions ours;
         ours.compare_skew = false;
-        out->calibration = calib::calibrate_session(out->session, ours).stereo.calibration;
+        const calib::StereoResult stereo = calib::calibrate_session(out->session, ours).stereo;
+        out->calibration = stereo.calibration;
+        out->focal_sigma = stereo.camera_sigma.fu / stereo.calibration.camera.fu;
         calib::StereoSessionOptions joint = ours;
         joint.stereo.procedure = calib::StereoProcedure::joint;
         joint.stereo.camera_grid = {};
@@ -180,12 +183,16 @@ TEST(HybridCheckerboard, OneSessionGivesATableTrueInShapeAndCloseToItsStereoMode
         // Pixels the boards did not reach get no point from the table.
         EXPECT_GT(double(sc->table.n), 0.95 * double(sc->sv.n));
         // Against the paper's joint calibration of the same session, the
-        // error against the truth is less than a third, its shape less than
-        // half. (At 400 x 300 what is left is mostly the calibration's noise:
-        // focal lengths to about 100 ppm, 0.03 mm of depth at 480 mm.)
-        EXPECT_LT(sc->table.rms, 0.33 * sc->joint.rms);
+        // shape of the error is less than half.
         EXPECT_LT(sc->table.shape, 0.5 * sc->joint.shape);
+        // Its depth offset is what the calibration's noise allows at 400 x
+        // 300: within three of its focal length's reported sigmas (87 ppm
+        // here: 0.13 mm at 480 mm; measured -0.07 to -0.08 mm; the joint
+        // calibration's, which its lens-defect bias adds to: +0.07 to +0.20).
+        EXPECT_LT(std::fabs(sc->table.mean), 3 * s.focal_sigma * 480.0);
     }
+    std::printf("depth offset allowed by the calibration's focal sigma (%.1f ppm): %.4f mm\n",
+                1e6 * s.focal_sigma, 3 * s.focal_sigma * 480.0);
     // The lens defect bends the joint SV's plane; ours stays flat.
     EXPECT_LT(plane.table.flatness, 0.012);
     EXPECT_GT(plane.joint.flatness, 0.05);

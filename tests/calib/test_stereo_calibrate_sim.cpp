@@ -264,10 +264,10 @@ void expect_acceptance(const Acceptance& a, const sim::Rig& rig) {
     EXPECT_LE(c.camera_rms, 0.1);
     EXPECT_LE(c.projector_rms, 0.1);
     // The camera against the truth: focal lengths and principal point within
-    // three of their own reported sigmas (at 800 x 600 about 0.037 and
+    // three of their own reported sigmas (at 800 x 600 about 0.035 and
     // 0.11 px), and over the volume no farther off than the principal
     // point's three-sigma circle. The over-volume error is mostly the
-    // principal point's (measured 0.09 px at 800 x 600, under one sigma): a
+    // principal point's (measured 0.08 px at 800 x 600, under one sigma): a
     // fixed 0.1 px bound would sit inside the calibration's own noise.
     const LensModel& sigma = a.result.stereo.camera_sigma;
     EXPECT_LE(std::fabs(c.camera.fu - rig.camera.fu), 3 * sigma.fu);
