@@ -7,6 +7,8 @@
 // the corner-model fit is within ~0.007 px RMS (0.03 px max) of the true
 // corners, cornerSubPix alone ~0.06 px RMS (0.12 px max).
 
+#include "test_support.hpp"
+
 #include "fpp/calib/corners.hpp"
 #include "fpp/decoder.hpp"
 #include "fpp/sequences.hpp"
@@ -18,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <variant>
 
 namespace {
 
@@ -92,6 +95,46 @@ TEST(Corners, ModelFitMatchesTrueCornersAndBeatsCornerSubPix) {
     EXPECT_LT(rms_model, 0.012);
     EXPECT_LT(max_model, 0.05);
     EXPECT_GT(rms_subpix, 3 * rms_model);
+}
+
+// On the camera-defect rig at full size, OpenCV's classic finder leaves corner
+// (0, 6) of pose 14 of seed 3's session 15 px from the corner (cornerSubPix
+// stuck on another feature); the neighbours' prediction puts it back.
+TEST(Corners, ACornerFarFromWhereItsNeighboursPutItIsFoundAgain) {
+    const sim::Rig rig =
+        sim::load_rig(fpp::test::source_dir() / "board" / "sim" / "rig-camera-defect.yaml");
+    sim::SessionOptions options;
+    options.poses = 30;
+    options.seed = 3;
+    const int k = 13;
+    const sim::Pose pose = sim::session_poses(rig, options).at(k);
+    const sim::Checkerboard board(pose, options.board);
+    // The session's white frame of that pose, with its noise (as write_session
+    // seeds it).
+    int white = 0;
+    for (const PatternBlock& block : standard_sequence("gray-xy", rig.projector_size)) {
+        if (std::holds_alternative<WhiteBlock>(block))
+            break;
+        white += frame_count(block);
+    }
+    const std::uint64_t seed = options.seed * 1000003ULL + static_cast<std::uint64_t>(k);
+    const sim::Renderer renderer(rig, sim::session_scene(options, pose));
+    const Frame frame = renderer.render(Image<std::uint8_t>(rig.projector_size, 1, 255),
+                                        sim::Renderer::frame_seed(seed, white));
+    Image<float> image(frame.size());
+    for (std::size_t i = 0; i < image.pixel_count(); ++i)
+        image.data()[i] = static_cast<float>(frame.u8.data()[i]);
+    const std::vector<CornerTexture> texture{{std::move(image), "white"}};
+    calib::CornerFinderOptions subpix;
+    subpix.refinement = calib::CornerRefinement::subpix;
+    for (const calib::CornerFinderOptions& o : {subpix, calib::CornerFinderOptions{}}) {
+        const auto found = calib::find_checkerboard(texture, 11, 8, o);
+        ASSERT_TRUE(found.found) << found.failure;
+        EXPECT_EQ(found.finder, "classic");
+        const Errors e = corner_errors(rig, board, found.points);
+        std::cout << "corner error vs truth: " << e.rms << " px RMS, max " << e.max << "\n";
+        EXPECT_LT(e.max, o.refinement == calib::CornerRefinement::model ? 0.05 : 0.3);
+    }
 }
 
 // Corner 0 of the detection must be the board's own corner (0, 0) whatever

@@ -635,6 +635,71 @@ bool canonical_corner_order(std::vector<Vec2>& p, int columns, int rows,
     return origin_black_evidence(p, columns, rows, texture) >= 0;
 }
 
+namespace {
+
+// Where the neighbours put corner (i, j): the component-wise median of the
+// midpoints of its row and column neighbours and of the extrapolations from
+// two neighbours on each side (perspective moves a midpoint by a few
+// hundredths of the spacing; one bad neighbour cannot carry the median).
+bool predicted_corner(const std::vector<cv::Point2f>& p, int columns, int rows, int i, int j,
+                      cv::Point2f& out) {
+    auto at = [&](int ii, int jj) { return p[static_cast<std::size_t>(jj * columns + ii)]; };
+    auto inside = [&](int ii, int jj) { return ii >= 0 && jj >= 0 && ii < columns && jj < rows; };
+    std::vector<float> xs, ys;
+    auto add = [&](cv::Point2f q) {
+        xs.push_back(q.x);
+        ys.push_back(q.y);
+    };
+    for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{0, 1}}) {
+        if (inside(i - di, j - dj) && inside(i + di, j + dj))
+            add(0.5f * (at(i - di, j - dj) + at(i + di, j + dj)));
+        for (const int sign : {-1, 1})
+            if (inside(i + 2 * sign * di, j + 2 * sign * dj))
+                add(2.0f * at(i + sign * di, j + sign * dj) -
+                    at(i + 2 * sign * di, j + 2 * sign * dj));
+    }
+    if (xs.size() < 3)
+        return false;
+    auto median = [](std::vector<float>& v) {
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+        return v[v.size() / 2];
+    };
+    out = {median(xs), median(ys)};
+    return true;
+}
+
+// OpenCV's finders now and then leave a corner far from where its
+// neighbours put it (cornerSubPix stuck on the wrong feature: 15 px off in
+// one simulated pose). Such a corner is placed where its neighbours predict
+// and refined again; false if one still disagrees, naming it in `why`.
+bool repair_outlying_corners(const cv::Mat& texture, std::vector<cv::Point2f>& found, int columns,
+                             int rows, double spacing, int half, std::string& why) {
+    const double tolerance = std::max(2.0, 0.1 * spacing);
+    for (int j = 0; j < rows; ++j)
+        for (int i = 0; i < columns; ++i) {
+            cv::Point2f expected;
+            if (!predicted_corner(found, columns, rows, i, j, expected))
+                continue;
+            cv::Point2f& corner = found[static_cast<std::size_t>(j * columns + i)];
+            if (cv::norm(corner - expected) <= tolerance)
+                continue;
+            std::vector<cv::Point2f> one{expected};
+            cv::cornerSubPix(
+                texture, one, cv::Size(half, half), cv::Size(-1, -1),
+                cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+            if (!(cv::norm(one[0] - expected) <= tolerance)) {
+                why = "corner (" + std::to_string(i) + ", " + std::to_string(j) + ") is " +
+                      std::to_string(cv::norm(corner - expected)) +
+                      " px from where its neighbours put it";
+                return false;
+            }
+            corner = one[0];
+        }
+    return true;
+}
+
+} // namespace
+
 CheckerboardCorners find_checkerboard(const std::vector<CornerTexture>& textures, int columns,
                                       int rows, const CornerFinderOptions& options) {
     CheckerboardCorners result;
@@ -677,6 +742,11 @@ CheckerboardCorners find_checkerboard(const std::vector<CornerTexture>& textures
             cv::cornerSubPix(
                 texture_mat, found, cv::Size(half, half), cv::Size(-1, -1),
                 cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+            std::string why;
+            if (!repair_outlying_corners(texture_mat, found, columns, rows, median, half, why)) {
+                tried += " (" + why + ")";
+                continue;
+            }
             for (std::size_t k = 0; k < found.size(); ++k)
                 points[k] = {static_cast<double>(found[k].x), static_cast<double>(found[k].y)};
             bool finite = true;

@@ -70,7 +70,11 @@ struct CheckerboardCorners {
 
 // Finds, refines and orders the inner corners. Tries the classic finder then
 // the sector-based one on each texture in turn; the corners are refined on
-// the first (preferred) texture whichever one the board was found on.
+// the first (preferred) texture whichever one the board was found on. A
+// corner farther than a tenth of the spacing (at least 2 px) from where its
+// neighbours put it is sought again there; if it is still off, that
+// detection is refused and the next finder or texture tried (the failure
+// names the corner).
 CheckerboardCorners find_checkerboard(const std::vector<CornerTexture>& textures, int columns,
                                       int rows, const CornerFinderOptions& options = {});
 
@@ -81,17 +85,21 @@ bool canonical_corner_order(std::vector<Vec2>& points, int columns, int rows,
                             const Image<float>& texture);
 
 // Refines corners (ordering above) by fitting, in a disc around each corner,
-//   I(x) = a0 + ax dx + ay dy + b erf(d1 / (sqrt(2) s)) erf(d2 / (sqrt(2) s)),
-// d1, d2 the signed distances of x to the two edge lines through the corner
+//   I(x) = a0 + ax dx + ay dy
+//          + b (1 + gx dx + gy dy) erf(d1 / (sqrt(2) s)) erf(d2 / (sqrt(2) s)),
+// d1, d2 the signed distances of x to the two edges through the corner
 // (free directions: perspective shears the corner), s the blur, a0 ax ay b
 // the shading: the maximum-likelihood corner under white noise, using every
-// pixel of the four squares' inner parts rather than gradients alone. A fit
-// that fails or moves a corner by more than `max_shift_px` leaves it as it was.
-// Sharp images (median fitted blur below 0.4 px: edges are then box-sampled
-// ramps rather than erf profiles, and the fit of nearly axis-aligned edges
-// jumps with the sub-pixel phase) are fitted again after a 0.5 px Gaussian
-// pre-blur, which keeps the corner where it is (the pattern is symmetric
-// about it).
+// pixel of the four squares' inner parts rather than gradients alone. A first
+// pass takes the edges straight (d = l) and the contrast flat (g = 0); a
+// second bends each edge as the cubic through its row or column of corners
+// bends (d = l + k w^2, w along the edge) and tilts the contrast as the
+// neighbours' fitted contrasts say. A fit that fails or moves a corner by
+// more than `max_shift_px` leaves it as it was. Sharp images (median fitted
+// blur below 0.4 px: edges are then box-sampled ramps rather than erf
+// profiles, and the fit of nearly axis-aligned edges jumps with the
+// sub-pixel phase) are fitted after a 0.5 px Gaussian pre-blur, which keeps
+// the corner where it is (the pattern is symmetric about it).
 // Returns the number of corners refined.
 int refine_corners_model(const Image<float>& texture, std::vector<Vec2>& points, int columns,
                          int rows, double max_shift_px = 2.0);
