@@ -59,6 +59,30 @@ TEST(SimSession, CheckerboardPosesSpreadThroughTheVolumeAndStayVisible) {
     EXPECT_NE(sim::session_poses(rig, options)[7].centre, poses[7].centre);
 }
 
+// With the projector above the camera (rig-decentred-projector.yaml) the
+// fields meet below the camera's axis near the rig: boards that do not fit
+// about the camera's axis are centred on the common field instead (before,
+// the session was refused at 412 mm).
+TEST(SimSession, BoardsAreCentredOnTheCommonFieldWhenTheCameraAxisIsOffIt) {
+    const sim::Rig rig = sim::load_rig(sim::decentred_projector_rig_path());
+    sim::SessionOptions options;
+    options.poses = 30;
+    options.seed = 3;
+    std::vector<sim::Pose> poses;
+    ASSERT_NO_THROW(poses = sim::session_poses(rig, options));
+    ASSERT_EQ(poses.size(), 30u);
+    double zmin = 1e9, zmax = 0;
+    for (const sim::Pose& p : poses) {
+        EXPECT_TRUE(
+            sim::checkerboard_fully_visible(rig, options.board, p,
+                                            sim::checkerboard_margin_px(rig, options)));
+        zmin = std::min(zmin, p.centre[2]);
+        zmax = std::max(zmax, p.centre[2]);
+    }
+    EXPECT_LT(zmin, 415);
+    EXPECT_GT(zmax, 545);
+}
+
 TEST(SimSession, PlanePosesCoverTheCameraFieldThroughTheDepthRange) {
     const sim::Rig rig = sim::Rig::paper();
     sim::SessionOptions options;
