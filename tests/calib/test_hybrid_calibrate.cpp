@@ -7,12 +7,13 @@
 // camera binned 4x (400 x 300) to keep the test fast: a checkerboard
 // session (15 poses, gray-xy) calibrated by the paper's joint SV procedure
 // (no correction grids), then a plane session (20 poses, vertical fringes)
-// fitted with each hybrid model on that SV calibration. Scans of the inclined plane, the sphere and the cylinder are
-// reconstructed with SV and with each table and compared with the true
-// surface pixel by pixel: the depth error Z - Z_true along the pixel's ray.
-// The scans are noise-free (no read or shot noise): noise enters SV and
-// hybrid alike, and without it the figures are the models' own errors.
+// fitted with each hybrid model on that SV calibration. Scans of the inclined plane, the sphere and
+// the cylinder are reconstructed with SV and with each table and compared with the true surface
+// pixel by pixel: the depth error Z - Z_true along the pixel's ray. The scans are noise-free (no
+// read or shot noise): noise enters SV and hybrid alike, and without it the figures are the models'
+// own errors.
 
+#include "depth_error.hpp"
 #include "test_support.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
@@ -34,9 +35,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <vector>
 #include <cstdio>
 #include <memory>
+#include <vector>
 
 namespace fpp::test {
 namespace {
@@ -78,40 +79,8 @@ Setup& setup() {
     return *s;
 }
 
-// Depth error along the camera ray against the true surface, over pixels
-// where both have a point.
-struct DepthError {
-    double rms = 0, mean = 0;
-    std::size_t n = 0;
-    double form = 0;     // RMS about the mean (the error once the offset is removed)
-    double flatness = 0; // RMS residual of a least-squares plane through the points
-};
-
-DepthError depth_error(const Image<float>& xyz, const Image<float>& truth) {
-    DepthError e;
-    double sum = 0, sum2 = 0;
-    for (std::size_t i = 0; i < truth.pixel_count(); ++i) {
-        const double z = double(xyz.data()[3 * i + 2]), zt = double(truth.data()[3 * i + 2]);
-        if (!std::isfinite(z) || !std::isfinite(zt))
-            continue;
-        sum += z - zt;
-        sum2 += (z - zt) * (z - zt);
-        ++e.n;
-    }
-    if (e.n) {
-        e.mean = sum / double(e.n);
-        e.rms = std::sqrt(sum2 / double(e.n));
-        e.form = std::sqrt(std::max(0.0, e.rms * e.rms - e.mean * e.mean));
-    }
-    std::vector<Vec3> points;
-    for (std::size_t i = 0; i < truth.pixel_count(); ++i)
-        if (std::isfinite(xyz.data()[3 * i + 2]))
-            points.push_back({double(xyz.data()[3 * i]), double(xyz.data()[3 * i + 1]),
-                              double(xyz.data()[3 * i + 2])});
-    if (points.size() > 3)
-        e.flatness = calib::fit_plane(points).fit.rms;
-    return e;
-}
+using fpp::test::depth_error;
+using fpp::test::DepthError;
 
 struct Comparison {
     DepthError sv, hybrid;
@@ -190,14 +159,14 @@ TEST(HybridCalibrate, RationalModelFlattensThePlaneAndIsNoWorseAgainstTruth) {
         Row row{model, compare("inclined-plane", r.table, 0.0, setup().calibration),
                 compare("sphere", r.table, 0.0, setup().calibration),
                 compare("cylinder", r.table, 0.0, setup().calibration), median(r.rms_z)};
-        for (const auto& [name, c] : {std::pair<const char*, const Comparison*>{"plane", &row.plane},
-                                      {"sphere", &row.sphere},
-                                      {"cylinder", &row.cylinder}}) {
+        for (const auto& [name, c] :
+             {std::pair<const char*, const Comparison*>{"plane", &row.plane},
+              {"sphere", &row.sphere},
+              {"cylinder", &row.cylinder}}) {
             std::printf("%s %s: SV %.4f mm (mean %.4f, plane fit %.4f), hybrid %.4f mm (mean "
                         "%.4f, plane fit %.4f), %zu / %zu px\n",
                         to_string(model), name, c->sv.rms, c->sv.mean, c->sv.flatness,
-                        c->hybrid.rms, c->hybrid.mean, c->hybrid.flatness, c->sv.n,
-                        c->hybrid.n);
+                        c->hybrid.rms, c->hybrid.mean, c->hybrid.flatness, c->sv.n, c->hybrid.n);
             // Pixels outside a table's calibrated phase range lose their point.
             EXPECT_GT(double(c->hybrid.n), 0.98 * double(c->sv.n)) << name;
         }

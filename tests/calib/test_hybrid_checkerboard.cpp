@@ -23,10 +23,10 @@
 // The refusals run on a small session with the rig's exact model as its
 // calibration.
 
+#include "depth_error.hpp"
 #include "test_support.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
-#include "fpp/calib/shape_fit.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/capture_set.hpp"
@@ -87,37 +87,8 @@ Session& setup() {
     return *s;
 }
 
-struct Error {
-    double rms = 0, mean = 0, shape = 0; // shape: RMS about the mean
-    double flatness = 0; // RMS residual of a least-squares plane through the points
-    std::size_t n = 0;
-};
-
-Error depth_error(const PointCloud& cloud, const Image<float>& truth) {
-    Error e;
-    double sum = 0, sum2 = 0;
-    for (std::size_t i = 0; i < truth.pixel_count(); ++i) {
-        const double z = double(cloud.xyz.data()[3 * i + 2]), zt = double(truth.data()[3 * i + 2]);
-        if (!std::isfinite(z) || !std::isfinite(zt))
-            continue;
-        sum += z - zt;
-        sum2 += (z - zt) * (z - zt);
-        ++e.n;
-    }
-    if (e.n) {
-        e.mean = sum / double(e.n);
-        e.rms = std::sqrt(sum2 / double(e.n));
-        e.shape = std::sqrt(std::max(0.0, e.rms * e.rms - e.mean * e.mean));
-    }
-    std::vector<Vec3> points;
-    for (std::size_t i = 0; i < truth.pixel_count(); ++i)
-        if (std::isfinite(cloud.xyz.data()[3 * i + 2]))
-            points.push_back({double(cloud.xyz.data()[3 * i]), double(cloud.xyz.data()[3 * i + 1]),
-                              double(cloud.xyz.data()[3 * i + 2])});
-    if (points.size() > 3)
-        e.flatness = calib::fit_plane(points).fit.rms;
-    return e;
-}
+using fpp::test::depth_error;
+using Error = fpp::test::DepthError;
 
 struct Scan {
     Error joint, sv, table;
@@ -139,8 +110,8 @@ Scan scan(const std::string& scene, const CoefficientTable& table) {
     calib::SvReconstructor(s.joint).reconstruct(decoded, calib::ReconstructAxes::x, joint);
     calib::SvReconstructor(s.calibration).reconstruct(decoded, calib::ReconstructAxes::x, sv);
     apply_table(table, decoded.proj_x, hybrid);
-    Scan out{depth_error(joint, capture.truth_xyz), depth_error(sv, capture.truth_xyz),
-             depth_error(hybrid, capture.truth_xyz)};
+    Scan out{depth_error(joint.xyz, capture.truth_xyz), depth_error(sv.xyz, capture.truth_xyz),
+             depth_error(hybrid.xyz, capture.truth_xyz)};
     std::printf("%s: joint SV %.4f (mean %+.4f, shape %.4f, plane fit %.4f), our SV %.4f (mean "
                 "%+.4f, shape %.4f, plane fit %.4f), table %.4f (mean %+.4f, shape %.4f, plane "
                 "fit %.4f), %zu / %zu px\n",
@@ -201,7 +172,8 @@ TEST(HybridCheckerboard, OneSessionGivesATableTrueInShapeAndCloseToItsStereoMode
     // model between them; the model's alone are the stereo model.
     calib::HybridOptions options;
     options.samples = calib::HybridSamples::boards;
-    const calib::HybridResult boards = calib::calibrate_hybrid(s.session, s.calibration, 1, options);
+    const calib::HybridResult boards =
+        calib::calibrate_hybrid(s.session, s.calibration, 1, options);
     options.samples = calib::HybridSamples::model;
     const calib::HybridResult model = calib::calibrate_hybrid(s.session, s.calibration, 1, options);
     EXPECT_EQ(boards.samples, calib::HybridSamples::boards);
@@ -213,7 +185,8 @@ TEST(HybridCheckerboard, OneSessionGivesATableTrueInShapeAndCloseToItsStereoMode
     // samples map says how many they had.
     options.samples = calib::HybridSamples::boards_and_model;
     options.min_board_samples = 20;
-    const calib::HybridResult sparse = calib::calibrate_hybrid(s.session, s.calibration, 1, options);
+    const calib::HybridResult sparse =
+        calib::calibrate_hybrid(s.session, s.calibration, 1, options);
     EXPECT_GT(sparse.pixels_too_few_poses, sparse.pose_count.pixel_count() / 10);
     std::size_t checked = 0, with_model = 0;
     for (int y = 0; y < sparse.pose_count.height(); ++y)
@@ -292,8 +265,8 @@ TEST(HybridCheckerboard, BadPosesAreRejectedWithTheirReasons) {
     const Sequence sequence = standard_sequence("gray-xy", s.rig.projector_size);
     // No board: a plain wall.
     sim::Scene wall;
-    wall.add(std::make_unique<sim::Plane>(sim::Pose{{0, 0, 500}, {1, 0, 0, 0, 1, 0, 0, 0, 1}},
-                                          600, 500, 0.8));
+    wall.add(std::make_unique<sim::Plane>(sim::Pose{{0, 0, 500}, {1, 0, 0, 0, 1, 0, 0, 0, 1}}, 600,
+                                          500, 0.8));
     sim::write_simulated_capture(session / "pose-07-wall", sim::simulate(s.rig, wall, sequence, 1));
     // The board in view, the projector dark but for a strip: the phase
     // frames of pose-01 with three quarters of the image blacked out.

@@ -58,14 +58,31 @@ const Made& made() {
     return *m;
 }
 
+// A simulated scan of the inclined plane (camera binned 4 x 4) reconstructed
+// with `table` into `cloud`; the reconstruct run, or the simulate run if that
+// failed.
+ToolRun scan_inclined_plane(const TempDir& dir, const fs::path& table, const fs::path& cloud) {
+    const fs::path scan = dir / "scan";
+    const ToolRun sim = run_calib(
+        "simulate --rig " +
+            shell_quote(fpp::test::source_dir() / "board/sim/paper-rig-effects.yaml") +
+            " --scene inclined-plane --sequence gray-x --binning 4 --out " + shell_quote(scan),
+        dir);
+    if (sim.exit_code != 0)
+        return sim;
+    return run_calib("reconstruct " + shell_quote(scan) + " --table " + shell_quote(table) +
+                         " --out " + shell_quote(cloud),
+                     dir);
+}
+
 TEST(CliHybrid, TableFromPlanesReconstructsAScan) {
     const Made& m = made();
     TempDir dir;
     const fs::path table = dir / "table.fpt", report = dir / "report";
-    const ToolRun hybrid = run_calib("hybrid " + shell_quote(m.planes) + " --calib " +
-                                         shell_quote(m.calib) + " --out " + shell_quote(table) +
-                                         " --report " + shell_quote(report),
-                                     dir);
+    const ToolRun hybrid =
+        run_calib("hybrid " + shell_quote(m.planes) + " --calib " + shell_quote(m.calib) +
+                      " --out " + shell_quote(table) + " --report " + shell_quote(report),
+                  dir);
     ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
     EXPECT_TRUE(contains(hybrid.output, "poses: 8 of 8 used")) << hybrid.output;
     EXPECT_TRUE(contains(hybrid.output, "hybrid model: rational")) << hybrid.output;
@@ -76,17 +93,8 @@ TEST(CliHybrid, TableFromPlanesReconstructsAScan) {
                           "fit-rms-z.png", "samples.png", "sigma-z.png", "plane-residuals.png"})
         EXPECT_TRUE(fs::exists(report / f)) << f;
 
-    const fs::path scan = dir / "scan", cloud = dir / "cloud.ply";
-    ASSERT_EQ(run_calib("simulate --rig " + shell_quote(fpp::test::source_dir() /
-                                                        "board/sim/paper-rig-effects.yaml") +
-                            " --scene inclined-plane --sequence gray-x --binning 4 --out " +
-                            shell_quote(scan),
-                        dir)
-                  .exit_code,
-              0);
-    const ToolRun rec = run_calib("reconstruct " + shell_quote(scan) + " --table " +
-                                      shell_quote(table) + " --out " + shell_quote(cloud),
-                                  dir);
+    const fs::path cloud = dir / "cloud.ply";
+    const ToolRun rec = scan_inclined_plane(dir, table, cloud);
     ASSERT_EQ(rec.exit_code, 0) << rec.output;
     EXPECT_TRUE(contains(rec.output, "error against ground truth")) << rec.output;
     const fpp::PlyPoints points = fpp::read_ply(cloud);
@@ -101,10 +109,10 @@ TEST(CliHybrid, TableFromTheCheckerboardSessionReconstructsAScan) {
     const Made& m = made();
     TempDir dir;
     const fs::path table = dir / "table.fpt", report = dir / "report";
-    const ToolRun hybrid = run_calib("hybrid " + shell_quote(m.boards) + " --calib " +
-                                         shell_quote(m.calib) + " --out " + shell_quote(table) +
-                                         " --report " + shell_quote(report),
-                                     dir);
+    const ToolRun hybrid =
+        run_calib("hybrid " + shell_quote(m.boards) + " --calib " + shell_quote(m.calib) +
+                      " --out " + shell_quote(table) + " --report " + shell_quote(report),
+                  dir);
     ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
     EXPECT_TRUE(contains(hybrid.output, "procedure: checkerboards placed by the camera; fitted "
                                         "to boards+model"))
@@ -112,17 +120,8 @@ TEST(CliHybrid, TableFromTheCheckerboardSessionReconstructsAScan) {
     EXPECT_TRUE(contains(hybrid.output, "poses: 10 of 10 used")) << hybrid.output;
     for (const char* f : {"summary.md", "poses.csv", "sv-offsets.png", "samples.png"})
         EXPECT_TRUE(fs::exists(report / f)) << f;
-    const fs::path scan = dir / "scan", cloud = dir / "cloud.ply";
-    ASSERT_EQ(run_calib("simulate --rig " + shell_quote(fpp::test::source_dir() /
-                                                        "board/sim/paper-rig-effects.yaml") +
-                            " --scene inclined-plane --sequence gray-x --binning 4 --out " +
-                            shell_quote(scan),
-                        dir)
-                  .exit_code,
-              0);
-    const ToolRun rec = run_calib("reconstruct " + shell_quote(scan) + " --table " +
-                                      shell_quote(table) + " --out " + shell_quote(cloud),
-                                  dir);
+    const fs::path cloud = dir / "cloud.ply";
+    const ToolRun rec = scan_inclined_plane(dir, table, cloud);
     ASSERT_EQ(rec.exit_code, 0) << rec.output;
     // The boards of 10 poses reach most of the plane.
     EXPECT_GT(fpp::read_ply(cloud).size(), 90000u);
@@ -143,8 +142,8 @@ TEST(CliHybrid, BadInputExitsWithTwoAndWritesNothing) {
         text.replace(at, 15, "square_size: 14");
         std::ofstream(session / "board.yaml") << text;
     }
-    ToolRun run = run_calib("hybrid " + shell_quote(session) + " --calib " +
-                                shell_quote(m.calib) + " --out " + shell_quote(table),
+    ToolRun run = run_calib("hybrid " + shell_quote(session) + " --calib " + shell_quote(m.calib) +
+                                " --out " + shell_quote(table),
                             dir);
     EXPECT_EQ(run.exit_code, 2) << run.output;
     EXPECT_TRUE(contains(run.output, "board.yaml")) << run.output;
@@ -167,11 +166,11 @@ TEST(CliHybrid, BadInputExitsWithTwoAndWritesNothing) {
         f.write(&c, 1);
     }
     const fs::path scan = dir / "scan", cloud = dir / "cloud.ply";
-    ASSERT_EQ(run_calib("simulate --scene plane --sequence gray-x --binning 4 --out " +
-                            shell_quote(scan),
-                        dir)
-                  .exit_code,
-              0);
+    ASSERT_EQ(
+        run_calib("simulate --scene plane --sequence gray-x --binning 4 --out " + shell_quote(scan),
+                  dir)
+            .exit_code,
+        0);
     run = run_calib("reconstruct " + shell_quote(scan) + " --table " + shell_quote(table) +
                         " --out " + shell_quote(cloud),
                     dir);

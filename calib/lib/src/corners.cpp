@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <variant>
@@ -645,10 +646,13 @@ bool predicted_corner(const std::vector<cv::Point2f>& p, int columns, int rows, 
                       cv::Point2f& out) {
     auto at = [&](int ii, int jj) { return p[static_cast<std::size_t>(jj * columns + ii)]; };
     auto inside = [&](int ii, int jj) { return ii >= 0 && jj >= 0 && ii < columns && jj < rows; };
-    std::vector<float> xs, ys;
+    // At most six predictions: a midpoint and two extrapolations per axis.
+    std::array<float, 6> xs{}, ys{};
+    std::size_t count = 0;
     auto add = [&](cv::Point2f q) {
-        xs.push_back(q.x);
-        ys.push_back(q.y);
+        xs[count] = q.x;
+        ys[count] = q.y;
+        ++count;
     };
     for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{0, 1}}) {
         if (inside(i - di, j - dj) && inside(i + di, j + dj))
@@ -658,11 +662,12 @@ bool predicted_corner(const std::vector<cv::Point2f>& p, int columns, int rows, 
                 add(2.0f * at(i + sign * di, j + sign * dj) -
                     at(i + 2 * sign * di, j + 2 * sign * dj));
     }
-    if (xs.size() < 3)
+    if (count < 3)
         return false;
-    auto median = [](std::vector<float>& v) {
-        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-        return v[v.size() / 2];
+    auto median = [count](std::array<float, 6>& v) {
+        const auto middle = v.begin() + static_cast<std::ptrdiff_t>(count / 2);
+        std::nth_element(v.begin(), middle, v.begin() + static_cast<std::ptrdiff_t>(count));
+        return *middle;
     };
     out = {median(xs), median(ys)};
     return true;

@@ -467,8 +467,7 @@ std::vector<HybridResult> fit_hybrid_models(const HybridResult& common,
             // The rational model is exact for rays, as good beyond the boards'
             // depths as between them; a cubic in the column is not (60 mm each
             // side cost it 0.1 mm on the lens-defects rig): only between them.
-            const double margin =
-                model == TableModel::rational ? options.model_depth_margin_mm : 0.0;
+            const double margin = options.depth_margin_mm(model);
             fit.model_samples = [&model_source, margin](int u, int v, double z_near, double z_far,
                                                         double* phase, double* depth,
                                                         int capacity) {

@@ -283,9 +283,8 @@ void Run::calibrate_our_procedures() {
     add_tables(boards, Procedure::boards, "boards", "our procedure");
     for (std::size_t m = first; m < count(); ++m) {
         methods()[m].is_default = methods()[m].model == HybridOptions{}.model;
-        // Cubic models keep to the boards' depth range (no margin beyond
-        // it, see HybridOptions::model_depth_margin_mm): fewer depths.
-        methods()[m].in_common = methods()[m].model == TableModel::rational;
+        // A model that keeps to the boards' depth range reaches fewer depths.
+        methods()[m].in_common = ho.depth_margin_mm(methods()[m].model) > 0;
     }
     // The same session's tables fitted to the boards' samples alone,
     // and to the stereo model's alone, for comparison.

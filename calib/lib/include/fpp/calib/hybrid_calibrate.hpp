@@ -126,6 +126,11 @@ struct HybridOptions {
 
     // Throws std::invalid_argument naming the first bad field.
     void validate() const;
+    // The margin a model's stereo-model samples reach beyond a pixel's boards
+    // (mm): model_depth_margin_mm for the rational model, 0 for the cubics.
+    double depth_margin_mm(TableModel fitted) const {
+        return fitted == TableModel::rational ? model_depth_margin_mm : 0.0;
+    }
 };
 
 struct HybridPose {
