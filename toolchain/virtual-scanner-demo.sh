@@ -4,7 +4,7 @@
 #      board at 30 poses (capture mode, one scan per pose);
 #   2. fpp-calib calibrates the camera-projector pair (stereo, the camera
 #      first) and fits the hybrid coefficient table from the same session
-#      (each board placed by the camera);
+#      (each board placed by the camera), in one command (`calibrate`);
 #   3. fpp-scanner loads the table and scans the composite scene (a button
 #      press), writing the point cloud;
 #   4. fpp-calib compares the cloud with the scene's ground truth.
@@ -29,9 +29,9 @@ echo "== 1. recording the calibration session with fpp-scanner (capture mode)"
   --store "$out/session" > /dev/null 2>> "$log"
 
 echo "== 2. calibrating with fpp-calib: stereo, then the hybrid table, from the same session"
-"$calib" stereo "$out/session" --out "$out/calib.yaml" --report "$out/stereo-report" 2>> "$log" | tail -n 3
-"$calib" hybrid "$out/session" --calib "$out/calib.yaml" --out "$out/table.fpt" \
-  --report "$out/hybrid-report" 2>> "$log" | tail -n 3
+"$calib" calibrate "$out/session" --out "$out/calib.yaml" --table "$out/table.fpt" \
+  --stereo-report "$out/stereo-report" --hybrid-report "$out/hybrid-report" 2>> "$log" \
+  | grep -E "^(calibrated from|wrote|pixels modelled|poses:)"
 
 echo "== 3. a scan on fpp-scanner with that table"
 scan="$("$scanner" --board "$root/board/sim.yaml" --once --store "$out/scans" --table "$out/table.fpt" 2>> "$log")"

@@ -2,11 +2,11 @@
 //                         [--model rational|ray|polynomial] [--min-poses N]
 //                         [--samples boards+model|boards|model]
 
+#include "calibration_outputs.hpp"
 #include "cli_util.hpp"
 #include "commands.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
-#include "fpp/calib/hybrid_report.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
@@ -32,11 +32,8 @@ struct HybridArgs {
 
 int run_hybrid(const HybridArgs& args) {
     const std::filesystem::path out = args.out;
-    if (std::filesystem::is_directory(out))
-        throw InputError(out, "", "is a folder; --out names the table file to write");
-    if (!args.report.empty() && !report_folder_writable(args.report))
-        throw InputError(args.report, "",
-                         "exists and is not a hybrid calibration report; choose another folder");
+    check_output_file(out, "--out names the table file to write");
+    check_report_folder(args.report, "hybrid calibration");
     const StereoCalibration calibration =
         load_calibration(args.calib, parse_calibration_format(args.calib_format));
     const std::string calib_bytes = yaml_fields::read_text_file(args.calib);
@@ -51,14 +48,7 @@ int run_hybrid(const HybridArgs& args) {
     options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
     const HybridResult result = calibrate_hybrid(
         args.session, calibration, fnv1a64(calib_bytes.data(), calib_bytes.size()), options);
-    if (!args.report.empty()) {
-        std::cerr << "writing the report to " << args.report << "\n";
-        write_hybrid_report(args.report, result);
-    }
-    write_table(out, result.table);
-    std::cerr << "time per stage (s, summed over the threads running it): "
-              << result.time_split.summary() << "\n";
-    std::cout << result.summary() << "wrote " << out.string() << "\n";
+    write_hybrid_outputs(result, out, args.report);
     return 0;
 }
 } // namespace

@@ -1,12 +1,12 @@
 // fpp-calib stereo SESSION --out calib.yaml [--report DIR] [--drop-outliers]
 //                          [--corner-method poly|bilinear|homography] [--no-skew]
-//                          [--procedure camera-first|joint] [--camera-grid CxR]
-//                          [--projector-grid CxR]
+//                          [--compare-skew] [--procedure camera-first|joint]
+//                          [--camera-grid CxR] [--projector-grid CxR]
 
+#include "calibration_outputs.hpp"
 #include "cli_util.hpp"
 #include "commands.hpp"
 
-#include "fpp/calib/calibration_report.hpp"
 #include "fpp/calib/held_out_check.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/stereo_session.hpp"
@@ -14,7 +14,6 @@
 
 #include <cstdio>
 #include <optional>
-#include <iomanip>
 #include <iostream>
 #include <memory>
 
@@ -28,6 +27,7 @@ struct StereoArgs {
     std::string corner_method = "poly";
     bool drop_outliers = false;
     bool no_skew = false;
+    bool compare_skew = false;
     bool held_out = false;
     std::string procedure = "camera-first";
     std::string camera_grid = "12x9";
@@ -52,15 +52,13 @@ int run_stereo(const StereoArgs& args) {
     // Output locations are checked before the work, so that bad arguments
     // cost nothing and nothing is written on failure.
     const std::filesystem::path out = args.out;
-    if (std::filesystem::is_directory(out))
-        throw InputError(out, "", "is a folder; --out names the calibration file to write");
-    if (!args.report.empty() && !report_folder_writable(args.report))
-        throw InputError(args.report, "",
-                         "exists and is not a calibration report; choose another --report folder");
+    check_output_file(out, "--out names the calibration file to write");
+    check_report_folder(args.report, "calibration");
 
     StereoSessionOptions options;
     options.corners.method = corner_method_from_string(args.corner_method);
     options.stereo.skew = !args.no_skew;
+    options.compare_skew = args.compare_skew;
     options.stereo.drop_outliers = args.drop_outliers;
     options.stereo.procedure = parse_stereo_procedure(args.procedure);
     options.stereo.camera_grid = parse_grid(args.camera_grid, "--camera-grid");
@@ -82,38 +80,7 @@ int run_stereo(const StereoArgs& args) {
         held_out = check_held_out(result, options);
         std::cout << held_out->summary();
     }
-    if (!args.report.empty()) {
-        std::cerr << "writing the report to " << args.report << "\n";
-        write_calibration_report(args.report, result, held_out ? &*held_out : nullptr);
-    }
-    StereoCalibration calibration = s.calibration;
-    // Every pose of the session in order; skipped ones with their reason.
-    calibration.poses.clear();
-    std::size_t next = 0;
-    for (const SessionPose& p : result.poses) {
-        if (p.usable) {
-            calibration.poses.push_back(s.calibration.poses.at(next++));
-            continue;
-        }
-        PoseResidual r;
-        r.name = p.name;
-        r.used = false;
-        r.note = "skipped: " + p.skip_reason;
-        calibration.poses.push_back(r);
-    }
-    save_calibration(out, calibration);
-    std::cerr << "time per stage (s, summed over the threads running it): "
-              << result.time_split.summary() << "\n";
-
-    std::cout << std::fixed << std::setprecision(4) << "calibrated from "
-              << result.calibrated.size() << " of " << result.poses.size() << " poses: camera RMS "
-              << s.calibration.camera_rms << " px, projector RMS " << s.calibration.projector_rms
-              << " px (skew " << (s.skew_estimated ? "estimated" : "fixed at 0") << ", corners by "
-              << to_string(result.method) << ")\n"
-              << std::setprecision(2) << "camera fu " << s.calibration.camera.fu << " fv "
-              << s.calibration.camera.fv << ", projector fu " << s.calibration.projector.fu
-              << " fv " << s.calibration.projector.fv << "\n"
-              << "wrote " << out.string() << " in " << result.seconds_total << " s\n";
+    write_stereo_outputs(result, out, args.report, held_out ? &*held_out : nullptr);
     return 0;
 }
 } // namespace
@@ -142,6 +109,8 @@ Action add_stereo_command(CLI::App& app) {
                   "drop poses whose RMS exceeds 2.5 x the median pose RMS and refine again");
     cmd->add_flag("--no-skew", args->no_skew,
                   "fix skew at 0 for both devices (estimated by default)");
+    cmd->add_flag("--compare-skew", args->compare_skew,
+                  "also calibrate with the other skew setting and compare the two in the report");
     cmd->add_flag("--held-out", args->held_out,
                   "also measure the calibration's absolute accuracy on poses it did not see: "
                   "each pose left out in turn, the pair calibrated from the others, the "

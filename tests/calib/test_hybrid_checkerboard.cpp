@@ -73,7 +73,6 @@ Session& setup() {
         sim::write_session(out->session, out->rig,
                            standard_sequence("gray-xy", out->rig.projector_size), options);
         calib::StereoSessionOptions ours;
-        ours.compare_skew = false;
         const calib::StereoResult stereo = calib::calibrate_session(out->session, ours).stereo;
         out->calibration = stereo.calibration;
         out->focal_sigma = stereo.camera_sigma.fu / stereo.calibration.camera.fu;

@@ -207,7 +207,6 @@ Acceptance run_acceptance(int binning) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     t0 = std::chrono::steady_clock::now();
     calib::StereoSessionOptions so;
-    so.compare_skew = false;
     a.result = calib::calibrate_session(dir / "session", so);
     a.seconds_calibration =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -1,7 +1,7 @@
 // fpp-calib hybrid and reconstruct --table, run as a person would: a stereo
 // calibration from a checkerboard session, a table from the same session
 // (boards placed by the camera) and from a plane session (the paper's), a
-// scan reconstructed with each; bad input gives exit code 2, a message naming
+// scan reconstructed with each; `calibrate`, both from one reading; bad input gives exit code 2, a message naming
 // the file and what is wrong, and nothing written. Camera binned 4x
 // (400 x 300) so that each step takes a second or two.
 
@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -125,6 +126,71 @@ TEST(CliHybrid, TableFromTheCheckerboardSessionReconstructsAScan) {
     ASSERT_EQ(rec.exit_code, 0) << rec.output;
     // The boards of 10 poses reach most of the plane.
     EXPECT_GT(fpp::read_ply(cloud).size(), 90000u);
+}
+
+std::string file_text(const fs::path& path) {
+    std::stringstream read;
+    read << std::ifstream(path, std::ios::binary).rdbuf();
+    return read.str();
+}
+
+// `calibrate` does both from one reading of the session: the calibration
+// file byte for byte as `stereo` writes it, and every coefficient of the
+// table as `hybrid` fits it from that file.
+TEST(CliHybrid, CalibrateWritesWhatStereoAndThenHybridWrite) {
+    const Made& m = made();
+    TempDir dir;
+    const fs::path calib = dir / "calib.yaml", table = dir / "table.fpt";
+    const fs::path stereo_report = dir / "stereo-report", hybrid_report = dir / "hybrid-report";
+    ToolRun run = run_calib("calibrate " + shell_quote(m.boards) + " --out " + shell_quote(calib) +
+                                " --table " + shell_quote(table) + " --stereo-report " +
+                                shell_quote(stereo_report) + " --hybrid-report " +
+                                shell_quote(hybrid_report),
+                            dir);
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "calibrated from 10 of 10 poses")) << run.output;
+    EXPECT_TRUE(contains(run.output, "poses: 10 of 10 used")) << run.output;
+    EXPECT_EQ(file_text(calib), file_text(m.calib));
+    EXPECT_TRUE(fs::exists(stereo_report / "summary.md"));
+    EXPECT_TRUE(fs::exists(hybrid_report / "sv-offsets.png"));
+
+    const fs::path separate = dir / "separate.fpt";
+    ASSERT_EQ(run_calib("hybrid " + shell_quote(m.boards) + " --calib " + shell_quote(m.calib) +
+                            " --out " + shell_quote(separate),
+                        dir)
+                  .exit_code,
+              0);
+    const fpp::CoefficientTable a = fpp::load_table(table), b = fpp::load_table(separate);
+    EXPECT_EQ(a.info().calibration_hash, b.info().calibration_hash);
+    ASSERT_EQ(a.planes(), b.planes());
+    ASSERT_EQ(a.info().camera, b.info().camera);
+    int modelled = 0, differing = 0;
+    for (int y = 0; y < a.info().camera.height; ++y)
+        for (int x = 0; x < a.info().camera.width; ++x) {
+            modelled += a.has_model(x, y) ? 1 : 0;
+            for (int p = 0; p < a.planes(); ++p) {
+                const float u = a.get(p, x, y), v = b.get(p, x, y);
+                differing += (u == v || (std::isnan(u) && std::isnan(v))) ? 0 : 1;
+            }
+        }
+    EXPECT_GT(modelled, 100000);
+    EXPECT_EQ(differing, 0);
+
+    // A plane session (the paper's) is not one session for both, and an
+    // output that is a folder is refused before any work.
+    const fs::path other = dir / "other.yaml";
+    run = run_calib("calibrate " + shell_quote(m.planes) + " --out " + shell_quote(other) +
+                        " --table " + shell_quote(dir / "other.fpt"),
+                    dir);
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_TRUE(contains(run.output, "board.yaml")) << run.output;
+    EXPECT_FALSE(fs::exists(other));
+    run = run_calib("calibrate " + shell_quote(m.boards) + " --out " + shell_quote(other) +
+                        " --table " + shell_quote(dir.path()),
+                    dir);
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_TRUE(contains(run.output, "--table names the table file")) << run.output;
+    EXPECT_FALSE(fs::exists(other));
 }
 
 TEST(CliHybrid, BadInputExitsWithTwoAndWritesNothing) {

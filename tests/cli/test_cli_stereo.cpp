@@ -95,6 +95,8 @@ TEST(CliStereo, SimulatedSessionCalibratesAndWritesTheReport) {
     EXPECT_EQ(fpp::calib::load_calibration(dir / "calib.yaml").board_square_size, 15.0);
     EXPECT_TRUE(contains(summary.str(), "Projector corner methods against ground truth"))
         << summary.str();
+    // The other skew setting's calibration only on request (--compare-skew).
+    EXPECT_FALSE(contains(summary.str(), "(comparison)")) << summary.str();
     for (const char* png : {"corners-pose-01.png", "corners-pose-06.png", "residuals-camera.png",
                             "residuals-projector.png", "pose-rms.png"}) {
         ASSERT_TRUE(fs::exists(report / png)) << png;
@@ -106,11 +108,16 @@ TEST(CliStereo, SimulatedSessionCalibratesAndWritesTheReport) {
 
     // Run again into the same report folder: the earlier report is replaced.
     fs::remove(dir / "calib.yaml");
-    const ToolRun again = stereo(dir, session, "--corner-method homography --no-skew");
+    const ToolRun again =
+        stereo(dir, session, "--corner-method homography --no-skew --compare-skew");
     ASSERT_EQ(again.exit_code, 0) << again.output;
     EXPECT_TRUE(contains(again.output, "corners by homography")) << again.output;
     EXPECT_EQ(fpp::calib::load_calibration(dir / "calib.yaml").camera.skew, 0.0);
-    EXPECT_TRUE(fs::exists(report / "summary.md"));
+    std::ifstream in_again(report / "summary.md");
+    std::stringstream summary_again;
+    summary_again << in_again.rdbuf();
+    EXPECT_TRUE(contains(summary_again.str(), "skew estimated (comparison)"))
+        << summary_again.str();
 }
 
 // The paper's procedure on request, and the held-out check of absolute

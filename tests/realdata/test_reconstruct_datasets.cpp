@@ -616,7 +616,6 @@ TEST(ReconstructDatasets, SlStudioSkullWithOurCalibration) {
     FPP_REQUIRE_DATASET(session);
     FPP_REQUIRE_DATASET(folder);
     fpp::calib::StereoSessionOptions options;
-    options.compare_skew = false; // one calibration is enough here
     const fpp::calib::SessionResult calibrated = fpp::calib::calibrate_session(session, options);
     ASSERT_EQ(calibrated.calibrated.size(), 6u);
     const fpp::calib::StereoCalibration& ours = calibrated.stereo.calibration;

@@ -49,8 +49,9 @@ cv::Point2f to_point(const Vec2& p, double scale) {
             static_cast<float>((p[1] + 0.5) * scale - 0.5)};
 }
 
-// The texture with the corners, the origin and the board axes.
-cv::Mat corner_figure(const SessionPose& pose, int columns, int rows) {
+// The texture with the corners (green where `method` gave their projector
+// coordinates), the origin and the board axes.
+cv::Mat corner_figure(const SessionPose& pose, CornerMethod method, int columns, int rows) {
     const Image<std::uint8_t>& t = pose.texture;
     if (t.empty())
         return {};
@@ -76,8 +77,8 @@ cv::Mat corner_figure(const SessionPose& pose, int columns, int rows) {
                 cv::line(out, to_point(p[k], scale),
                          to_point(p[k + static_cast<std::size_t>(columns)], scale), {0, 200, 255},
                          1, cv::LINE_AA);
-            const bool projected =
-                pose.projector[0].valid.size() == p.size() && pose.projector[0].valid[k];
+            const ProjectorCorners& used = pose.projector[static_cast<std::size_t>(method)];
+            const bool projected = used.valid.size() == p.size() && used.valid[k];
             cv::circle(out, to_point(p[k], scale), 3,
                        projected ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 0, 255), 1, cv::LINE_AA);
         }
@@ -388,7 +389,7 @@ void write_calibration_report(const fs::path& folder, const SessionResult& r,
     write_report_folder(folder, [&](const fs::path& temp) {
         write_file_synced(temp / "summary.md", calibration_summary(r, held_out));
         for (const SessionPose& p : r.poses) {
-            const cv::Mat fig = corner_figure(p, columns, rows);
+            const cv::Mat fig = corner_figure(p, r.method, columns, rows);
             if (!fig.empty())
                 save_png(temp / ("corners-" + p.name + ".png"), fig);
         }

@@ -300,20 +300,15 @@ HybridResult calibrate_hybrid(const fs::path& session, const StereoCalibration& 
         calibrate_hybrid(session, calibration, calibration_hash, options, {options.model}).front());
 }
 
-std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
-                                           const StereoCalibration& calibration,
-                                           std::uint64_t calibration_hash,
-                                           const HybridOptions& options,
-                                           const std::vector<TableModel>& models) {
+namespace {
+
+// The session's folder, checked against the options and the calibration.
+SessionFolder hybrid_session(const fs::path& session, const StereoCalibration& calibration,
+                             const HybridOptions& options, const std::vector<TableModel>& models) {
     options.validate();
     if (models.empty())
         throw std::invalid_argument("hybrid calibration: no table model asked for");
-    const auto t_start = std::chrono::steady_clock::now();
-    const auto say = [&](const std::string& s) {
-        if (options.progress)
-            options.progress(s);
-    };
-    const SessionFolder folder = read_session_folder(
+    SessionFolder folder = read_session_folder(
         session, std::nullopt, {Axis::x}, "hybrid calibration",
         "the hybrid model maps the projector column (vertical fringes) to X, Y, Z");
     if (calibration.sizes_known() && !(calibration.camera_size == folder.camera_size))
@@ -321,9 +316,47 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
                          "camera size " + size_text(folder.camera_size) +
                              " differs from the calibration's " +
                              size_text(calibration.camera_size));
+    return folder;
+}
+
+} // namespace
+
+std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
+                                           const StereoCalibration& calibration,
+                                           std::uint64_t calibration_hash,
+                                           const HybridOptions& options,
+                                           const std::vector<TableModel>& models,
+                                           const std::vector<BoardView>& views) {
+    const SessionFolder folder = hybrid_session(session, calibration, options, models);
+    if (folder.board.kind != BoardDescription::Kind::checkerboard)
+        throw InputError(folder.folder / "board.yaml", "kind",
+                         "the poses were seen as checkerboards, but the session's board is not one");
+    if (views.size() != folder.poses.size())
+        throw std::invalid_argument("hybrid calibration: " + std::to_string(views.size()) +
+                                    " board views for the " + std::to_string(folder.poses.size()) +
+                                    " poses of " + session.string());
+    for (const BoardView& view : views)
+        if (view.corners.found && !(view.bright_column.size() == folder.camera_size))
+            throw std::invalid_argument("hybrid calibration: a board view's size differs from "
+                                        "the session's camera");
+    return detail::calibrate_hybrid_checkerboard(folder, calibration, calibration_hash, options,
+                                                 models, &views);
+}
+
+std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
+                                           const StereoCalibration& calibration,
+                                           std::uint64_t calibration_hash,
+                                           const HybridOptions& options,
+                                           const std::vector<TableModel>& models) {
+    const SessionFolder folder = hybrid_session(session, calibration, options, models);
+    const auto t_start = std::chrono::steady_clock::now();
+    const auto say = [&](const std::string& s) {
+        if (options.progress)
+            options.progress(s);
+    };
     if (folder.board.kind == BoardDescription::Kind::checkerboard)
         return detail::calibrate_hybrid_checkerboard(folder, calibration, calibration_hash,
-                                                     options, models);
+                                                     options, models, nullptr);
     StereoCalibration calib = calibration;
     if (!calib.sizes_known()) {
         calib.camera_size = folder.camera_size;

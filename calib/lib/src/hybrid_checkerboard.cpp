@@ -171,11 +171,32 @@ struct PoseOutcome {
     TimeSplit time_split;
 };
 
-// One pose: decode, find and place the board, sample its bright parts, and
-// compare the SV reconstruction of the samples with the camera's plane.
-// `cloud` is scratch for the SV points.
-void process_pose(const fs::path& folder, const PoseContext& context, PointCloud& cloud,
-                  PoseOutcome& outcome) {
+// A pose's view from its folder: read, decode, find the board.
+BoardView read_board_view(const fs::path& folder, const PoseContext& context, TimeSplit& time) {
+    StageTimer reading(time, "reading");
+    const CaptureSet capture = read_x_capture(folder);
+    reading.stop();
+    DecodeResult decoded;
+    try {
+        StageTimer decoding(time, "decoding");
+        decoded = decode(capture, context.options.decode);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(folder / "capture.yaml", "sequence",
+                         std::string("cannot be decoded: ") + e.what());
+    }
+    StageTimer corner_stage(time, "corners");
+    const CheckerboardCorners corners =
+        find_checkerboard(corner_textures(capture, decoded), context.columns, context.rows);
+    corner_stage.stop();
+    StageTimer bright(time, "bright parts");
+    return observe_board(decoded, corners, context.columns, context.rows, context.options);
+}
+
+// One pose: its view (given, or read from its folder), then place the
+// board, sample its bright parts, and compare the SV reconstruction of the
+// samples with the camera's plane. `cloud` is scratch for the SV points.
+void process_pose(const fs::path& folder, const BoardView* given, const PoseContext& context,
+                  PointCloud& cloud, PoseOutcome& outcome) {
     const auto t0 = std::chrono::steady_clock::now();
     const HybridOptions& options = context.options;
     const Image<float>& rays = context.sv.camera_rays();
@@ -190,30 +211,19 @@ void process_pose(const fs::path& folder, const PoseContext& context, PointCloud
         outcome.progress.push_back("  rejected " + pose.name + ": " + why);
         pose.seconds = since(t0);
     };
-    StageTimer reading(time, "reading");
-    const CaptureSet capture = read_x_capture(folder);
-    reading.stop();
-    DecodeResult decoded;
-    try {
-        StageTimer decoding(time, "decoding");
-        decoded = decode(capture, options.decode);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(folder / "capture.yaml", "sequence",
-                         std::string("cannot be decoded: ") + e.what());
-    }
-    StageTimer corner_stage(time, "corners");
-    const CheckerboardCorners corners =
-        find_checkerboard(corner_textures(capture, decoded), context.columns, context.rows);
-    corner_stage.stop();
-    if (!corners.found)
-        return reject("board not found: " + corners.failure);
+    BoardView read;
+    if (!given)
+        read = read_board_view(folder, context, time);
+    const BoardView& view = given ? *given : read;
+    if (!view.corners.found)
+        return reject("board not found: " + view.corners.failure);
     StageTimer placement(time, "board placement");
     RigidPose placed;
-    if (!camera_pose(context.calibration, context.board_points, corners.points, placed,
+    if (!camera_pose(context.calibration, context.board_points, view.corners.points, placed,
                      pose.corner_rms_px))
         return reject("the camera model cannot place the board (its corners do not undistort or "
                       "the pose does not converge)");
-    pose.lit_fraction = lit_fraction(decoded, corners.points, context.columns, context.rows);
+    pose.lit_fraction = view.lit_fraction;
     if (pose.lit_fraction < options.min_lit_fraction)
         return reject("the projector lights only " + fixed(100 * pose.lit_fraction, 1) +
                       " % of the board's squares (need " +
@@ -233,16 +243,15 @@ void process_pose(const fs::path& folder, const PoseContext& context, PointCloud
     // Samples: the bright parts where the decoded column is the stereo
     // model's for the camera's plane (else not on the board), smoothed.
     StageTimer sampling(time, "samples");
-    const Image<std::uint8_t> bright = bright_board_mask(decoded, false, options.bright);
     PoseSamples& s = outcome.samples;
     s.plane = pose.plane;
     s.phase = Image<float>(camera, 1, kNaN);
     context.pool.parallel_for(camera.height, 8, [&](int v0, int v1, int) {
         for (int v = v0; v < v1; ++v)
             for (int u = 0; u < camera.width; ++u) {
-                const float p = decoded.proj_x.at(u, v);
+                const float p = view.bright_column.at(u, v);
                 const double xn = rays.at(u, v, 0), yn = rays.at(u, v, 1);
-                if (!bright.at(u, v) || !std::isfinite(p) || !std::isfinite(xn))
+                if (!std::isfinite(p) || !std::isfinite(xn))
                     continue;
                 const double z = d / (normal[0] * xn + normal[1] * yn + normal[2]);
                 const Vec2 q = context.calibration.projector_pixel({xn * z, yn * z, z});
@@ -259,12 +268,19 @@ void process_pose(const fs::path& folder, const PoseContext& context, PointCloud
                       " pixels sample the board's bright parts (need 1 % of the image)");
 
     // The stereo model's view of the same board: its SV points on the
-    // sampled pixels (the others' are not used), against the camera's plane.
+    // sampled pixels of every kSvStride-th row and column (the others' are
+    // not used: a plane's position and tilt need far fewer than a table's
+    // fit), against the camera's plane.
     StageTimer sv_stage(time, "SV comparison (report)");
-    for (std::size_t i = 0; i < camera.area(); ++i)
-        if (!std::isfinite(s.phase.data()[i]))
-            decoded.proj_x.data()[i] = kNaN;
-    context.sv.reconstruct(decoded, ReconstructAxes::x, cloud);
+    constexpr int kSvStride = 4;
+    DecodeResult sv_input;
+    sv_input.camera = camera;
+    sv_input.proj_x = Image<float>(camera, 1, kNaN);
+    for (int v = 0; v < camera.height; v += kSvStride)
+        for (int u = 0; u < camera.width; u += kSvStride)
+            if (std::isfinite(s.phase.at(u, v)))
+                sv_input.proj_x.at(u, v) = view.bright_column.at(u, v);
+    context.sv.reconstruct(sv_input, ReconstructAxes::x, cloud);
     std::vector<std::size_t> points;
     double sum2 = 0;
     for (std::size_t i = 0; i < camera.area(); ++i) {
@@ -311,7 +327,8 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
                                                         const StereoCalibration& calibration,
                                                         std::uint64_t calibration_hash,
                                                         const HybridOptions& options,
-                                                        const std::vector<TableModel>& models) {
+                                                        const std::vector<TableModel>& models,
+                                                        const std::vector<BoardView>* views) {
     const auto t_start = std::chrono::steady_clock::now();
     const auto say = [&](const std::string& s) {
         if (options.progress)
@@ -360,8 +377,8 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
     for_each_pose(
         pool, static_cast<int>(folder.poses.size()),
         [&](int k, int worker) {
-            process_pose(folder.poses[std::size_t(k)], context, clouds[std::size_t(worker)],
-                         outcomes[std::size_t(k)]);
+            process_pose(folder.poses[std::size_t(k)], views ? &(*views)[std::size_t(k)] : nullptr,
+                         context, clouds[std::size_t(worker)], outcomes[std::size_t(k)]);
         },
         [&](int k) {
             PoseOutcome& o = outcomes[std::size_t(k)];
@@ -409,3 +426,23 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
 }
 
 } // namespace fpp::calib::detail
+
+namespace fpp::calib {
+
+BoardView observe_board(const DecodeResult& decoded, const CheckerboardCorners& corners,
+                        int columns, int rows, const HybridOptions& options) {
+    BoardView view;
+    view.corners = corners;
+    if (!corners.found)
+        return view;
+    view.lit_fraction = detail::lit_fraction(decoded, corners.points, columns, rows);
+    const Image<std::uint8_t> bright = bright_board_mask(decoded, false, options.bright);
+    view.bright_column = Image<float>(decoded.proj_x.size(), 1, detail::kNaN);
+    const std::size_t n = bright.pixel_count();
+    for (std::size_t i = 0; i < n; ++i)
+        if (bright.data()[i])
+            view.bright_column.data()[i] = decoded.proj_x.data()[i];
+    return view;
+}
+
+} // namespace fpp::calib

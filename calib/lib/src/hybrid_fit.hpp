@@ -20,11 +20,13 @@ std::vector<HybridResult> fit_hybrid_models(const HybridResult& common,
                                             const std::vector<TableModel>& models,
                                             const ModelSampleSource& model);
 
-// The checkerboard (camera-anchored) procedure, for calibrate_hybrid.
+// The checkerboard (camera-anchored) procedure, for calibrate_hybrid: from
+// the poses' views when given (one per pose), else reading every pose.
 std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& folder,
                                                         const StereoCalibration& calibration,
                                                         std::uint64_t calibration_hash,
                                                         const HybridOptions& options,
-                                                        const std::vector<TableModel>& models);
+                                                        const std::vector<TableModel>& models,
+                                                        const std::vector<BoardView>* views);
 
 } // namespace fpp::calib::detail

@@ -12,6 +12,7 @@
 #include "fpp/calib/hybrid_report.hpp"
 #include "fpp/calib/plots.hpp"
 #include "fpp/calib/report_folder.hpp"
+#include "fpp/calib/session_folder.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
@@ -229,7 +230,6 @@ void Run::calibrate_paper_procedure() {
     } else {
         say("the paper's stereo calibration (joint, no correction grids)");
         StereoSessionOptions so;
-        so.compare_skew = false;
         so.decode.threads = options().threads;
         so.stereo.procedure = StereoProcedure::joint;
         so.stereo.camera_grid = {};
@@ -256,10 +256,20 @@ void Run::calibrate_our_procedures() {
     say("our stereo calibration from the checkerboard session (camera first, correction "
         "grids)");
     StereoSessionOptions so;
-    so.compare_skew = false;
     so.decode.threads = options().threads;
     so.progress = indented();
     const auto start = Clock::now();
+    // The tables' view of each board, kept as the stereo calibration reads
+    // the session (as `fpp-calib calibrate` does): the tables read nothing.
+    const SessionFolder folder = read_session_folder(
+        board_session_, BoardDescription::Kind::checkerboard, {Axis::x, Axis::y},
+        "our procedure", "the stereo calibration needs phase in x and y");
+    const int columns = folder.board.inner_columns, rows = folder.board.inner_rows;
+    std::vector<BoardView> views(folder.poses.size());
+    HybridOptions ho = hybrid_options();
+    so.on_pose = [&](int pose, const DecodeResult& decoded, const CheckerboardCorners& corners) {
+        views.at(std::size_t(pose)) = observe_board(decoded, corners, columns, rows, ho);
+    };
     our_calibration_ = calibrate_stereo(board_session_, so, "stereo-report", record_.our_stereo);
     const std::uint64_t hash = save(our_calibration_, "calib.yaml");
     Method sv;
@@ -272,9 +282,8 @@ void Run::calibrate_our_procedures() {
 
     say("our hybrid tables from the same checkerboard session, every model");
     const auto hybrid_start = Clock::now();
-    HybridOptions ho = hybrid_options();
-    std::vector<HybridResult> boards =
-        calibrate_hybrid(board_session_, our_calibration_, hash, ho, available_table_models());
+    std::vector<HybridResult> boards = calibrate_hybrid(board_session_, our_calibration_, hash, ho,
+                                                        available_table_models(), views);
     record_.seconds_boards_hybrid = seconds_since(hybrid_start);
     add("calibration.boards.seconds_stereo", record_.our_stereo.seconds, "s");
     add("calibration.boards.seconds_hybrid", record_.seconds_boards_hybrid, "s");
@@ -293,7 +302,8 @@ void Run::calibrate_our_procedures() {
         const std::string key = samples == HybridSamples::boards ? "boards-only" : "model-only";
         say("our tables fitted to " + std::string(to_string(samples)) + " samples only");
         add_tables(
-            calibrate_hybrid(board_session_, our_calibration_, hash, ho, {HybridOptions{}.model}),
+            calibrate_hybrid(board_session_, our_calibration_, hash, ho, {HybridOptions{}.model},
+                             views),
             Procedure::boards, key,
             samples == HybridSamples::boards ? "our procedure, board samples only"
                                              : "our procedure, stereo model only");

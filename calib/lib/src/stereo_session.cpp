@@ -67,8 +67,8 @@ struct PoseContext {
 
 // One pose: decode, corners, their projector coordinates by every method
 // (and against the simulator's truth), dense samples.
-void process_pose(const fs::path& folder, const PoseContext& context, SessionPose& pose,
-                  PoseObservations& observations, PoseOutcome& outcome) {
+void process_pose(int index, const fs::path& folder, const PoseContext& context,
+                  SessionPose& pose, PoseObservations& observations, PoseOutcome& outcome) {
     const StereoSessionOptions& options = context.options;
     const int columns = context.columns, rows = context.rows;
     TimeSplit& time = outcome.time_split;
@@ -98,6 +98,8 @@ void process_pose(const fs::path& folder, const PoseContext& context, SessionPos
         pose.texture = to_8bit_view(used->image);
     }
     pose.corner_seconds = corners.stop();
+    if (options.on_pose)
+        options.on_pose(index, decoded, pose.corners);
     if (!pose.corners.found) {
         pose.skip_reason = pose.corners.failure;
         outcome.progress.push_back("  skipped " + pose.name + ": " + pose.skip_reason);
@@ -109,9 +111,14 @@ void process_pose(const fs::path& folder, const PoseContext& context, SessionPos
                                 context.dense_step, observations.dense_camera,
                                 observations.dense_projector);
     }
+    // The other methods only for the report's comparison with the
+    // simulator's truth (about 0.07 s a pose at full size).
+    const bool truth = capture.manifest.truth && !capture.manifest.truth->projector.empty();
     for (int m = 0; m < kCornerMethods; ++m) {
         ProjectorCornerOptions o = options.corners;
         o.method = static_cast<CornerMethod>(m);
+        if (o.method != options.corners.method && !truth)
+            continue;
         StageTimer projector(time, o.method == options.corners.method
                                        ? "projector corners"
                                        : "projector corners of the other methods (report)");
@@ -121,7 +128,7 @@ void process_pose(const fs::path& folder, const PoseContext& context, SessionPos
     }
 
     // Ground truth of simulated captures: each method against truth_proj.
-    if (capture.manifest.truth && !capture.manifest.truth->projector.empty()) {
+    if (truth) {
         StageTimer truth_comparison(time, "ground truth (report)");
         const Image<float> truth = read_tiff_float(folder / capture.manifest.truth->projector);
         for (int m = 0; m < kCornerMethods; ++m) {
@@ -211,7 +218,7 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
     detail::for_each_pose(
         ThreadPool::shared(options.decode.threads), static_cast<int>(folders.size()),
         [&](int p, int) {
-            process_pose(folders[std::size_t(p)], context, result.poses[std::size_t(p)],
+            process_pose(p, folders[std::size_t(p)], context, result.poses[std::size_t(p)],
                          per_pose[std::size_t(p)], outcomes[std::size_t(p)]);
         },
         [&](int p) {

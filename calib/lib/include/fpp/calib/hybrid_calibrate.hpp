@@ -57,6 +57,7 @@
 // calibrated range gives no point (no extrapolation).
 
 #include "fpp/calib/board_samples.hpp"
+#include "fpp/calib/corners.hpp"
 #include "fpp/calib/pixel_fit.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
@@ -142,8 +143,9 @@ struct HybridPose {
     std::size_t outliers = 0; // points dropped from the plane fit
     BoardPlane plane;         // the plane the samples are put on
     // Plane sessions: inliers about their own plane, orthogonal. Checkerboard
-    // sessions: the SV points of the board's bright parts about the camera's
-    // plane (how far the stereo model is from where the camera puts it).
+    // sessions: the SV points of the board's bright parts (every 4th row and
+    // column) about the camera's plane (how far the stereo model is from
+    // where the camera puts it).
     double plane_rms_mm = 0;
     double plane_max_mm = 0; // largest |distance| among those points
     // Checkerboard sessions: the board's camera-only placement against the
@@ -203,6 +205,35 @@ std::vector<HybridResult> calibrate_hybrid(const std::filesystem::path& session,
                                            std::uint64_t calibration_hash,
                                            const HybridOptions& options,
                                            const std::vector<TableModel>& models);
+
+// What a checkerboard pose gives the table before any calibration is known:
+// the board's corners, how much of its squares the projector lights, and
+// the projector column on its bright parts. The stereo calibration of the
+// same session can keep them as it reads each pose
+// (StereoSessionOptions::on_pose), so that stereo and table together read,
+// decode and search every pose once (`fpp-calib calibrate`).
+struct BoardView {
+    CheckerboardCorners corners; // found false: corners.failure says why
+    double lit_fraction = 0;     // of the board's squares' area decoded (0 when not found)
+    Image<float> bright_column;  // proj_x on the board's bright parts, NaN elsewhere
+};
+
+// The view of a pose from its decoded maps (x axis, with modulation) and
+// the corners found on it (columns x rows inner corners).
+BoardView observe_board(const DecodeResult& decoded, const CheckerboardCorners& corners,
+                        int columns, int rows, const HybridOptions& options);
+
+// calibrate_hybrid for a checkerboard session whose poses were already
+// seen: `views` holds one per pose folder, in the session's order, made with
+// the same options. Reads no frames. Throws InputError as calibrate_hybrid
+// (and for a session of another board kind), std::invalid_argument when
+// the views do not match the session's poses in number or size.
+std::vector<HybridResult> calibrate_hybrid(const std::filesystem::path& session,
+                                           const StereoCalibration& calibration,
+                                           std::uint64_t calibration_hash,
+                                           const HybridOptions& options,
+                                           const std::vector<TableModel>& models,
+                                           const std::vector<BoardView>& views);
 
 // The robust plane of a pose's points (3-channel image, NaN = no point):
 // points off the plane get NaN in `xyz` when `drop_outliers`. Returns false

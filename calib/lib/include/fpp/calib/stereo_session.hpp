@@ -22,6 +22,7 @@
 #include "fpp/calib/stereo_calibrate.hpp"
 #include "fpp/calib/time_split.hpp"
 #include "fpp/capture_set.hpp"
+#include "fpp/decoder.hpp"
 
 #include <array>
 #include <filesystem>
@@ -38,7 +39,9 @@ struct StereoSessionOptions {
     ProjectorCornerOptions corners; // corners.method feeds the calibration
     CornerFinderOptions finder;
     StereoOptions stereo;     // skew, outliers; progress is set from `progress`
-    bool compare_skew = true; // also calibrate with the other skew setting (report)
+    // Also calibrate with the other skew setting, for the report (on its own
+    // thread alongside: about 6 s of CPU at full size, 30 poses).
+    bool compare_skew = false;
     DecodeOptions decode;
     // A pose needs projector coordinates for at least this fraction of its corners.
     double min_projector_corner_fraction = 0.5;
@@ -49,6 +52,11 @@ struct StereoSessionOptions {
     int dense_step_px = 0;
     BrightBoardOptions bright;
     std::function<void(const std::string&)> progress;
+    // Called once a pose's board has been searched, with its index among
+    // the session's poses, what it decoded and the corners (found or not),
+    // on the thread processing it (poses run in parallel); may be empty.
+    // fpp-calib calibrate keeps the table's view of each board this way.
+    std::function<void(int pose, const DecodeResult&, const CheckerboardCorners&)> on_pose;
 };
 
 struct SessionPose {
@@ -57,7 +65,9 @@ struct SessionPose {
     bool usable = false;
     std::string skip_reason; // why not usable
     CheckerboardCorners corners;
-    // Projector coordinates of the corners by each method.
+    // Projector coordinates of the corners by each method: the options'
+    // method always, the others only for captures with the simulator's
+    // truth (empty otherwise).
     std::array<ProjectorCorners, kCornerMethods> projector;
     // RMS error of each method against the simulator's truth_proj at the
     // detected camera corners (projector px), when the capture has truth.

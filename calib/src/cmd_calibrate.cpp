@@ -1,0 +1,118 @@
+// fpp-calib calibrate SESSION --out calib.yaml --table table.fpt
+//                             [--stereo-report DIR] [--hybrid-report DIR]
+//                             [--model rational|ray|polynomial]
+//                             [--samples boards+model|boards|model] [--min-poses N]
+//
+// `stereo` and then `hybrid` on one checkerboard session, with their
+// defaults, reading and searching every pose once: the table's view of each
+// board (its corners, lit fraction and the column on its bright parts) is
+// kept while the stereo calibration reads the poses. Writes what the two
+// commands write, byte for byte.
+
+#include "calibration_outputs.hpp"
+#include "commands.hpp"
+
+#include "fpp/calib/hybrid_calibrate.hpp"
+#include "fpp/calib/session_folder.hpp"
+#include "fpp/calib/stereo_calibration.hpp"
+#include "fpp/calib/stereo_session.hpp"
+#include "fpp/coefficient_table.hpp"
+#include "fpp/yaml_fields.hpp"
+
+#include <iostream>
+#include <memory>
+
+namespace fpp::calib {
+
+namespace {
+struct CalibrateArgs {
+    std::string session;
+    std::string out;
+    std::string table;
+    std::string stereo_report;
+    std::string hybrid_report;
+    std::string model = "rational";
+    std::string samples = "boards+model";
+    int min_poses = 6;
+    int threads = 0;
+};
+
+int run_calibrate(const CalibrateArgs& args) {
+    const std::filesystem::path out = args.out, table = args.table;
+    check_output_file(out, "--out names the calibration file to write");
+    check_output_file(table, "--table names the table file to write");
+    check_report_folder(args.stereo_report, "calibration");
+    check_report_folder(args.hybrid_report, "hybrid calibration");
+
+    HybridOptions hybrid;
+    hybrid.model = parse_table_model(args.model);
+    hybrid.min_poses = args.min_poses;
+    hybrid.samples = parse_hybrid_samples(args.samples);
+    hybrid.threads = args.threads;
+    hybrid.decode.threads = args.threads;
+    hybrid.sv.threads = args.threads;
+    hybrid.progress = [](const std::string& line) { std::cerr << line << "\n"; };
+    hybrid.validate();
+
+    // The board and the poses, for the views (the stereo calibration checks
+    // the session in full).
+    const SessionFolder folder = read_session_folder(
+        args.session, BoardDescription::Kind::checkerboard, {Axis::x, Axis::y},
+        "calibration from one session",
+        "the stereo calibration needs the projector's x and y coordinate of every corner (phase "
+        "in both directions)");
+    const int columns = folder.board.inner_columns, rows = folder.board.inner_rows;
+    std::vector<BoardView> views(folder.poses.size());
+    StereoSessionOptions stereo;
+    stereo.decode = hybrid.decode;
+    stereo.progress = hybrid.progress;
+    stereo.on_pose = [&](int pose, const DecodeResult& decoded,
+                         const CheckerboardCorners& corners) {
+        // Each pose writes its own element, from its own thread.
+        views.at(std::size_t(pose)) = observe_board(decoded, corners, columns, rows, hybrid);
+    };
+    std::cerr << "== stereo calibration\n";
+    const SessionResult session = calibrate_session(args.session, stereo);
+    write_stereo_outputs(session, out, args.stereo_report, nullptr);
+
+    std::cerr << "== hybrid table, from the same poses\n";
+    const StereoCalibration calibration = load_calibration(out);
+    const std::string calib_bytes = yaml_fields::read_text_file(out);
+    const std::vector<HybridResult> results =
+        calibrate_hybrid(args.session, calibration, fnv1a64(calib_bytes.data(), calib_bytes.size()),
+                         hybrid, {hybrid.model}, views);
+    write_hybrid_outputs(results.front(), table, args.hybrid_report);
+    return 0;
+}
+} // namespace
+
+Action add_calibrate_command(CLI::App& app) {
+    auto args = std::make_shared<CalibrateArgs>();
+    auto* cmd = app.add_subcommand(
+        "calibrate",
+        "Calibrate a scanner from one checkerboard session: `stereo` (camera first, correction "
+        "grids) and then `hybrid` (boards placed by the camera), each with its defaults, reading "
+        "and searching every pose once. Writes the calibration file and the table, the same as "
+        "the two commands would");
+    cmd->add_option("session", args->session, "session folder (board.yaml kind checkerboard)")
+        ->required();
+    cmd->add_option("--out", args->out, "calibration file to write (YAML)")->required();
+    cmd->add_option("--table", args->table, "table file to write (.fpt)")->required();
+    cmd->add_option("--stereo-report", args->stereo_report,
+                    "the stereo calibration's report folder (as `stereo --report`)");
+    cmd->add_option("--hybrid-report", args->hybrid_report,
+                    "the table's report folder (as `hybrid --report`)");
+    cmd->add_option("--model", args->model, "table model (as `hybrid --model`)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"rational", "ray", "polynomial"}));
+    cmd->add_option("--samples", args->samples, "what the table is fitted to (as `hybrid --samples`)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"boards+model", "boards", "model"}));
+    cmd->add_option("--min-poses", args->min_poses, "poses a pixel needs for a model (at least 4)")
+        ->capture_default_str()
+        ->check(CLI::Range(4, 1000));
+    cmd->add_option("--threads", args->threads, "threads (0 = all cores)")->capture_default_str();
+    return [args] { return run_calibrate(*args); };
+}
+
+} // namespace fpp::calib
