@@ -113,11 +113,11 @@ void process_pose(int index, const fs::path& folder, const PoseContext& context,
     }
     // The other methods only for the report's comparison with the
     // simulator's truth (about 0.07 s a pose at full size).
-    const bool truth = capture.manifest.truth && !capture.manifest.truth->projector.empty();
+    const bool has_truth = capture.manifest.truth && !capture.manifest.truth->projector.empty();
     for (int m = 0; m < kCornerMethods; ++m) {
         ProjectorCornerOptions o = options.corners;
         o.method = static_cast<CornerMethod>(m);
-        if (o.method != options.corners.method && !truth)
+        if (o.method != options.corners.method && !has_truth)
             continue;
         StageTimer projector(time, o.method == options.corners.method
                                        ? "projector corners"
@@ -128,7 +128,7 @@ void process_pose(int index, const fs::path& folder, const PoseContext& context,
     }
 
     // Ground truth of simulated captures: each method against truth_proj.
-    if (truth) {
+    if (has_truth) {
         StageTimer truth_comparison(time, "ground truth (report)");
         const Image<float> truth = read_tiff_float(folder / capture.manifest.truth->projector);
         for (int m = 0; m < kCornerMethods; ++m) {
