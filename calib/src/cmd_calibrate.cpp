@@ -13,7 +13,6 @@
 #include "commands.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
-#include "fpp/calib/session_folder.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/coefficient_table.hpp"
@@ -54,23 +53,11 @@ int run_calibrate(const CalibrateArgs& args) {
     hybrid.progress = [](const std::string& line) { std::cerr << line << "\n"; };
     hybrid.validate();
 
-    // The board and the poses, for the views (the stereo calibration checks
-    // the session in full).
-    const SessionFolder folder = read_session_folder(
-        args.session, BoardDescription::Kind::checkerboard, {Axis::x, Axis::y},
-        "calibration from one session",
-        "the stereo calibration needs the projector's x and y coordinate of every corner (phase "
-        "in both directions)");
-    const int columns = folder.board.inner_columns, rows = folder.board.inner_rows;
-    std::vector<BoardView> views(folder.poses.size());
     StereoSessionOptions stereo;
     stereo.decode = hybrid.decode;
     stereo.progress = hybrid.progress;
-    stereo.on_pose = [&](int pose, const DecodeResult& decoded,
-                         const CheckerboardCorners& corners) {
-        // Each pose writes its own element, from its own thread.
-        views.at(std::size_t(pose)) = observe_board(decoded, corners, columns, rows, hybrid);
-    };
+    std::vector<BoardView> views;
+    keep_board_views(args.session, hybrid, stereo, views);
     std::cerr << "== stereo calibration\n";
     const SessionResult session = calibrate_session(args.session, stereo);
     write_stereo_outputs(session, out, args.stereo_report, nullptr);

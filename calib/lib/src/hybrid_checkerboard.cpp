@@ -429,6 +429,8 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
 
 namespace fpp::calib {
 
+namespace fs = std::filesystem;
+
 BoardView observe_board(const DecodeResult& decoded, const CheckerboardCorners& corners,
                         int columns, int rows, const HybridOptions& options) {
     BoardView view;
@@ -443,6 +445,22 @@ BoardView observe_board(const DecodeResult& decoded, const CheckerboardCorners& 
         if (bright.data()[i])
             view.bright_column.data()[i] = decoded.proj_x.data()[i];
     return view;
+}
+
+void keep_board_views(const fs::path& session, const HybridOptions& hybrid,
+                      StereoSessionOptions& stereo, std::vector<BoardView>& views) {
+    const SessionFolder folder = read_session_folder(
+        session, BoardDescription::Kind::checkerboard, {Axis::x, Axis::y},
+        "calibration from one session",
+        "the stereo calibration needs the projector's x and y coordinate of every corner (phase "
+        "in both directions)");
+    const int columns = folder.board.inner_columns, rows = folder.board.inner_rows;
+    views.assign(folder.poses.size(), BoardView{});
+    // Each pose writes its own element, from the thread processing it.
+    stereo.on_pose = [&views, &hybrid, columns, rows](int pose, const DecodeResult& decoded,
+                                                      const CheckerboardCorners& corners) {
+        views.at(std::size_t(pose)) = observe_board(decoded, corners, columns, rows, hybrid);
+    };
 }
 
 } // namespace fpp::calib

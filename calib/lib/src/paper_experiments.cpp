@@ -12,7 +12,6 @@
 #include "fpp/calib/hybrid_report.hpp"
 #include "fpp/calib/plots.hpp"
 #include "fpp/calib/report_folder.hpp"
-#include "fpp/calib/session_folder.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
@@ -261,15 +260,9 @@ void Run::calibrate_our_procedures() {
     const auto start = Clock::now();
     // The tables' view of each board, kept as the stereo calibration reads
     // the session (as `fpp-calib calibrate` does): the tables read nothing.
-    const SessionFolder folder = read_session_folder(
-        board_session_, BoardDescription::Kind::checkerboard, {Axis::x, Axis::y},
-        "our procedure", "the stereo calibration needs phase in x and y");
-    const int columns = folder.board.inner_columns, rows = folder.board.inner_rows;
-    std::vector<BoardView> views(folder.poses.size());
     HybridOptions ho = hybrid_options();
-    so.on_pose = [&](int pose, const DecodeResult& decoded, const CheckerboardCorners& corners) {
-        views.at(std::size_t(pose)) = observe_board(decoded, corners, columns, rows, ho);
-    };
+    std::vector<BoardView> views;
+    keep_board_views(board_session_, ho, so, views);
     our_calibration_ = calibrate_stereo(board_session_, so, "stereo-report", record_.our_stereo);
     const std::uint64_t hash = save(our_calibration_, "calib.yaml");
     Method sv;

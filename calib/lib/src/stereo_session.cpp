@@ -65,8 +65,8 @@ struct PoseContext {
     int dense_step;
 };
 
-// One pose: decode, corners, their projector coordinates by every method
-// (and against the simulator's truth), dense samples.
+// One pose: decode, corners, their projector coordinates (by every method
+// and against the truth for simulated captures), dense samples.
 void process_pose(int index, const fs::path& folder, const PoseContext& context,
                   SessionPose& pose, PoseObservations& observations, PoseOutcome& outcome) {
     const StereoSessionOptions& options = context.options;

@@ -76,6 +76,8 @@
 
 namespace fpp::calib {
 
+struct StereoSessionOptions; // fpp/calib/stereo_session.hpp
+
 // What a checkerboard session's tables are fitted to.
 enum class HybridSamples {
     boards_and_model, // the boards' samples and the stereo model's between them (default)
@@ -222,6 +224,13 @@ struct BoardView {
 // the corners found on it (columns x rows inner corners).
 BoardView observe_board(const DecodeResult& decoded, const CheckerboardCorners& corners,
                         int columns, int rows, const HybridOptions& options);
+
+// Sets stereo.on_pose so that calibrate_session(session, stereo) fills
+// `views` (sized here to the session's poses) with each board's view for
+// `hybrid`'s options. Throws InputError as read_session_folder for a session
+// that is not a checkerboard session with phase in x and y.
+void keep_board_views(const std::filesystem::path& session, const HybridOptions& hybrid,
+                      StereoSessionOptions& stereo, std::vector<BoardView>& views);
 
 // calibrate_hybrid for a checkerboard session whose poses were already
 // seen: `views` holds one per pose folder, in the session's order, made with
