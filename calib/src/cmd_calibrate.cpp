@@ -56,6 +56,7 @@ int run_calibrate(const CalibrateArgs& args) {
     StereoSessionOptions stereo;
     stereo.decode = hybrid.decode;
     stereo.progress = hybrid.progress;
+    stereo.compare_corner_methods = !args.stereo_report.empty();
     std::vector<BoardView> views;
     keep_board_views(args.session, hybrid, stereo, views);
     std::cerr << "== stereo calibration\n";

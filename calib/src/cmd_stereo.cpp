@@ -59,6 +59,7 @@ int run_stereo(const StereoArgs& args) {
     options.corners.method = corner_method_from_string(args.corner_method);
     options.stereo.skew = !args.no_skew;
     options.compare_skew = args.compare_skew;
+    options.compare_corner_methods = !args.report.empty();
     options.stereo.drop_outliers = args.drop_outliers;
     options.stereo.procedure = parse_stereo_procedure(args.procedure);
     options.stereo.camera_grid = parse_grid(args.camera_grid, "--camera-grid");

@@ -732,7 +732,12 @@ AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& 
     if (!std::isfinite(cost))
         throw std::runtime_error("bundle adjustment: a board point lies behind a device at the "
                                  "start (a failed initialisation)");
-    double lambda = 1e-3;
+    // Small from the start: every adjustment here starts near its minimum
+    // (OpenCV's start or the previous stage's result), where more damping
+    // only slows the grids' smooth modes (measured on 30 full-size poses:
+    // 8 and 14 iterations for the two dense stages instead of 14 and 21,
+    // to the same result).
+    double lambda = 1e-6;
     std::vector<double> full(std::size_t(layout.size()), 0.0);
     const auto full_step = [&](const Eigen::VectorXd& step) {
         std::fill(full.begin(), full.end(), 0.0);

@@ -118,9 +118,12 @@ bool fit_polynomial_at_origin(const std::vector<Sample>& samples, int order,
             b(r, 1) = samples[s].py;
             ++r;
         }
-        const Eigen::MatrixXd AtA = A.transpose() * A;
+        // The lower triangle only (a symmetric rank update: half a product's
+        // work), which is all LDLT reads.
+        Eigen::MatrixXd AtA = Eigen::MatrixXd::Zero(terms, terms);
+        AtA.selfadjointView<Eigen::Lower>().rankUpdate(A.transpose());
         const Eigen::MatrixXd Atb = A.transpose() * b;
-        const Eigen::LDLT<Eigen::MatrixXd> ldlt(AtA);
+        const Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt(AtA);
         if (ldlt.info() != Eigen::Success)
             return false;
         coef = ldlt.solve(Atb);

@@ -194,9 +194,9 @@ BoardView read_board_view(const fs::path& folder, const PoseContext& context, Ti
 
 // One pose: its view (given, or read from its folder), then place the
 // board, sample its bright parts, and compare the SV reconstruction of the
-// samples with the camera's plane. `cloud` is scratch for the SV points.
+// samples with the camera's plane.
 void process_pose(const fs::path& folder, const BoardView* given, const PoseContext& context,
-                  PointCloud& cloud, PoseOutcome& outcome) {
+                  PoseOutcome& outcome) {
     const auto t0 = std::chrono::steady_clock::now();
     const HybridOptions& options = context.options;
     const Image<float>& rays = context.sv.camera_rays();
@@ -268,37 +268,31 @@ void process_pose(const fs::path& folder, const BoardView* given, const PoseCont
                       " pixels sample the board's bright parts (need 1 % of the image)");
 
     // The stereo model's view of the same board: its SV points on the
-    // sampled pixels of every kSvStride-th row and column (the others' are
-    // not used: a plane's position and tilt need far fewer than a table's
-    // fit), against the camera's plane.
+    // sampled pixels of every kSvStride-th row and column (a plane's
+    // position and tilt need far fewer than a table's fit), against the
+    // camera's plane.
     StageTimer sv_stage(time, "SV comparison (report)");
-    constexpr int kSvStride = 4;
-    DecodeResult sv_input;
-    sv_input.camera = camera;
-    sv_input.proj_x = Image<float>(camera, 1, kNaN);
+    constexpr int kSvStride = 8;
+    std::vector<Vec3> sv_found;
     for (int v = 0; v < camera.height; v += kSvStride)
-        for (int u = 0; u < camera.width; u += kSvStride)
-            if (std::isfinite(s.phase.at(u, v)))
-                sv_input.proj_x.at(u, v) = view.bright_column.at(u, v);
-    context.sv.reconstruct(sv_input, ReconstructAxes::x, cloud);
-    std::vector<std::size_t> points;
+        for (int u = 0; u < camera.width; u += kSvStride) {
+            Vec3 q{};
+            if (std::isfinite(s.phase.at(u, v)) &&
+                context.sv.triangulate_pixel_x(u, v, double(view.bright_column.at(u, v)), q))
+                sv_found.push_back(q);
+        }
     double sum2 = 0;
-    for (std::size_t i = 0; i < camera.area(); ++i) {
-        const float* q = cloud.xyz.data() + 3 * i;
-        if (!std::isfinite(s.phase.data()[i]) || !std::isfinite(q[2]))
-            continue;
-        const double dist =
-            normal[0] * double(q[0]) + normal[1] * double(q[1]) + normal[2] * double(q[2]) - d;
+    Image<float> sv_points(std::max<int>(1, int(sv_found.size())), 1, 3, kNaN);
+    for (std::size_t k = 0; k < sv_found.size(); ++k) {
+        const Vec3& q = sv_found[k];
+        const double dist = normal[0] * q[0] + normal[1] * q[1] + normal[2] * q[2] - d;
         sum2 += dist * dist;
         pose.plane_max_mm = std::max(pose.plane_max_mm, std::fabs(dist));
-        points.push_back(i);
-    }
-    pose.points = points.size();
-    pose.plane_rms_mm = points.empty() ? 0 : std::sqrt(sum2 / double(points.size()));
-    Image<float> sv_points(camera, 3, kNaN);
-    for (const std::size_t i : points)
         for (int c = 0; c < 3; ++c)
-            sv_points.data()[3 * i + std::size_t(c)] = cloud.xyz.data()[3 * i + std::size_t(c)];
+            sv_points.data()[3 * k + std::size_t(c)] = float(q[std::size_t(c)]);
+    }
+    pose.points = sv_found.size();
+    pose.plane_rms_mm = sv_found.empty() ? 0 : std::sqrt(sum2 / double(sv_found.size()));
     BoardPlane sv_plane;
     PlaneFitStats stats;
     if (fit_board_plane(sv_points, options, sv_plane, stats, false)) {
@@ -372,13 +366,12 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
     const PoseContext context{calibration,  sv,      options, board_points,
                               board_centre, columns, rows,    pool};
     std::vector<PoseOutcome> outcomes(folder.poses.size());
-    std::vector<PointCloud> clouds(std::size_t(pool.size())); // SV points, per thread
     std::vector<PoseSamples> samples;
     for_each_pose(
         pool, static_cast<int>(folder.poses.size()),
-        [&](int k, int worker) {
+        [&](int k, int) {
             process_pose(folder.poses[std::size_t(k)], views ? &(*views)[std::size_t(k)] : nullptr,
-                         context, clouds[std::size_t(worker)], outcomes[std::size_t(k)]);
+                         context, outcomes[std::size_t(k)]);
         },
         [&](int k) {
             PoseOutcome& o = outcomes[std::size_t(k)];

@@ -66,7 +66,7 @@ struct PoseContext {
 };
 
 // One pose: decode, corners, their projector coordinates (by every method
-// and against the truth for simulated captures), dense samples.
+// and against the truth for simulated captures, on request), dense samples.
 void process_pose(int index, const fs::path& folder, const PoseContext& context,
                   SessionPose& pose, PoseObservations& observations, PoseOutcome& outcome) {
     const StereoSessionOptions& options = context.options;
@@ -112,12 +112,13 @@ void process_pose(int index, const fs::path& folder, const PoseContext& context,
                                 observations.dense_projector);
     }
     // The other methods only for the report's comparison with the
-    // simulator's truth (about 0.07 s a pose at full size).
-    const bool has_truth = capture.manifest.truth && !capture.manifest.truth->projector.empty();
+    // simulator's truth (about 0.16 s a pose at full size).
+    const bool compare = options.compare_corner_methods && capture.manifest.truth &&
+                           !capture.manifest.truth->projector.empty();
     for (int m = 0; m < kCornerMethods; ++m) {
         ProjectorCornerOptions o = options.corners;
         o.method = static_cast<CornerMethod>(m);
-        if (o.method != options.corners.method && !has_truth)
+        if (o.method != options.corners.method && !compare)
             continue;
         StageTimer projector(time, o.method == options.corners.method
                                        ? "projector corners"
@@ -128,7 +129,7 @@ void process_pose(int index, const fs::path& folder, const PoseContext& context,
     }
 
     // Ground truth of simulated captures: each method against truth_proj.
-    if (has_truth) {
+    if (compare) {
         StageTimer truth_comparison(time, "ground truth (report)");
         const Image<float> truth = read_tiff_float(folder / capture.manifest.truth->projector);
         for (int m = 0; m < kCornerMethods; ++m) {

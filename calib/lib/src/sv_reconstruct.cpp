@@ -424,6 +424,17 @@ bool SvReconstructor::triangulate_xy(double u, double v, double proj_x, double p
     return ok;
 }
 
+bool SvReconstructor::triangulate_pixel_x(int u, int v, double proj_x, Vec3& point) const {
+    if (u < 0 || v < 0 || u >= rays_.width() || v >= rays_.height())
+        throw std::invalid_argument("SV reconstruction: pixel outside the camera image");
+    const double xn = double(rays_.at(u, v, 0)), yn = double(rays_.at(u, v, 1));
+    if (!std::isfinite(xn) || !std::isfinite(yn))
+        return false;
+    int iterations = 0;
+    return Geometry(calibration_, options_).solve_x(xn, yn, proj_x, point.data(), iterations) ==
+           Outcome::point;
+}
+
 SvStats SvReconstructor::reconstruct(const DecodeResult& decoded, ReconstructAxes requested,
                                      PointCloud& cloud) const {
     const Size size = calibration_.camera_size;

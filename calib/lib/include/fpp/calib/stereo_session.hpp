@@ -42,6 +42,11 @@ struct StereoSessionOptions {
     // Also calibrate with the other skew setting, for the report (on its own
     // thread alongside: about 6 s of CPU at full size, 30 poses).
     bool compare_skew = false;
+    // For captures with the simulator's truth, also find the corners'
+    // projector coordinates by the other methods and measure every method
+    // against the truth (the report's comparison: about 4.7 s of CPU at
+    // full size, 30 poses). Real captures have no truth and skip it anyway.
+    bool compare_corner_methods = false;
     DecodeOptions decode;
     // A pose needs projector coordinates for at least this fraction of its corners.
     double min_projector_corner_fraction = 0.5;
@@ -66,11 +71,11 @@ struct SessionPose {
     std::string skip_reason; // why not usable
     CheckerboardCorners corners;
     // Projector coordinates of the corners by each method: the options'
-    // method always, the others only for captures with the simulator's
-    // truth (empty otherwise).
+    // method always, the others only with compare_corner_methods for
+    // captures with the simulator's truth (empty otherwise).
     std::array<ProjectorCorners, kCornerMethods> projector;
     // RMS error of each method against the simulator's truth_proj at the
-    // detected camera corners (projector px), when the capture has truth.
+    // detected camera corners (projector px), when the other methods ran.
     std::array<double, kCornerMethods> truth_rms{-1, -1, -1};
     int truth_points = 0;
     Image<std::uint8_t> texture; // 8-bit view of the corner texture (report figures)

@@ -122,6 +122,10 @@ class SvReconstructor {
                        int* iterations = nullptr) const;
     bool triangulate_xy(double u, double v, double proj_x, double proj_y, Vec3& point,
                         double* ray_gap_mm = nullptr) const;
+    // One camera pixel (u, v) (in the image) by its ray in camera_rays(),
+    // as reconstruct() finds it: for a few points of a scan without a
+    // camera-size decode result.
+    bool triangulate_pixel_x(int u, int v, double proj_x, Vec3& point) const;
 
   private:
     StereoCalibration calibration_;
