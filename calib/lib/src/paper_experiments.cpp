@@ -152,6 +152,7 @@ StereoCalibration Run::calibrate_stereo(const fs::path& session, const StereoSes
                                         const std::string& report, StereoSummary& summary) {
     const auto start = Clock::now();
     const SessionResult result = calibrate_session(session, so);
+    summary.seconds = seconds_since(start); // the calibration, not its report
     write_calibration_report(folder_ / report, result);
     const StereoCalibration& c = result.stereo.calibration;
     summary.calibrated = true;
@@ -163,7 +164,6 @@ StereoCalibration Run::calibrate_stereo(const fs::path& session, const StereoSes
     summary.camera_grid_max = c.camera_correction.largest_control_value();
     summary.projector_grid_max = c.projector_correction.largest_control_value();
     summary.camera_grid_smoothness = result.stereo.camera_grid_smoothness;
-    summary.seconds = seconds_since(start);
     summary.origin = c.origin;
     say("  camera RMS " + fixed_text(c.camera_rms, 4) + " px, projector RMS " +
         fixed_text(c.projector_rms, 4) + " px, " + std::to_string(summary.poses) + " poses, " +
@@ -239,6 +239,8 @@ void Run::calibrate_paper_procedure() {
             calibrate_stereo(paper_board_session_, so, "stereo-report-paper", record_.paper_stereo);
     }
     const std::uint64_t hash = save(paper_calibration_, "calib-paper.yaml");
+    record_.paper_turn = camera_frame_turn(paper_calibration_, rig().camera);
+    add("calibration.paper.frame_turn_mrad", 1000 * record_.paper_turn.angle_rad, "mrad");
     Method sv;
     sv.key = "sv-paper";
     sv.title = "SV, the paper's calibration";
@@ -257,10 +259,9 @@ void Run::calibrate_our_procedures() {
         "grids)");
     StereoSessionOptions so;
     so.decode.threads = options().threads;
-    // Timed as a user's calibration: the corner methods are compared in
-    // the paper's procedure's report only.
+    // Timed as a user's calibration (the reports apart): the corner
+    // methods are compared in the paper's procedure's report only.
     so.progress = indented();
-    const auto start = Clock::now();
     // The tables' view of each board, kept as the stereo calibration reads
     // the session (as `fpp-calib calibrate` does): the tables read nothing.
     HybridOptions ho = hybrid_options();
@@ -268,6 +269,8 @@ void Run::calibrate_our_procedures() {
     keep_board_views(board_session_, ho, so, views);
     our_calibration_ = calibrate_stereo(board_session_, so, "stereo-report", record_.our_stereo);
     const std::uint64_t hash = save(our_calibration_, "calib.yaml");
+    record_.our_turn = camera_frame_turn(our_calibration_, rig().camera);
+    add("calibration.boards.frame_turn_mrad", 1000 * record_.our_turn.angle_rad, "mrad");
     Method sv;
     sv.key = "sv";
     sv.title = "SV, our calibration";
@@ -283,7 +286,8 @@ void Run::calibrate_our_procedures() {
     record_.seconds_boards_hybrid = seconds_since(hybrid_start);
     add("calibration.boards.seconds_stereo", record_.our_stereo.seconds, "s");
     add("calibration.boards.seconds_hybrid", record_.seconds_boards_hybrid, "s");
-    add("calibration.boards.seconds", seconds_since(start), "s");
+    add("calibration.boards.seconds", record_.our_stereo.seconds + record_.seconds_boards_hybrid,
+        "s");
     const std::size_t first = count();
     add_tables(boards, Procedure::boards, "boards", "our procedure");
     for (std::size_t m = first; m < count(); ++m) {

@@ -5,6 +5,7 @@
 // (paper_report.cpp).
 
 #include "fpp/calib/evaluation.hpp"
+#include "fpp/calib/frame_turn.hpp"
 #include "fpp/calib/paper_experiments.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/coefficient_table.hpp"
@@ -100,6 +101,10 @@ struct ScanSummary {
     std::vector<ErrorStats> truth_noisy, truth_clean; // per method, Z error
     std::vector<ErrorStats> shape_noisy, shape_clean; // per method: bias and tilt removed
     std::vector<ErrorStats> distance_clean;           // per method: 3D distance to the truth
+    // Per method, noise-free: the Z error with the points turned by their
+    // calibration's camera frame turn (Record::paper_turn, our_turn), i.e.
+    // in the true frame's orientation; beside truth_clean, never instead.
+    std::vector<ErrorStats> turned_clean;
     std::size_t compared_noisy = 0, compared_clean = 0;
 };
 
@@ -146,6 +151,10 @@ struct Record {
     sim::Rig rig;
     std::vector<Method> methods;
     StereoSummary paper_stereo, our_stereo;
+    // Each calibration's camera frame against the rig's, from the camera's
+    // rays alone (frame_turn.hpp): what no board data can observe.
+    FrameTurn paper_turn, our_turn;
+    const FrameTurn* turn_of(Procedure p) const; // null for the reference
     double seconds_boards_hybrid = 0; // our table's hybrid calibration (all its models)
     std::vector<ScanSummary> scans;
     std::vector<BallBarPosition> ball_bars;

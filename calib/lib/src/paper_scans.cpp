@@ -135,12 +135,18 @@ Run::NoisyScan Run::process_scan(ScanSummary& s, const sim::Scene& scene,
         fit_shapes(s, recon, false);
         std::vector<TruthComparison> cmp;
         for (std::size_t m = 0; m < count(); ++m) {
-            cmp.push_back(compare_with_truth(masked_points(recon.clouds[m], recon.common),
-                                             capture.truth_xyz));
+            CloudPoints points = masked_points(recon.clouds[m], recon.common);
+            cmp.push_back(compare_with_truth(points, capture.truth_xyz));
             s.truth_clean.push_back(cmp.back().dz);
             s.shape_clean.push_back(cmp.back().dz_shape);
             s.distance_clean.push_back(cmp.back().distance);
             s.compared_clean = cmp.back().compared;
+            if (const FrameTurn* turn = record_.turn_of(record_.methods[m].procedure)) {
+                turn_points(*turn, points.points);
+                s.turned_clean.push_back(compare_with_truth(points, capture.truth_xyz).dz);
+            } else {
+                s.turned_clean.push_back(cmp.back().dz);
+            }
         }
         if (save) {
             // Error maps on one colour scale, the paper's SV's.
@@ -164,6 +170,8 @@ Run::NoisyScan Run::process_scan(ScanSummary& s, const sim::Scene& scene,
         add("truth." + s.key + ".noisy." + k + ".shape_rms", s.shape_noisy[m].rms, "mm");
         add("truth." + s.key + ".noise_free." + k + ".shape_rms", s.shape_clean[m].rms, "mm");
         add("truth." + s.key + ".noise_free." + k + ".distance_rms", s.distance_clean[m].rms, "mm");
+        add("truth." + s.key + ".noise_free." + k + ".turned_rms", s.turned_clean[m].rms, "mm");
+        add("truth." + s.key + ".noise_free." + k + ".turned_mean", s.turned_clean[m].mean, "mm");
     }
     add(s.key + ".truth_pixels", double(s.truth_pixels), "");
     add(s.key + ".common_points", double(s.common), "");

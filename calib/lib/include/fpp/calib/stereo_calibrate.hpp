@@ -85,10 +85,13 @@ struct StereoOptions {
     // reprojects them best, the stiffer one unless a softer one is 2 %
     // better): a defect-free lens keeps a stiff grid, which leaves the
     // camera's frame as well determined as the lens model alone does, and
-    // a lens with a defect gets the freedom to follow it. Needs at least 6
-    // poses, else the first choice is used.
+    // a lens with a defect gets the freedom to follow it. While the softest
+    // choice tried is the best, up to camera_grid_softer_steps choices ten
+    // times softer each are tried after the list. Needs at least 6 poses,
+    // else the first choice is used.
     double camera_grid_smoothness = 0;
     std::vector<double> camera_grid_smoothness_choices{1e4, 1e3, 1e2};
+    int camera_grid_softer_steps = 4;
     double projector_grid_smoothness = 1e3;
     double grid_ridge = 1e-4; // weight of each squared control value (px^-2)
     bool skew = true;           // estimate skew for both devices (else fixed at 0)
