@@ -13,7 +13,9 @@ namespace fpp::calib {
 
 namespace {
 
-Eigen::Vector3d unit_ray(const Vec2& n) { return Eigen::Vector3d(n[0], n[1], 1).normalized(); }
+Eigen::Vector3d unit_ray(const Vec2& n) {
+    return Eigen::Vector3d(n[0], n[1], 1).normalized();
+}
 
 } // namespace
 

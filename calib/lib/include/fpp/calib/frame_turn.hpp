@@ -18,9 +18,9 @@ namespace fpp::calib {
 struct FrameTurn {
     // X_true = Q X_calibrated (camera frames, the camera centre fixed).
     Mat3 Q{1, 0, 0, 0, 1, 0, 0, 0, 1};
-    double angle_rad = 0;       // |Q|'s angle
-    double ray_rms_rad = 0;     // angle between the turned calibrated rays and the true ones, RMS
-    int rays = 0;               // pixels compared
+    double angle_rad = 0;   // |Q|'s angle
+    double ray_rms_rad = 0; // angle between the turned calibrated rays and the true ones, RMS
+    int rays = 0;           // pixels compared
 };
 
 // Least squares over the unit rays of every `step_px`-th pixel of the
