@@ -13,12 +13,14 @@
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/lens_model.hpp"
 
+#include <vector>
+
 namespace fpp::calib {
 
 struct FrameTurn {
     // X_true = Q X_calibrated (camera frames, the camera centre fixed).
     Mat3 Q{1, 0, 0, 0, 1, 0, 0, 0, 1};
-    double angle_rad = 0;   // |Q|'s angle
+    double angle_rad = 0;   // Q's angle of rotation
     double ray_rms_rad = 0; // angle between the turned calibrated rays and the true ones, RMS
     int rays = 0;           // pixels compared
 };
