@@ -110,6 +110,14 @@ Linearisation linearise(const RigState& state, const std::vector<CornerObservati
                         const std::vector<bool>& pose_used, const FreeParameters& free,
                         const GridRegularisation& regularisation,
                         const RigState* start = nullptr);
+// The fields a correction grid must not hold, one per row, each a unit
+// vector of (du, dv) per control point: constant and linear displacements
+// (principal point, focal lengths, skew, a turn about the optical axis), the
+// image motion of a small turn about the x or y axis, and the distortion
+// terms' own fields, all through `lens`. Empty for an empty grid. The
+// adjustment keeps each grid orthogonal to them (grid_gauge.cpp).
+std::vector<std::vector<Vec2>> gauge_fields(const CorrectionGrid& grid, const LensModel& lens);
+
 // Adds `step` (free parameters, the same order) to `state`.
 void apply_increment(RigState& state, const std::vector<bool>& pose_used,
                      const FreeParameters& free, const std::vector<double>& step);
