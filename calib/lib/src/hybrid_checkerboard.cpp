@@ -273,26 +273,23 @@ void process_pose(const fs::path& folder, const BoardView* given, const PoseCont
     // camera's plane.
     StageTimer sv_stage(time, "SV comparison (report)");
     constexpr int kSvStride = 8;
-    std::vector<Vec3> sv_found;
+    Image<float> sv_points((camera.width + kSvStride - 1) / kSvStride,
+                           (camera.height + kSvStride - 1) / kSvStride, 3, kNaN);
+    double sum2 = 0;
     for (int v = 0; v < camera.height; v += kSvStride)
         for (int u = 0; u < camera.width; u += kSvStride) {
             Vec3 q{};
-            if (std::isfinite(s.phase.at(u, v)) &&
-                context.sv.triangulate_pixel_x(u, v, double(view.bright_column.at(u, v)), q))
-                sv_found.push_back(q);
+            if (!std::isfinite(s.phase.at(u, v)) ||
+                !context.sv.triangulate_pixel_x(u, v, double(view.bright_column.at(u, v)), q))
+                continue;
+            const double dist = normal[0] * q[0] + normal[1] * q[1] + normal[2] * q[2] - d;
+            sum2 += dist * dist;
+            pose.plane_max_mm = std::max(pose.plane_max_mm, std::fabs(dist));
+            ++pose.points;
+            for (int c = 0; c < 3; ++c)
+                sv_points.at(u / kSvStride, v / kSvStride, c) = float(q[std::size_t(c)]);
         }
-    double sum2 = 0;
-    Image<float> sv_points(std::max<int>(1, int(sv_found.size())), 1, 3, kNaN);
-    for (std::size_t k = 0; k < sv_found.size(); ++k) {
-        const Vec3& q = sv_found[k];
-        const double dist = normal[0] * q[0] + normal[1] * q[1] + normal[2] * q[2] - d;
-        sum2 += dist * dist;
-        pose.plane_max_mm = std::max(pose.plane_max_mm, std::fabs(dist));
-        for (int c = 0; c < 3; ++c)
-            sv_points.data()[3 * k + std::size_t(c)] = float(q[std::size_t(c)]);
-    }
-    pose.points = sv_found.size();
-    pose.plane_rms_mm = sv_found.empty() ? 0 : std::sqrt(sum2 / double(sv_found.size()));
+    pose.plane_rms_mm = pose.points ? std::sqrt(sum2 / double(pose.points)) : 0;
     BoardPlane sv_plane;
     PlaneFitStats stats;
     if (fit_board_plane(sv_points, options, sv_plane, stats, false)) {

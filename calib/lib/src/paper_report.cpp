@@ -53,6 +53,29 @@ const char* kAbsoluteScans[] = {"plane", "cylinder", "sphere", "relief"};
 // sideways at 500 mm).
 constexpr double kReportedTurnRad = 1e-4;
 
+// `first` followed by the absolute scans the run has.
+std::vector<std::string> with_absolute_scans(const Record& r, std::vector<std::string> first) {
+    for (const char* key : kAbsoluteScans)
+        if (r.scan(key))
+            first.push_back(key);
+    return first;
+}
+
+// A method's name, bold for the default one.
+std::string method_cell(const Record& r, std::size_t m, std::size_t best) {
+    return m == best ? "**" + r.methods[m].key + "**" : r.methods[m].key;
+}
+
+// Method m's "RMS / mean" of `errors` (one of ScanSummary's per-method Z
+// errors) on each absolute scan the run has.
+void add_absolute_errors(const Record& r, std::size_t m,
+                         std::vector<ErrorStats> ScanSummary::*errors,
+                         std::vector<std::string>& cells) {
+    for (const char* key : kAbsoluteScans)
+        if (const ScanSummary* s = r.scan(key))
+            cells.push_back(mm((s->*errors)[m].rms) + " / " + mm((s->*errors)[m].mean));
+}
+
 } // namespace
 
 const char* procedure_title(Procedure p) {
@@ -276,20 +299,13 @@ std::string summary_markdown(const Record& r, const std::vector<PaperTarget>& ta
     md << "## Errors against the truth\n\n";
     md << "Noise-free scans (each method's own error), Z error RMS / mean (bias), mm:\n\n";
     {
-        std::vector<std::string> head{"method", "procedure"};
-        for (const char* key : kAbsoluteScans)
-            if (r.scan(key))
-                head.push_back(key);
+        std::vector<std::string> head = with_absolute_scans(r, {"method", "procedure"});
         head.insert(head.end(), {"ball bar, largest SD error", "plane shape RMS"});
         header(md, head);
         for (std::size_t m = 0; m < r.methods.size(); ++m) {
-            std::vector<std::string> cells{
-                (m == best ? "**" + r.methods[m].key + "**" : r.methods[m].key),
-                procedure_title(r.methods[m].procedure)};
-            for (const char* key : kAbsoluteScans)
-                if (const ScanSummary* s = r.scan(key))
-                    cells.push_back(mm(s->truth_clean[m].rms) + " / " +
-                                    mm(s->truth_clean[m].mean));
+            std::vector<std::string> cells{method_cell(r, m, best),
+                                           procedure_title(r.methods[m].procedure)};
+            add_absolute_errors(r, m, &ScanSummary::truth_clean, cells);
             cells.push_back(mm(largest_spacing_error(r, m, false)));
             const ScanSummary* plane = r.scan("plane");
             cells.push_back(plane ? mm(plane->shape_clean[m].rms) : "-");
@@ -312,18 +328,10 @@ std::string summary_markdown(const Record& r, const std::vector<PaperTarget>& ta
             md << " The same noise-free errors with each calibration's points turned back by "
                   "its frame's turn (beside the errors above, not instead of them), Z error RMS "
                   "/ mean, mm:\n\n";
-            std::vector<std::string> head{"method"};
-            for (const char* key : kAbsoluteScans)
-                if (r.scan(key))
-                    head.push_back(key);
-            header(md, head);
+            header(md, with_absolute_scans(r, {"method"}));
             for (std::size_t m = 0; m < r.methods.size(); ++m) {
-                std::vector<std::string> cells{m == best ? "**" + r.methods[m].key + "**"
-                                                         : r.methods[m].key};
-                for (const char* key : kAbsoluteScans)
-                    if (const ScanSummary* s = r.scan(key))
-                        cells.push_back(mm(s->turned_clean[m].rms) + " / " +
-                                        mm(s->turned_clean[m].mean));
+                std::vector<std::string> cells{method_cell(r, m, best)};
+                add_absolute_errors(r, m, &ScanSummary::turned_clean, cells);
                 row(md, cells);
             }
         } else {
@@ -333,20 +341,13 @@ std::string summary_markdown(const Record& r, const std::vector<PaperTarget>& ta
     md << "\nWith the rig's noise (one scan each), Z error RMS / mean, mm; diameters and the "
           "ball bar fitted to the noisy points:\n\n";
     {
-        std::vector<std::string> head{"method"};
-        for (const char* key : kAbsoluteScans)
-            if (r.scan(key))
-                head.push_back(key);
+        std::vector<std::string> head = with_absolute_scans(r, {"method"});
         head.insert(head.end(), {"cylinder diameter error", "sphere diameter error",
                                  "ball bar, largest SD error", "ball, largest size error"});
         header(md, head);
         for (std::size_t m = 0; m < r.methods.size(); ++m) {
-            std::vector<std::string> cells{m == best ? "**" + r.methods[m].key + "**"
-                                                     : r.methods[m].key};
-            for (const char* key : kAbsoluteScans)
-                if (const ScanSummary* s = r.scan(key))
-                    cells.push_back(mm(s->truth_noisy[m].rms) + " / " +
-                                    mm(s->truth_noisy[m].mean));
+            std::vector<std::string> cells{method_cell(r, m, best)};
+            add_absolute_errors(r, m, &ScanSummary::truth_noisy, cells);
             for (const char* key : {"cylinder", "sphere"}) {
                 const ScanSummary* s = r.scan(key);
                 cells.push_back(s && !s->diameter_error.empty() ? mm(s->diameter_error[m]) : "-");
