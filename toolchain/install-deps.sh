@@ -26,8 +26,14 @@ packages=(
   # libdrm (KMS display), libgpiod 1.6 (trigger, button, LED); aravis-tools and
   # gpiod give the fake GigE camera and the command-line GPIO tools
   libaravis-dev aravis-tools libusb-1.0-0-dev libdrm-dev libgpiod-dev gpiod
+  # the scanner's HTTP API and page: libmicrohttpd, nlohmann-json, libarchive
+  # (tar downloads), three.js for the page's viewer; libcurl: fpp-calib's
+  # client of that API
+  libmicrohttpd-dev nlohmann-json3-dev libarchive-dev libjs-three libcurl4-openssl-dev
   # tests and benchmarks (OpenCV's structured_light module is the speed baseline)
   libgtest-dev libgmock-dev libbenchmark-dev libopencv-contrib-dev
+  # the scanner's page in a real browser, driven through WebDriver
+  chromium chromium-driver python3-selenium
   # PLY interoperability tests: the viewers' own readers, headless
   # (MeshLab's meshlabserver needs an X server for its OpenGL context)
   python3-open3d cloudcompare meshlab xvfb xauth
@@ -49,6 +55,8 @@ cross_packages=(
   libpng-dev:arm64 libtiff-dev:arm64 libyaml-cpp0.7:arm64
   # device drivers (as above)
   libaravis-dev:arm64 libusb-1.0-0-dev:arm64 libdrm-dev:arm64 libgpiod-dev:arm64
+  # HTTP API (nlohmann-json is headers only, the same for every architecture)
+  libmicrohttpd-dev:arm64 libarchive-dev:arm64
   # tests (static libraries and CMake package files)
   libgtest-dev:arm64
 )
