@@ -1,4 +1,5 @@
-// fpp-scanner: the scanner head's firmware. Waits for the button, scans,
+// fpp-scanner: the scanner head's firmware. Waits for the button (and, with
+// an HTTP listener, for requests: firmware/scanner/http-api.md), scans,
 // writes the point cloud into the scan store; --once (or --scans N) scans
 // once (N times) and exits.
 #include "fpp/drivers/device_error.hpp"
@@ -6,15 +7,18 @@
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/hardware_board.hpp"
 #include "fpp/scanner/log.hpp"
+#include "fpp/scanner/network_face.hpp"
 #include "fpp/scanner/scanner.hpp"
+#include "fpp/scanner/settings_file.hpp"
 #include "fpp/scanner/sim_board.hpp"
+
+#include <CLI/CLI.hpp>
 
 #include <atomic>
 #include <csignal>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace {
@@ -23,67 +27,153 @@ std::atomic<bool> g_stop{false};
 
 extern "C" void on_stop_signal(int) { g_stop.store(true); }
 
-void usage(std::FILE* out) {
-    std::fputs("usage: fpp-scanner --board FILE [--once | --scans N] [--mode scan|capture]\n"
-               "                   [--store DIR] [--table FILE]\n"
-               "  --board FILE   board configuration (fpp-scanner-board/1, e.g. board/sim.yaml)\n"
-               "  --once         scan once as if the button had been pressed, print the output\n"
-               "                 folder and exit (0 only when the outputs are written)\n"
-               "  --scans N      the same N times in a row, one output folder per line\n"
-               "  --mode M       scan: point cloud (needs the board's table); capture: also the\n"
-               "                 raw capture set (calibration sessions)\n"
-               "  --store DIR    scan store directory (overrides the board's)\n"
-               "  --table FILE   coefficient table (overrides the board's)\n",
-               out);
+struct Options {
+    std::string board;
+    std::string store;
+    std::string table;
+    std::string settings;
+    std::string http;
+    std::string token_file;
+    std::string web_root;
+    bool once = false;
+    int scans = 0; // --scans N; --once is --scans 1
+    std::string mode = "scan";
+};
+
+// The command line over the board file.
+void apply_options(const Options& o, fpp::scanner::BoardConfig& board) {
+    using namespace fpp::scanner;
+    if (!o.store.empty()) board.store.directory = o.store;
+    if (!o.table.empty()) board.table = o.table;
+    if (!o.settings.empty()) board.settings_file = o.settings;
+    if (!o.http.empty() || !o.token_file.empty()) {
+        if (!board.http) board.http.emplace();
+        if (!o.http.empty()) board.http->listen = o.http;
+        if (!o.token_file.empty()) board.http->token_file = o.token_file;
+        if (board.http->listen.empty() || board.http->token_file.empty())
+            throw fpp::InputError("command line", "--http",
+                                  "--http ADDRESS:PORT and --token-file FILE go together");
+        try {
+            (void)parse_listen_address(board.http->listen);
+        } catch (const std::invalid_argument& e) {
+            throw fpp::InputError("command line", "--http", e.what());
+        }
+    }
+    if (!o.web_root.empty() && board.http) board.http->web_root = o.web_root;
+    // The exposure a person set last, over the board file's.
+    if (board.settings_file)
+        if (const auto s = read_settings_file(*board.settings_file))
+            board.camera.settings.exposure_us = s->exposure_us;
+}
+
+int run(const Options& o, const fpp::scanner::Logger& log) {
+    using namespace fpp::scanner;
+    BoardConfig board = read_board_config(o.board);
+    apply_options(o, board);
+    const ScanMode mode = o.mode == "capture" ? ScanMode::capture : ScanMode::scan;
+    const int scans = o.scans > 0 ? o.scans : (o.once ? 1 : 0);
+    const bool serving = board.http && scans == 0;
+    // The table's path, kept for uploads even when no table is there yet.
+    const std::optional<std::filesystem::path> table_path = board.table;
+    // Capture mode records calibration sessions, made before any table
+    // exists: it neither needs nor loads one. A network scanner starts
+    // without one too, and takes one over the network.
+    if (mode == ScanMode::capture && !serving) board.table.reset();
+    if (serving && board.table && !std::filesystem::exists(*board.table)) {
+        log.warning("no table at " + board.table->string() +
+                    ": capture mode only until one is installed (PUT /api/v1/table)");
+        board.table.reset();
+    }
+    // A board file with a sim section is the virtual scanner; without one
+    // the hardware. Devices that cannot be opened throw DeviceError.
+    std::unique_ptr<SimBoard> sim;
+    std::unique_ptr<HardwareBoard> hardware;
+    if (board.sim) sim = std::make_unique<SimBoard>(board);
+    else {
+        hardware = std::make_unique<HardwareBoard>(board);
+        // As a service the scanner waits for a camera that does not answer
+        // yet (LED in error); --once and --scans fail at once.
+        if (scans > 0) hardware->open_camera();
+        else if (!hardware->wait_for_camera(log, g_stop)) {
+            hardware->led().set(fpp::drivers::LedState::off);
+            hardware->display().restore();
+            log.info("stopped while waiting for the camera");
+            return 0;
+        }
+    }
+    Devices devices = sim ? sim->devices() : hardware->devices();
+    // Lines and display are released by the destructors, on every path.
+    try {
+        std::optional<Scanner> made;
+        try {
+            made.emplace(board, devices, log);
+        } catch (const fpp::InputError& e) {
+            // A network scanner with a bad table still serves, so that a
+            // good one can be installed.
+            if (!serving || !board.table || e.file() != *board.table) throw;
+            log.error(std::string(e.what()) + ": serving without a table until one is installed");
+            board.table.reset();
+            made.emplace(board, devices, log);
+        }
+        Scanner& scanner = *made;
+        if (scans > 0) {
+            for (int k = 0; k < scans; ++k) {
+                const ScanOutcome outcome = scanner.scan(mode, &g_stop);
+                std::printf("%s\n", outcome.folder.string().c_str());
+                std::fflush(stdout);
+            }
+        } else if (serving) {
+            NetworkFace face(board, scanner, devices, log,
+                             NetworkFaceOptions{table_path, sim ? sim->session_board_yaml() : "",
+                                                sim != nullptr});
+            face.run(mode, g_stop);
+        } else {
+            scanner.run(mode, g_stop);
+            log.info("stopped");
+        }
+        devices.display.restore();
+        return 0;
+    } catch (const ScanAborted&) {
+        devices.display.restore(); // logged by the scanner; LED already off
+        return 1;
+    } catch (...) {
+        devices.led.set(fpp::drivers::LedState::error);
+        devices.display.restore();
+        throw;
+    }
 }
 
 } // namespace
 
 int main(int argc, char** argv) {
-    using namespace fpp::scanner;
-    std::string board_path;
-    std::string store;
-    std::string table;
-    bool once = false;
-    int scans = 0; // --scans N; --once is --scans 1
-    ScanMode mode = ScanMode::scan;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        const bool has_value = i + 1 < argc;
-        if (a == "--board" && has_value) board_path = argv[++i];
-        else if (a == "--store" && has_value) store = argv[++i];
-        else if (a == "--table" && has_value) table = argv[++i];
-        else if (a == "--once") once = true;
-        else if (a == "--scans" && has_value) {
-            const std::string n = argv[++i];
-            char* end = nullptr;
-            const long v = std::strtol(n.c_str(), &end, 10);
-            if (n.empty() || *end != '\0' || v < 1 || v > 100000) {
-                std::fprintf(stderr, "error: --scans must be 1..100000, not '%s'\n", n.c_str());
-                return 2;
-            }
-            scans = static_cast<int>(v);
-        }
-        else if (a == "--mode" && has_value) {
-            const std::string m = argv[++i];
-            if (m == "scan") mode = ScanMode::scan;
-            else if (m == "capture") mode = ScanMode::capture;
-            else {
-                std::fprintf(stderr, "error: --mode must be scan or capture, not '%s'\n", m.c_str());
-                return 2;
-            }
-        } else if (a == "--help" || a == "-h") {
-            usage(stdout);
-            return 0;
-        } else {
-            std::fprintf(stderr, "error: unknown or incomplete argument '%s'\n", a.c_str());
-            usage(stderr);
-            return 2;
-        }
-    }
-    if (board_path.empty()) {
-        usage(stderr);
-        return 2;
+    Options o;
+    CLI::App app{"fpp-scanner: the scanner head's firmware. Without --once or --scans it runs "
+                 "until SIGTERM: a button press scans, and with --http (or the board's http "
+                 "section) so does a request."};
+    app.add_option("--board", o.board, "board configuration (fpp-scanner-board/1, e.g. board/sim.yaml)")
+        ->required();
+    app.add_flag("--once", o.once,
+                 "scan once as if the button had been pressed, print the output folder and exit "
+                 "(0 only when the outputs are written)");
+    app.add_option("--scans", o.scans, "the same N times in a row, one output folder per line")
+        ->check(CLI::Range(1, 100000));
+    app.add_option("--mode", o.mode,
+                   "scan: point cloud (needs the board's table); capture: also the raw capture "
+                   "set (calibration sessions)")
+        ->check(CLI::IsMember({"scan", "capture"}));
+    app.add_option("--store", o.store, "scan store directory (overrides the board's)");
+    app.add_option("--table", o.table, "coefficient table (overrides the board's)");
+    app.add_option("--settings", o.settings,
+                   "settings file the API may change (overrides the board's)");
+    app.add_option("--http", o.http,
+                   "serve the HTTP API and page on ADDRESS:PORT (port 0: any free port, "
+                   "logged); needs --token-file");
+    app.add_option("--token-file", o.token_file, "the API's bearer token, first line of FILE");
+    app.add_option("--web-root", o.web_root, "the page's files (default: installed, else source)");
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e) == 0 ? 0 : 2;
     }
 
     struct sigaction action {};
@@ -91,65 +181,14 @@ int main(int argc, char** argv) {
     sigemptyset(&action.sa_mask);
     sigaction(SIGTERM, &action, nullptr);
     sigaction(SIGINT, &action, nullptr);
+    // A client that goes away mid-download must not end the scanner.
+    std::signal(SIGPIPE, SIG_IGN);
 
-    const Logger log;
+    const fpp::scanner::Logger log;
     try {
-        BoardConfig board = read_board_config(board_path);
-        if (!store.empty()) board.store.directory = store;
-        if (!table.empty()) board.table = table;
-        // Capture mode records calibration sessions, made before any table
-        // exists: it neither needs nor loads one.
-        if (mode == ScanMode::capture) board.table.reset();
-        // A board file with a sim section is the virtual scanner; without one
-        // the hardware. Devices that cannot be opened throw DeviceError.
-        std::unique_ptr<SimBoard> sim;
-        std::unique_ptr<HardwareBoard> hardware;
-        if (board.sim) sim = std::make_unique<SimBoard>(board);
-        else {
-            hardware = std::make_unique<HardwareBoard>(board);
-            // As a service the scanner waits for a camera that does not
-            // answer yet (LED in error); --once and --scans fail at once.
-            if (once || scans > 0) hardware->open_camera();
-            else if (!hardware->wait_for_camera(log, g_stop)) {
-                hardware->led().set(fpp::drivers::LedState::off);
-                hardware->display().restore();
-                log.info("stopped while waiting for the camera");
-                return 0;
-            }
-        }
-        Devices devices = sim ? sim->devices() : hardware->devices();
-        // Lines and display are released by the destructors, on every path.
-        try {
-            Scanner scanner(board, devices, log);
-            if (once && scans == 0) scans = 1;
-            if (scans > 0) {
-                for (int k = 0; k < scans; ++k) {
-                    const ScanOutcome outcome = scanner.scan(mode, &g_stop);
-                    std::printf("%s\n", outcome.folder.string().c_str());
-                    std::fflush(stdout);
-                }
-                devices.display.restore();
-                return 0;
-            }
-            scanner.run(mode, g_stop);
-            devices.display.restore();
-            log.info("stopped");
-            return 0;
-        } catch (const ScanAborted&) {
-            devices.display.restore(); // logged by the scanner; LED already off
-            return 1;
-        } catch (...) {
-            devices.led.set(fpp::drivers::LedState::error);
-            devices.display.restore();
-            throw;
-        }
-    } catch (const fpp::InputError& e) {
-        log.error(e.what());
-    } catch (const fpp::IoError& e) {
-        log.error(e.what());
-    } catch (const fpp::drivers::DeviceError& e) {
-        log.error(e.what());
+        return run(o, log);
     } catch (const std::exception& e) {
+        // InputError, IoError and DeviceError name the file, field or device.
         log.error(e.what());
     }
     return 1;

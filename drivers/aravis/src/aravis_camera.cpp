@@ -370,6 +370,18 @@ void AravisCamera::stop() {
     d.recycle_queued_buffers();
 }
 
+void AravisCamera::set_exposure_us(double exposure_us) {
+    Impl& d = *impl_;
+    if (!(exposure_us > 0.0) || exposure_us > 1e7)
+        throw InputError(kSettings, "exposure_us", "must lie in (0, 1e7] microseconds");
+    if (d.streaming) throw DeviceError(d.name, "exposure changed while acquiring");
+    glib::Error error;
+    arv_camera_set_exposure_time(d.camera.get(), exposure_us, error.out());
+    d.unreachable = bool(error);
+    error.throw_if_set(d.name, "cannot set ExposureTime = " + std::to_string(exposure_us) + " us");
+    d.settings.exposure_us = exposure_us;
+}
+
 void AravisCamera::software_trigger() {
     Impl& d = *impl_;
     if (d.settings.trigger != TriggerMode::software)

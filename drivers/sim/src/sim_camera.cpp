@@ -1,6 +1,7 @@
 #include "fpp/sim/sim_camera.hpp"
 
 #include "fpp/drivers/device_error.hpp"
+#include "fpp/error.hpp"
 
 #include <stdexcept>
 #include <utility>
@@ -54,6 +55,15 @@ void SimCamera::stop() {
 void SimCamera::inject_fault(CameraFault fault, int at_trigger) {
     fault_ = fault;
     fault_at_ = at_trigger;
+}
+
+void SimCamera::set_exposure_us(double exposure_us) {
+    check_present();
+    if (!(exposure_us > 0.0) || exposure_us > 1e7)
+        throw InputError("sim camera settings", "exposure_us", "must lie in (0, 1e7] microseconds");
+    if (streaming_)
+        throw drivers::DeviceError(kDevice, "exposure changed while streaming");
+    settings_.exposure_us = exposure_us;
 }
 
 void SimCamera::software_trigger() {

@@ -13,6 +13,7 @@
 #include <csetjmp>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <stdexcept>
@@ -200,9 +201,9 @@ void check_writable_image(const fs::path& path, Size size, int channels, bool al
     }
 }
 
-// Writes PNG bytes to `path` (created or truncated) and fsyncs it.
-void write_png_file(const fs::path& path, const void* pixels, Size size, int channels,
-                    int bit_depth) {
+// Writes the PNG to `file` (`path` names it in errors).
+void write_png_stream(std::FILE* file, const fs::path& path, const void* pixels, Size size,
+                      int channels, int bit_depth) {
     const std::size_t row_bytes = std::size_t(size.width) * std::size_t(channels) *
                                   std::size_t(bit_depth / 8);
     std::vector<png_bytep> rows(static_cast<std::size_t>(size.height));
@@ -210,13 +211,10 @@ void write_png_file(const fs::path& path, const void* pixels, Size size, int cha
     auto* base = static_cast<png_bytep>(const_cast<void*>(pixels));
     for (std::size_t y = 0; y < rows.size(); ++y) rows[y] = base + y * row_bytes;
 
-    UniqueFile file(std::fopen(path.c_str(), "wb"));
-    if (!file) throw IoError(path, describe_errno("cannot open for writing", errno));
-
     PngWriteJob job{};
     PngWriteGuard guard{&job};
     if (!png_write_create_c(&job)) throw std::bad_alloc();
-    job.file = file.get();
+    job.file = file;
     job.width = static_cast<png_uint_32>(size.width);
     job.height = static_cast<png_uint_32>(size.height);
     job.bit_depth = bit_depth;
@@ -231,6 +229,14 @@ void write_png_file(const fs::path& path, const void* pixels, Size size, int cha
                                                       err)
                                      : std::string("PNG write failed: ") + job.error.message);
     }
+}
+
+// Writes PNG bytes to `path` (created or truncated) and fsyncs it.
+void write_png_file(const fs::path& path, const void* pixels, Size size, int channels,
+                    int bit_depth) {
+    UniqueFile file(std::fopen(path.c_str(), "wb"));
+    if (!file) throw IoError(path, describe_errno("cannot open for writing", errno));
+    write_png_stream(file.get(), path, pixels, size, channels, bit_depth);
     if (std::fflush(file.get()) != 0) throw IoError(path, describe_errno("write failed", errno));
     if (::fsync(::fileno(file.get())) != 0) {
         throw IoError(path, describe_errno("fsync failed", errno));
@@ -442,6 +448,27 @@ Frame read_png_gray(const std::filesystem::path& path) {
         throw InputError(path, "", png_failure(job.error));
     }
     return frame;
+}
+
+std::string encode_png(const Frame& frame) {
+    const fs::path name = "<png in memory>";
+    check_writable_frame(name, frame);
+    char* buffer = nullptr;
+    std::size_t size = 0;
+    // open_memstream grows its buffer as libpng writes; fclose publishes it.
+    std::unique_ptr<char, decltype(&std::free)> owned(nullptr, &std::free);
+    {
+        UniqueFile file(::open_memstream(&buffer, &size));
+        if (!file) throw IoError(name, describe_errno("open_memstream", errno));
+        if (frame.bit_depth == 8)
+            write_png_stream(file.get(), name, frame.u8.data(), frame.u8.size(), 1, 8);
+        else
+            write_png_stream(file.get(), name, frame.u16.data(), frame.u16.size(), 1, 16);
+        const int closed = std::fclose(file.release());
+        owned.reset(buffer);
+        if (closed != 0) throw IoError(name, describe_errno("PNG in memory", errno));
+    }
+    return std::string(buffer, size);
 }
 
 void write_png(const std::filesystem::path& path, const Image<std::uint8_t>& image) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <stdexcept>
 
 namespace fpp::scanner {
@@ -66,7 +67,7 @@ public:
         const YAML::Node root = r_.load(yaml_text);
         r_.expect_map(root, "",
                       {"format", "name", "display", "gpio", "camera", "sequence", "table", "store",
-                       "timing", "sim"});
+                       "timing", "sim", "http", "settings"});
         BoardConfig c;
         c.file = r_.origin();
         if (text(root, "", "format") != kBoardConfigFormat)
@@ -80,6 +81,10 @@ public:
             c.table = path(root, "", "table");
         parse_store(r_.require(root, "", "store"), c.store);
         parse_timing(r_.require(root, "", "timing"), c.timing);
+        if (root["http"] && !root["http"].IsNull())
+            c.http = parse_http(root["http"]);
+        if (root["settings"] && !root["settings"].IsNull())
+            c.settings_file = path(root, "", "settings");
         if (c.camera.driver == CameraDriver::sim && !root["sim"])
             r_.fail("sim", "missing field (camera.driver is sim)");
         if (root["sim"]) {
@@ -181,6 +186,26 @@ private:
         t.flip_timeout =
             std::chrono::milliseconds(int_in(n, "timing", "flip_timeout_ms", 1, 10'000));
     }
+    HttpConfig parse_http(const YAML::Node& n) const {
+        r_.expect_map(n, "http",
+                      {"listen", "token_file", "max_connections", "timeout_s", "web_root"});
+        HttpConfig h;
+        h.listen = non_empty(n, "http", "listen");
+        try {
+            (void)parse_listen_address(h.listen);
+        } catch (const std::invalid_argument& e) {
+            r_.fail(n["listen"], "http.listen", e.what());
+        }
+        h.token_file = path(n, "http", "token_file");
+        if (n["max_connections"])
+            h.max_connections = int_in(n, "http", "max_connections", 1, 1024);
+        if (n["timeout_s"])
+            h.timeout = std::chrono::seconds(int_in(n, "http", "timeout_s", 1, 3600));
+        if (n["web_root"])
+            h.web_root = path(n, "http", "web_root");
+        return h;
+    }
+
     // The virtual scanner behind a real GigE Vision link: its frames go
     // through Aravis's fake camera, which has no line trigger and stamps
     // frames on the host's monotonic clock, to the Aravis driver by address.
@@ -239,6 +264,22 @@ private:
 };
 
 } // namespace
+
+ListenAddress parse_listen_address(const std::string& text) {
+    const auto colon = text.rfind(':');
+    if (colon == std::string::npos || colon == 0)
+        throw std::invalid_argument("'" + text + "' must be ADDRESS:PORT (e.g. 0.0.0.0:8080)");
+    ListenAddress a;
+    a.host = text.substr(0, colon);
+    const std::string port = text.substr(colon + 1);
+    int value = -1;
+    const auto [end, ec] = std::from_chars(port.data(), port.data() + port.size(), value);
+    if (port.empty() || ec != std::errc() || end != port.data() + port.size() || value < 0 ||
+        value > 65535)
+        throw std::invalid_argument("'" + text + "': the port must be 0..65535");
+    a.port = value;
+    return a;
+}
 
 Sequence BoardConfig::sequence(Size projector) const {
     if (!sequence_name.empty()) {

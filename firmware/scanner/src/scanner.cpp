@@ -7,15 +7,14 @@
 #include "fpp/patterns.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/scanner/scan_store.hpp"
+#include "scan_metadata.hpp"
 #include "fpp/table_kernel.hpp"
 #include "fpp/yaml_fields.hpp"
 
 #include <algorithm>
 #include <chrono>
-#include <cinttypes>
 #include <cstdio>
 #include <memory>
-#include <sstream>
 
 namespace fpp::scanner {
 
@@ -28,28 +27,6 @@ double wall_ms() {
     return std::chrono::duration<double, std::milli>(
                std::chrono::steady_clock::now().time_since_epoch())
         .count();
-}
-
-std::string json_string(const std::string& s) {
-    std::string out = "\"";
-    for (char c : s) {
-        if (c == '"' || c == '\\')
-            out += '\\';
-        if (static_cast<unsigned char>(c) < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
-            out += buf;
-        } else {
-            out += c;
-        }
-    }
-    return out + "\"";
-}
-
-std::string hex64(std::uint64_t v) {
-    char buf[24];
-    std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
-    return buf;
 }
 
 std::uint64_t hash_file(const fs::path& path) {
@@ -74,13 +51,6 @@ std::string utc_now() {
 
 } // namespace
 
-// One flip and its frame, for the metadata.
-struct FrameRecord {
-    drivers::FlipEvent flip;
-    std::uint64_t frame_id = 0;
-    std::int64_t frame_timestamp_ns = 0;
-};
-
 struct Scanner::Captured {
     std::vector<FrameRecord> records;
     std::vector<Frame> frames; // capture mode only
@@ -91,21 +61,11 @@ Scanner::Scanner(const BoardConfig& board, Devices devices, const Logger& log)
     : board_(board), dev_(devices), log_(log) {
     const Size projector = dev_.display.size();
     sequence_ = board_.sequence(projector);
-    if (board_.table) {
-        const Size camera = dev_.camera.size();
-        table_ = load_table(*board_.table, &camera);
-        if (table_.info().projector != projector)
-            throw InputError(*board_.table, "projector_size",
-                             "table made for a " + std::to_string(table_.info().projector.width) +
-                                 "x" + std::to_string(table_.info().projector.height) +
-                                 " projector, the display is " + std::to_string(projector.width) +
-                                 "x" + std::to_string(projector.height));
-        table_file_hash_ = hash_file(*board_.table);
-        log_.info("table " + board_.table->string() + " loaded (" + to_string(table_.info().model) +
-                  ", hash " + hex64(table_file_hash_) + ")");
-    }
-    const auto patterns = render_sequence(sequence_, projector);
+    if (board_.table)
+        reload_table(*board_.table);
+    auto patterns = render_sequence(sequence_, projector);
     patterns_ = patterns.size();
+    patterns.emplace_back(projector, 1, std::uint8_t{255}); // white, for previews
     // Made now, so that a scan never starts on a sequence the decoder rejects.
     decoder_.emplace(sequence_, dev_.camera.size(), projector);
     dev_.display.prepare(patterns);
@@ -115,44 +75,109 @@ Scanner::Scanner(const BoardConfig& board, Devices devices, const Logger& log)
               std::to_string(dev_.camera.size().height));
 }
 
-ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop) {
+CoefficientTable Scanner::load_checked_table(const fs::path& path) const {
+    const Size camera = dev_.camera.size();
+    const Size projector = dev_.display.size();
+    CoefficientTable table = load_table(path, &camera);
+    if (table.info().projector != projector)
+        throw InputError(path, "projector_size",
+                         "table made for a " + std::to_string(table.info().projector.width) + "x" +
+                             std::to_string(table.info().projector.height) +
+                             " projector, the display is " + std::to_string(projector.width) +
+                             "x" + std::to_string(projector.height));
+    return table;
+}
+
+void Scanner::reload_table(const fs::path& path) {
+    CoefficientTable table = load_checked_table(path);
+    const std::uint64_t hash = hash_file(path);
+    // Only now: a bad file leaves the table in use as it was.
+    table_ = std::move(table);
+    table_file_hash_ = hash;
+    table_path_ = path;
+    log_.info("table " + path.string() + " loaded (" + to_string(table_.info().model) + ", hash " +
+              hex64(table_file_hash_) + ")");
+}
+
+Frame Scanner::preview() {
+    const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
+    dev_.camera.start();
+    try {
+        dev_.display.show(patterns_); // the white pattern after the sequence's
+        const drivers::FlipEvent flip = dev_.display.wait_flip(board_.timing.flip_timeout);
+        dev_.clock.sleep_until_ns(
+            flip.timestamp_ns +
+            std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count());
+        if (software)
+            dev_.camera.software_trigger();
+        else
+            dev_.trigger.pulse(board_.timing.trigger_pulse);
+        Frame frame = dev_.camera.next_frame(board_.camera.settings.frame_timeout).frame;
+        dev_.camera.stop();
+        return frame;
+    } catch (...) {
+        dev_.camera.stop();
+        throw;
+    }
+}
+
+ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop, fs::path folder) {
     dev_.led.set(LedState::scanning);
     log_.info(std::string("scan started (") + (mode == ScanMode::scan ? "scan" : "capture") +
               " mode)");
+    const auto fail = [&](const std::string& why, LedState led) {
+        dev_.camera.stop();
+        dev_.led.set(led);
+        if (observer_)
+            observer_->failed(why);
+    };
+    try {
+        if (folder.empty()) {
+            prepare_store(board_.store.directory);
+            folder = new_scan_folder(board_.store.directory);
+        }
+    } catch (const std::exception& e) {
+        log_.error(std::string("scan failed: ") + e.what());
+        fail(e.what(), LedState::error);
+        throw;
+    }
+    if (observer_)
+        observer_->scan_started(folder.filename().string(), mode, static_cast<int>(patterns_));
     for (int attempt_no = 1;; ++attempt_no) {
         try {
-            ScanOutcome outcome = attempt(mode, stop);
+            ScanOutcome outcome = attempt(mode, stop, folder);
             outcome.attempts = attempt_no;
             ++scans_completed_;
             dev_.led.set(LedState::ready);
+            if (observer_)
+                observer_->written(outcome);
             return outcome;
         } catch (const drivers::DeviceError& e) {
-            dev_.camera.stop();
             if (attempt_no == 1 && e.device().find("camera") != std::string::npos) {
+                dev_.camera.stop();
                 log_.warning(std::string("scan attempt failed: ") + e.what() + "; retrying once");
                 continue;
             }
             log_.error(std::string("scan failed: ") + e.what());
-            dev_.led.set(LedState::error);
+            fail(e.what(), LedState::error);
             throw;
         } catch (const ScanAborted&) {
-            dev_.camera.stop();
             log_.warning("scan aborted by a stop request; nothing written");
-            dev_.led.set(LedState::off);
+            fail("aborted by a stop request", LedState::off);
             throw;
         } catch (const std::exception& e) {
-            dev_.camera.stop();
             log_.error(std::string("scan failed: ") + e.what());
-            dev_.led.set(LedState::error);
+            fail(e.what(), LedState::error);
             throw;
         }
     }
 }
 
-ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
+ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop,
+                             const fs::path& folder) {
     if (mode == ScanMode::scan && table_.empty())
         throw InputError(board_.file, "table", "scan mode needs a table (or use capture mode)");
-    prepare_store(board_.store.directory);
+    prepare_store(folder.parent_path());
 
     auto& clock = dev_.clock;
     const Size camera = dev_.camera.size();
@@ -199,6 +224,8 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
         // The next pattern flips while this frame is decoded.
         if (i + 1 < patterns_)
             dev_.display.show(i + 1);
+        if (observer_)
+            observer_->frame_captured(static_cast<int>(i + 1), static_cast<int>(patterns_));
         const double t0 = wall_ms();
         decoder.push(frame.frame);
         const double dt = wall_ms() - t0;
@@ -218,8 +245,9 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
     double t = wall_ms();
     DecodeResult decoded = decoder.finish();
     outcome.timings.finish_ms = wall_ms() - t;
+    if (observer_)
+        observer_->decoded();
 
-    const fs::path folder = new_scan_folder(board_.store.directory);
     t = wall_ms();
     write_folder_atomically(folder, [&](const fs::path& temp) {
         write_outputs(temp, mode, captured, decoded, outcome);
@@ -230,9 +258,11 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop) {
     outcome.folder = folder;
     recycled_ = std::move(decoded);
 
-    const auto removed = prune_store(board_.store.directory, board_.store.max_bytes, folder);
-    for (const auto& r : removed)
-        log_.info("store full: removed " + r.filename().string());
+    if (folder.parent_path() == board_.store.directory) {
+        const auto removed = prune_store(board_.store.directory, board_.store.max_bytes, folder);
+        for (const auto& r : removed)
+            log_.info("store full: removed " + r.filename().string());
+    }
     char line[200];
     std::snprintf(line, sizeof line,
                   "scan written: %zu points, %d frames, streaming %.2f ms/frame (max %.2f), "
@@ -252,7 +282,7 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
         const Image<float>& phase =
             table_.info().phase_axis == Axis::x ? decoded.proj_x : decoded.proj_y;
         if (phase.empty())
-            throw InputError(*board_.table, "phase_axis",
+            throw InputError(table_path_, "phase_axis",
                              std::string("the sequence codes no ") +
                                  to_string(table_.info().phase_axis) + " phase");
         // cloud_ keeps its memory from the previous scan: a fresh 23 MB
@@ -293,45 +323,17 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
         write_capture_set(temp / "capture", manifest, captured.frames);
     }
 
-    const auto& s = board_.camera.settings;
-    std::ostringstream j;
-    j << "{\n  \"format\": \"fpp-scan/1\",\n"
-      << "  \"board\": " << json_string(board_.name) << ",\n"
-      << "  \"mode\": \"" << (mode == ScanMode::scan ? "scan" : "capture") << "\",\n"
-      << "  \"started_utc\": \"" << captured.started_utc << "\",\n"
-      << "  \"camera\": {\"width\": " << camera.width << ", \"height\": " << camera.height
-      << ", \"bit_depth\": " << dev_.camera.bit_depth()
-      << ", \"pixel_format\": " << json_string(s.pixel_format)
-      << ", \"exposure_us\": " << s.exposure_us << ", \"trigger\": \""
-      << (s.trigger == drivers::TriggerMode::line ? "line" : "software") << "\"},\n"
-      << "  \"projector\": {\"width\": " << projector.width << ", \"height\": " << projector.height
-      << "},\n"
-      << "  \"sequence\": "
-      << json_string(board_.sequence_name.empty() ? "blocks" : board_.sequence_name)
-      << ",\n  \"frames\": " << outcome.frames << ",\n"
-      << "  \"timing_settings_us\": {\"settle\": " << board_.timing.settle.count()
-      << ", \"trigger_pulse\": " << board_.timing.trigger_pulse.count() << "},\n";
+    std::optional<TableSummary> table;
     if (!table_.empty())
-        j << "  \"table\": {\"path\": " << json_string(board_.table->string()) << ", \"model\": \""
-          << to_string(table_.info().model) << "\", \"file_fnv1a64\": \"" << hex64(table_file_hash_)
-          << "\", \"calibration_fnv1a64\": \"" << hex64(table_.info().calibration_hash) << "\"},\n";
-    j << "  \"decode\": {\"method_x\": " << json_string(decoded.method_x)
-      << ", \"method_y\": " << json_string(decoded.method_y) << "},\n"
-      << "  \"points\": " << outcome.points << ",\n"
-      << "  \"timings_ms\": {\"capture\": " << outcome.timings.capture_ms
-      << ", \"push_mean\": " << outcome.timings.push_mean_ms
-      << ", \"push_max\": " << outcome.timings.push_max_ms
-      << ", \"finish\": " << outcome.timings.finish_ms
-      << ", \"apply\": " << outcome.timings.apply_ms << "},\n"
-      << "  \"flips\": [";
-    for (std::size_t i = 0; i < captured.records.size(); ++i) {
-        const auto& r = captured.records[i];
-        j << (i ? ",\n    " : "\n    ") << "{\"pattern\": " << r.flip.index
-          << ", \"sequence\": " << r.flip.sequence << ", \"flip_ns\": " << r.flip.timestamp_ns
-          << ", \"frame_id\": " << r.frame_id << ", \"frame_ns\": " << r.frame_timestamp_ns << "}";
-    }
-    j << "\n  ]\n}\n";
-    write_file_synced(temp / "scan.json", j.str());
+        table = TableSummary{table_path_, table_.info().model, table_file_hash_,
+                             table_.info().calibration_hash};
+    const ScanMetadata metadata{board_,           mode,
+                                captured.started_utc, camera,
+                                dev_.camera.bit_depth(), projector,
+                                table,            decoded.method_x,
+                                decoded.method_y, outcome,
+                                captured.records};
+    write_file_synced(temp / "scan.json", scan_json(metadata));
 }
 
 void Scanner::run(ScanMode mode, const std::atomic<bool>& stop) {

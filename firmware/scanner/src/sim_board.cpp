@@ -119,16 +119,23 @@ SimBoard::SimBoard(const BoardConfig& board) {
 }
 
 void SimBoard::next_session_pose() {
-    // A scan that took no frame (an attempt that failed at once) keeps the
-    // pose; any other scan moves the board on, cycling through the poses.
-    if (camera_->exposures().size() == exposures_at_pose_)
+    // A scan that took no frame (an attempt that failed at once) and a
+    // preview (one frame) keep the pose; any other scan moves the board on,
+    // cycling through the poses.
+    if (camera_->exposures().size() <= exposures_at_pose_ + 1) {
+        exposures_at_pose_ = camera_->exposures().size();
         return;
+    }
     exposures_at_pose_ = camera_->exposures().size();
     pose_index_ = (pose_index_ + 1) % session_poses_.size();
     auto next = std::make_unique<sim::Renderer>(
         rig_, sim::session_scene(*session_, session_poses_[pose_index_]));
     camera_->set_renderer(*next);
     renderer_ = std::move(next);
+}
+
+std::string SimBoard::session_board_yaml() const {
+    return session_ ? sim::session_board_yaml(*session_) : std::string();
 }
 
 Devices SimBoard::devices() {

@@ -29,6 +29,10 @@ public:
         driver_.stop();
         sensor_.stop();
     }
+    void set_exposure_us(double exposure_us) override {
+        sensor_.set_exposure_us(exposure_us);
+        driver_.set_exposure_us(exposure_us);
+    }
     void software_trigger() override {
         // The image must be in the fake camera before its trigger arrives:
         // it fills the frame when it sees the trigger.

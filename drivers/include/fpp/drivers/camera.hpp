@@ -49,6 +49,11 @@ public:
     virtual void start() = 0;
     virtual void stop() = 0;
 
+    // Exposure time of the frames from the next start() on (the value is
+    // checked: InputError outside (0, 1e7] us; DeviceError when the camera
+    // refuses it). Only while stopped.
+    virtual void set_exposure_us(double exposure_us) = 0;
+
     // Fire one exposure from software. Only valid with TriggerMode::software;
     // throws DeviceError otherwise or when the camera is gone.
     virtual void software_trigger() = 0;

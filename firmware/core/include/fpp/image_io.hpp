@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 
 namespace fpp {
 
@@ -30,6 +31,8 @@ PngInfo read_png_info(const std::filesystem::path& path);
 void write_png(const std::filesystem::path& path, const Image<std::uint8_t>& image); // 1 or 3 ch
 void write_png(const std::filesystem::path& path, const Image<std::uint16_t>& image); // 1 ch
 void write_png(const std::filesystem::path& path, const Frame& frame);
+// The same PNG bytes in memory (a preview served over the network).
+std::string encode_png(const Frame& frame);
 
 // Float32 TIFF with 1 to 4 interleaved channels (NaN preserved exactly).
 // Lossless Deflate with the floating-point predictor.

@@ -42,6 +42,7 @@ public:
     int bit_depth() const override;
     void start() override;
     void stop() override;
+    void set_exposure_us(double exposure_us) override;
     void software_trigger() override;
     CapturedFrame next_frame(std::chrono::milliseconds timeout) override;
 

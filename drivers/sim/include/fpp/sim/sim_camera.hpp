@@ -46,6 +46,7 @@ public:
     int bit_depth() const override;
     void start() override;
     void stop() override;
+    void set_exposure_us(double exposure_us) override;
     void software_trigger() override;
     drivers::CapturedFrame next_frame(std::chrono::milliseconds timeout) override;
 

@@ -18,6 +18,11 @@
 //   table: <path.fpt>                  optional: without it only capture mode works
 //   store: {directory: <path>, max_mb: N}   oldest scans pruned beyond N MiB
 //   timing: {settle_us: N, trigger_pulse_us: N, flip_timeout_ms: N}
+//   http: {listen: ADDRESS:PORT, token_file: <path>, max_connections: N (default 32),
+//          timeout_s: N (default 30), web_root: <path> (optional)}
+//                                      optional: without it no socket is opened
+//   settings: <path>                   optional: the settings the API may change
+//                                      (exposure_us), written by the scanner
 //   sim: {rig: <rig yaml>, scene: <scene name or yaml>, binning: N,
 //         flip_latency_us: N, clock: virtual | steady, seed: N,
 //         camera_only: bool (optional, default false)}
@@ -83,6 +88,23 @@ struct TimingConfig {
     std::chrono::milliseconds flip_timeout{100};
 };
 
+// The HTTP API and page (firmware/scanner/http-api.md).
+struct HttpConfig {
+    std::string listen;                  // "ADDRESS:PORT"; port 0 = any free port
+    std::filesystem::path token_file;    // the API's bearer token, first line
+    int max_connections = 32;
+    std::chrono::seconds timeout{30};    // an idle connection is closed after this
+    std::optional<std::filesystem::path> web_root; // the page's files
+};
+
+struct ListenAddress {
+    std::string host; // IPv4 or IPv6 literal
+    int port = 0;
+};
+
+// "0.0.0.0:8080", "[::1]:8080" -> host and port; throws std::invalid_argument.
+ListenAddress parse_listen_address(const std::string& text);
+
 struct SimConfig {
     std::filesystem::path rig;
     std::string scene = "composite"; // named scene or resolved yaml path
@@ -105,6 +127,8 @@ struct BoardConfig {
     StoreConfig store;
     TimingConfig timing;
     std::optional<SimConfig> sim; // a simulated board (always with camera.driver sim)
+    std::optional<HttpConfig> http;
+    std::optional<std::filesystem::path> settings_file;
 
     // The sequence for a projector of this size (throws InputError naming
     // field "sequence" if it does not fit that projector).

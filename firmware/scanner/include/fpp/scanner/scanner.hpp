@@ -67,6 +67,18 @@ struct ScanOutcome {
     ScanTimings timings;
 };
 
+// What a scan reports as it goes (the HTTP API's events). Called on the
+// scanning thread; implementations must return quickly.
+class ScanObserver {
+public:
+    virtual ~ScanObserver() = default;
+    virtual void scan_started(const std::string& id, ScanMode mode, int frames) = 0;
+    virtual void frame_captured(int frame, int frames) = 0; // frame counts from 1
+    virtual void decoded() = 0;
+    virtual void written(const ScanOutcome& outcome) = 0;
+    virtual void failed(const std::string& reason) = 0;
+};
+
 class Scanner {
 public:
     // Loads and checks the table (InputError naming the file: missing,
@@ -78,7 +90,21 @@ public:
     // (ScanAborted). A camera fault (DeviceError from the camera) fails the
     // attempt and the scan is tried once more. On failure the LED shows
     // error, nothing is left in the store, and the exception propagates.
-    ScanOutcome scan(ScanMode mode, const std::atomic<bool>* stop = nullptr);
+    // `folder`: where the scan goes (a new folder in the board's store when
+    // empty); the store is pruned only when it goes there.
+    ScanOutcome scan(ScanMode mode, const std::atomic<bool>* stop = nullptr,
+                     std::filesystem::path folder = {});
+
+    // One frame with the projector all white (placing a board, setting the
+    // exposure). Throws DeviceError.
+    Frame preview();
+
+    // Replaces the table used from the next scan on (loaded and checked as
+    // in the constructor: InputError naming the file for a bad one, and the
+    // table in use stays).
+    void reload_table(const std::filesystem::path& path);
+
+    void set_observer(ScanObserver* observer) { observer_ = observer; }
 
     // Idle loop: LED ready, a button press starts a scan; presses during a
     // scan are discarded and logged. Returns when `stop` is set. Scan
@@ -88,11 +114,16 @@ public:
     int frames_per_scan() const { return static_cast<int>(patterns_); }
     const Sequence& sequence() const { return sequence_; }
     bool has_table() const { return !table_.empty(); }
+    const CoefficientTable& table() const { return table_; }
+    std::uint64_t table_file_hash() const { return table_file_hash_; }
+    const std::filesystem::path& table_path() const { return table_path_; }
     int scans_completed() const { return scans_completed_; }
 
 private:
     struct Captured;
-    ScanOutcome attempt(ScanMode mode, const std::atomic<bool>* stop);
+    ScanOutcome attempt(ScanMode mode, const std::atomic<bool>* stop,
+                        const std::filesystem::path& folder);
+    CoefficientTable load_checked_table(const std::filesystem::path& path) const;
     void write_outputs(const std::filesystem::path& temp, ScanMode mode, Captured& captured,
                        DecodeResult& decoded, ScanOutcome& outcome);
 
@@ -100,9 +131,11 @@ private:
     Devices dev_;
     const Logger& log_;
     Sequence sequence_;
-    std::size_t patterns_ = 0;
+    std::size_t patterns_ = 0; // the sequence's; the display also holds a white one after them
+    ScanObserver* observer_ = nullptr;
     CoefficientTable table_;
     std::uint64_t table_file_hash_ = 0;
+    std::filesystem::path table_path_;
     // Memory reused scan after scan: a fresh decoder, result or cloud costs
     // page faults on every scan (tens of ms at 1600x1200).
     std::optional<StreamingDecoder> decoder_;

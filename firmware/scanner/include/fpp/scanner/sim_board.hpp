@@ -44,6 +44,9 @@ public:
 
     Devices devices();
 
+    // The calibration board's board.yaml of a session scene ("" otherwise).
+    std::string session_board_yaml() const;
+
     drivers::Clock& clock() { return *clock_; }
     const sim::Rig& rig() const { return rig_; }
     const sim::Renderer& renderer() const { return *renderer_; }

@@ -1,0 +1,49 @@
+#pragma once
+// The scanner on the network: the HTTP API and page (Api on an HttpServer),
+// its events, and the ScannerService that runs the scans, wired from the
+// board's http section. Lives on the thread that owns the devices.
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <fpp/scanner/board_config.hpp>
+#include <fpp/scanner/log.hpp>
+#include <fpp/scanner/scanner.hpp>
+
+namespace fpp::scanner {
+
+struct NetworkFaceOptions {
+    std::optional<std::filesystem::path> table_path; // where uploaded tables go
+    std::string session_board_yaml;                  // a simulated session board's own
+    bool simulated = false;
+};
+
+class NetworkFace {
+public:
+    // Reads the token, finds the page and starts listening (logged as
+    // "http: listening on ADDRESS:PORT"). Throws InputError for a bad token
+    // file, IoError when it cannot listen.
+    NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
+                NetworkFaceOptions options);
+    ~NetworkFace();
+    NetworkFace(const NetworkFace&) = delete;
+    NetworkFace& operator=(const NetworkFace&) = delete;
+
+    // Button presses (scans in `button_mode`) and requests until `stop`.
+    void run(ScanMode button_mode, const std::atomic<bool>& stop);
+
+    int port() const;
+
+private:
+    struct Parts;
+    std::unique_ptr<Parts> parts_;
+};
+
+// Where the page's files are: the board's (or --web-root), else installed
+// beside the binary (BIN/../share/fpp-scanner/web), else the source folder
+// the binary was built from.
+std::filesystem::path find_web_root(const std::optional<std::filesystem::path>& configured);
+
+} // namespace fpp::scanner

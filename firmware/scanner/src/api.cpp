@@ -1,0 +1,500 @@
+#include "fpp/scanner/api.hpp"
+
+#include "fpp/atomic_file.hpp"
+#include "fpp/capture_set.hpp"
+#include "fpp/error.hpp"
+#include "fpp/scanner/access_token.hpp"
+#include "fpp/scanner/api_error.hpp"
+#include "fpp/scanner/scan_store.hpp"
+#include "fpp/yaml_fields.hpp"
+#include "tar_stream.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <regex>
+
+namespace fpp::scanner {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr std::uint64_t kMaxJsonBody = 64 * 1024;
+constexpr auto kKeepAlive = std::chrono::seconds(10);
+
+std::vector<std::string> split_path(const std::string& path) {
+    std::vector<std::string> parts;
+    std::size_t i = 0;
+    while (i < path.size()) {
+        const std::size_t j = path.find('/', i);
+        const std::size_t end = j == std::string::npos ? path.size() : j;
+        if (end > i)
+            parts.push_back(path.substr(i, end - i));
+        i = end + 1;
+    }
+    return parts;
+}
+
+bool is_scan_id(const std::string& s) {
+    static const std::regex id(R"(scan-\d{8}-\d{6}-\d{3}(-\d{1,6})?)");
+    return std::regex_match(s, id);
+}
+
+bool is_session_name(const std::string& s) {
+    static const std::regex name(R"([A-Za-z0-9_-][A-Za-z0-9._-]{0,63})");
+    return std::regex_match(s, name);
+}
+
+// A path segment of a static file: no "..", no hidden files, no escapes.
+bool is_plain_segment(const std::string& s) {
+    static const std::regex segment(R"([A-Za-z0-9_-][A-Za-z0-9._-]{0,127})");
+    return std::regex_match(s, segment);
+}
+
+std::string content_type_of(const fs::path& file) {
+    const std::string ext = file.extension().string();
+    if (ext == ".html") return "text/html; charset=utf-8";
+    if (ext == ".js") return "text/javascript; charset=utf-8";
+    if (ext == ".css") return "text/css; charset=utf-8";
+    if (ext == ".png") return "image/png";
+    if (ext == ".svg") return "image/svg+xml";
+    if (ext == ".ico") return "image/x-icon";
+    return "";
+}
+
+HttpResponse file_response(const fs::path& file, const std::string& type,
+                           const std::string& download_name = {}) {
+    if (!fs::is_regular_file(file))
+        return HttpResponse::error(404, "no such file");
+    HttpResponse r;
+    r.file = file;
+    r.content_type = type;
+    if (!download_name.empty())
+        r.headers.emplace_back("Content-Disposition",
+                               "attachment; filename=\"" + download_name + "\"");
+    return r;
+}
+
+HttpResponse method_not_allowed(const std::string& allowed) {
+    HttpResponse r = HttpResponse::error(405, "method not allowed here (allowed: " + allowed + ")");
+    r.headers.emplace_back("Allow", allowed);
+    return r;
+}
+
+json parse_body(const HttpRequest& request) {
+    if (request.body.empty())
+        return json::object();
+    try {
+        json j = json::parse(request.body);
+        if (!j.is_object())
+            throw ApiError(400, "the body must be a JSON object");
+        return j;
+    } catch (const json::parse_error& e) {
+        throw ApiError(400, std::string("the body is not JSON: ") + e.what());
+    }
+}
+
+// A key that must be a string if present.
+std::string string_field(const json& body, const char* key, const std::string& fallback) {
+    if (!body.contains(key))
+        return fallback;
+    if (!body[key].is_string())
+        throw ApiError(400, std::string(key) + ": must be a string");
+    return body[key].get<std::string>();
+}
+
+void expect_keys(const json& body, std::initializer_list<const char*> allowed) {
+    for (const auto& [key, value] : body.items())
+        if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; }))
+            throw ApiError(400, key + ": unknown field");
+}
+
+ScanMode mode_of(const std::string& text) {
+    if (text == "scan")
+        return ScanMode::scan;
+    if (text == "capture")
+        return ScanMode::capture;
+    throw ApiError(400, "mode: must be scan or capture");
+}
+
+// One entry of GET /scans (and a session's pose list).
+json scan_summary(const fs::path& folder) {
+    json entry = {{"id", folder.filename().string()}};
+    try {
+        const json meta = json::parse(yaml_fields::read_text_file(folder / "scan.json"));
+        entry["mode"] = meta.value("mode", "");
+        entry["started_utc"] = meta.value("started_utc", "");
+        entry["points"] = meta.value("points", 0);
+    } catch (const std::exception&) {
+        entry["mode"] = nullptr; // written by an older scanner, or damaged
+    }
+    entry["bytes"] = folder_bytes(folder);
+    entry["cloud"] = fs::exists(folder / "cloud.ply");
+    entry["capture"] = fs::exists(folder / "capture" / "capture.yaml");
+    return entry;
+}
+
+// The frame under white light of a scan's capture set.
+std::optional<fs::path> texture_of(const fs::path& folder) {
+    const fs::path capture = folder / "capture";
+    if (!fs::exists(capture / "capture.yaml"))
+        return std::nullopt;
+    try {
+        const CaptureManifest m = read_manifest(capture / "capture.yaml");
+        std::size_t frame = 0;
+        for (const PatternBlock& block : m.sequence) {
+            if (std::holds_alternative<WhiteBlock>(block))
+                return frame < m.frames.size() ? std::optional(capture / m.frames[frame])
+                                               : std::nullopt;
+            frame += static_cast<std::size_t>(frame_count(block));
+        }
+    } catch (const std::exception&) {
+    }
+    return std::nullopt;
+}
+
+void remove_folder(const fs::path& folder) {
+    std::error_code ec;
+    fs::remove_all(folder, ec);
+    if (ec)
+        throw ApiError(500, "cannot remove " + folder.filename().string() + ": " + ec.message());
+}
+
+// Server-sent events of one client, from its subscription.
+class EventStream final : public HttpStream {
+public:
+    explicit EventStream(std::shared_ptr<EventHub::Subscription> s) : subscription_(std::move(s)) {}
+    std::size_t read(char* out, std::size_t max) override {
+        while (offset_ == pending_.size()) {
+            std::optional<std::string> next =
+                subscription_->next(std::chrono::duration_cast<std::chrono::milliseconds>(kKeepAlive));
+            if (!next)
+                return 0; // the scanner stops
+            pending_ = next->empty() ? std::string(": keep-alive\n\n") : std::move(*next);
+            offset_ = 0;
+        }
+        const std::size_t n = std::min(max, pending_.size() - offset_);
+        std::copy_n(pending_.data() + offset_, n, out);
+        offset_ += n;
+        return n;
+    }
+
+private:
+    std::shared_ptr<EventHub::Subscription> subscription_;
+    std::string pending_;
+    std::size_t offset_ = 0;
+};
+
+} // namespace
+
+Api::Api(ScannerService& service, EventHub& events, const Logger& log, ApiOptions options)
+    : service_(service), events_(events), log_(log), options_(std::move(options)) {}
+
+std::optional<HttpResponse> Api::begin(const HttpRequest& request, BodyPolicy& policy) {
+    if (!request.path.starts_with("/api/"))
+        return std::nullopt; // static files: no body
+    if (!authorized(request.authorization, options_.token)) {
+        HttpResponse r = HttpResponse::error(401, "a valid token is needed: Authorization: Bearer TOKEN");
+        r.headers.emplace_back("WWW-Authenticate", "Bearer");
+        return r;
+    }
+    if (request.method == "PUT" && request.path == "/api/v1/table") {
+        const auto target = service_.table_path();
+        if (!target)
+            return HttpResponse::error(409, "the board names no table path (board key table, or "
+                                            "--table)");
+        std::error_code ec;
+        fs::create_directories(target->parent_path(), ec);
+        policy.max_bytes = options_.max_table_bytes;
+        policy.spool_dir = target->parent_path(); // the same file system: installed by rename
+    } else if (request.method == "POST" || request.method == "PUT") {
+        policy.max_bytes = kMaxJsonBody;
+    }
+    return std::nullopt;
+}
+
+HttpResponse Api::handle(HttpRequest& request) {
+    try {
+        if (!request.path.starts_with("/api/"))
+            return static_file(request.path);
+        const auto parts = split_path(request.path);
+        if (parts.size() < 2 || parts[1] != "v1")
+            return HttpResponse::error(404, "no such path (the API is /api/v1)");
+        HttpResponse r = route(request, parts);
+        r.headers.emplace_back("Cache-Control", "no-store");
+        return r;
+    } catch (const ApiError& e) {
+        return HttpResponse::error(e.status(), e.what());
+    } catch (const InputError& e) {
+        return HttpResponse::error(400, e.what());
+    } catch (const IoError& e) {
+        log_.error(std::string("http: ") + request.method + " " + request.path + ": " + e.what());
+        return HttpResponse::error(500, e.what());
+    }
+}
+
+HttpResponse Api::route(HttpRequest& request, const std::vector<std::string>& parts) {
+    const std::string& m = request.method;
+    const std::string what = parts.size() > 2 ? parts[2] : "";
+    if (what == "scans")
+        return scans(request, parts);
+    if (what == "sessions")
+        return sessions(request, parts);
+    if (parts.size() != 3)
+        return HttpResponse::error(404, "no such path");
+    if (what == "status")
+        return m == "GET" ? HttpResponse::json(200, service_.status().dump())
+                          : method_not_allowed("GET");
+    if (what == "events")
+        return m == "GET" ? events() : method_not_allowed("GET");
+    if (what == "preview.png")
+        return m == "GET" ? preview() : method_not_allowed("GET");
+    if (what == "settings")
+        return settings(request);
+    if (what == "table")
+        return table(request);
+    return HttpResponse::error(404, "no such path");
+}
+
+HttpResponse Api::scans(HttpRequest& request, const std::vector<std::string>& parts) {
+    const std::string& m = request.method;
+    if (parts.size() == 3) {
+        if (m == "POST") {
+            const json body = parse_body(request);
+            expect_keys(body, {"mode"});
+            const ScanMode mode = mode_of(string_field(body, "mode", "scan"));
+            const std::string id = service_.start_scan(mode);
+            HttpResponse r = HttpResponse::json(
+                202, json{{"id", id}, {"mode", mode == ScanMode::scan ? "scan" : "capture"}}.dump());
+            r.headers.emplace_back("Location", "/api/v1/scans/" + id);
+            return r;
+        }
+        if (m != "GET")
+            return method_not_allowed("GET, POST");
+        auto folders = list_scans(service_.store());
+        std::reverse(folders.begin(), folders.end()); // newest first
+        json list = json::array();
+        for (const auto& f : folders)
+            list.push_back(scan_summary(f));
+        return HttpResponse::json(200, json{{"scans", list}}.dump());
+    }
+    if (!is_scan_id(parts[3]))
+        return HttpResponse::error(404, "no scan '" + parts[3] + "'");
+    const fs::path folder = service_.store() / parts[3];
+    if (!fs::is_directory(folder))
+        return HttpResponse::error(404, "no scan '" + parts[3] + "'");
+    if (parts.size() == 4) {
+        if (m == "DELETE") {
+            remove_folder(folder);
+            log_.info("http: scan " + parts[3] + " deleted");
+            return HttpResponse{204, "application/json", {}, {}, {}, {}};
+        }
+        return m == "GET" ? file_response(folder / "scan.json", "application/json")
+                          : method_not_allowed("GET, DELETE");
+    }
+    if (parts.size() == 5 && m == "GET")
+        return scan_file(folder, parts[4]);
+    return parts.size() == 5 ? method_not_allowed("GET") : HttpResponse::error(404, "no such path");
+}
+
+HttpResponse Api::scan_file(const fs::path& folder, const std::string& file) {
+    const std::string id = folder.filename().string();
+    if (file == "cloud.ply")
+        return file_response(folder / "cloud.ply", "application/octet-stream", id + "-cloud.ply");
+    if (file == "texture.png") {
+        const auto texture = texture_of(folder);
+        return texture ? file_response(*texture, "image/png")
+                       : HttpResponse::error(404, "the scan has no frame under white light");
+    }
+    if (file == "capture.tar") {
+        if (!fs::exists(folder / "capture" / "capture.yaml"))
+            return HttpResponse::error(404, "the scan has no capture set (scan mode)");
+        HttpResponse r;
+        r.content_type = "application/x-tar";
+        r.stream = std::make_shared<TarStream>(tar_entries_of(folder / "capture", "capture/"));
+        r.headers.emplace_back("Content-Disposition",
+                               "attachment; filename=\"" + id + "-capture.tar\"");
+        return r;
+    }
+    return HttpResponse::error(404, "no such file");
+}
+
+HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>& parts) {
+    const std::string& m = request.method;
+    const fs::path root = service_.sessions_dir();
+    if (parts.size() == 3) {
+        if (m == "POST") {
+            const json body = parse_body(request);
+            expect_keys(body, {"name", "board_yaml"});
+            const std::string name = string_field(body, "name", "");
+            if (!is_session_name(name))
+                throw ApiError(400, "name: 1 to 64 of A-Z a-z 0-9 . _ -, not starting with .");
+            std::string board = string_field(body, "board_yaml", service_.session_board_yaml());
+            if (board.empty())
+                throw ApiError(400, "board_yaml: needed (the calibration board, format " +
+                                        std::string(kBoardFormat) + ")");
+            try {
+                (void)parse_board(board, "board_yaml");
+            } catch (const InputError& e) {
+                throw ApiError(400, e.what());
+            }
+            const fs::path folder = root / name;
+            if (fs::exists(folder))
+                throw ApiError(409, "session '" + name + "' exists");
+            fs::create_directories(root);
+            write_folder_atomically(folder, [&](const fs::path& temp) {
+                write_file_synced(temp / "board.yaml", board);
+            });
+            log_.info("http: session " + name + " created");
+            return HttpResponse::json(201, json{{"name", name}, {"poses", 0}}.dump());
+        }
+        if (m != "GET")
+            return method_not_allowed("GET, POST");
+        json list = json::array();
+        std::error_code ec;
+        std::vector<fs::path> folders;
+        for (const auto& e : fs::directory_iterator(root, ec))
+            if (e.is_directory() && is_session_name(e.path().filename().string()))
+                folders.push_back(e.path());
+        std::sort(folders.begin(), folders.end());
+        for (const auto& f : folders)
+            list.push_back({{"name", f.filename().string()}, {"poses", list_scans(f).size()}});
+        return HttpResponse::json(200, json{{"sessions", list}}.dump());
+    }
+    const std::string& name = parts[3];
+    const fs::path folder = root / name;
+    if (!is_session_name(name) || !fs::is_directory(folder))
+        return HttpResponse::error(404, "no session '" + name + "'");
+    if (parts.size() == 4) {
+        if (m == "DELETE") {
+            remove_folder(folder);
+            log_.info("http: session " + name + " deleted");
+            return HttpResponse{204, "application/json", {}, {}, {}, {}};
+        }
+        if (m != "GET")
+            return method_not_allowed("GET, DELETE");
+        json poses = json::array();
+        for (const auto& f : list_scans(folder))
+            poses.push_back(scan_summary(f));
+        std::string board;
+        try {
+            board = yaml_fields::read_text_file(folder / "board.yaml");
+        } catch (const std::exception&) {
+        }
+        return HttpResponse::json(
+            200, json{{"name", name}, {"board_yaml", board}, {"poses", poses}}.dump());
+    }
+    if (parts[4] == "session.tar" && parts.size() == 5) {
+        if (m != "GET")
+            return method_not_allowed("GET");
+        HttpResponse r;
+        r.content_type = "application/x-tar";
+        r.stream = std::make_shared<TarStream>(tar_entries_of(folder, name + "/"));
+        r.headers.emplace_back("Content-Disposition",
+                               "attachment; filename=\"" + name + ".tar\"");
+        return r;
+    }
+    if (parts[4] != "poses")
+        return HttpResponse::error(404, "no such path");
+    if (parts.size() == 5) {
+        if (m != "POST")
+            return method_not_allowed("POST");
+        const std::string id = service_.start_scan(ScanMode::capture, name);
+        HttpResponse r =
+            HttpResponse::json(202, json{{"id", id}, {"session", name}}.dump());
+        r.headers.emplace_back("Location", "/api/v1/sessions/" + name + "/poses/" + id);
+        return r;
+    }
+    if (!is_scan_id(parts[5]) || !fs::is_directory(folder / parts[5]))
+        return HttpResponse::error(404, "no pose '" + parts[5] + "' in session '" + name + "'");
+    const fs::path pose = folder / parts[5];
+    if (parts.size() == 6) {
+        if (m == "DELETE") {
+            remove_folder(pose);
+            return HttpResponse{204, "application/json", {}, {}, {}, {}};
+        }
+        return m == "GET" ? file_response(pose / "scan.json", "application/json")
+                          : method_not_allowed("GET, DELETE");
+    }
+    if (parts.size() == 7 && m == "GET")
+        return scan_file(pose, parts[6]);
+    return HttpResponse::error(404, "no such path");
+}
+
+HttpResponse Api::events() {
+    HttpResponse r;
+    r.content_type = "text/event-stream";
+    r.headers.emplace_back("Cache-Control", "no-store");
+    r.stream = std::make_shared<EventStream>(events_.subscribe(service_.state_event()));
+    return r;
+}
+
+HttpResponse Api::preview() {
+    const Preview p = service_.preview();
+    HttpResponse r;
+    r.content_type = "image/png";
+    r.body = p.png;
+    r.headers.emplace_back("X-Preview-Saturated", std::to_string(p.saturated));
+    r.headers.emplace_back("X-Preview-Mean", std::to_string(p.mean));
+    return r;
+}
+
+HttpResponse Api::settings(HttpRequest& request) {
+    if (request.method == "PUT") {
+        const json body = parse_body(request);
+        expect_keys(body, {"exposure_us"});
+        if (!body.contains("exposure_us") || !body["exposure_us"].is_number())
+            throw ApiError(400, "exposure_us: a number is needed");
+        service_.set_exposure_us(body["exposure_us"].get<double>());
+    } else if (request.method != "GET") {
+        return method_not_allowed("GET, PUT");
+    }
+    return HttpResponse::json(200, json{{"exposure_us", service_.exposure_us()}}.dump());
+}
+
+HttpResponse Api::table(HttpRequest& request) {
+    if (request.method == "PUT") {
+        if (request.body_file.empty() || request.body_bytes == 0)
+            throw ApiError(400, "the body must be the .fpt file");
+        json t = service_.install_table(request.body_file);
+        request.body_file.clear(); // renamed into place
+        log_.info("http: table installed (" + t.value("model", "") + ", hash " +
+                  t.value("file_fnv1a64", "") + ")");
+        return HttpResponse::json(200, t.dump());
+    }
+    if (request.method != "GET")
+        return method_not_allowed("GET, PUT");
+    const json t = service_.table_json();
+    if (t.is_null())
+        return HttpResponse::error(404, "no table is installed");
+    return file_response(t["path"].get<std::string>(), "application/octet-stream", "table.fpt");
+}
+
+HttpResponse Api::static_file(const std::string& path) {
+    const auto parts = split_path(path == "/" ? "/index.html" : path);
+    if (parts.empty() || !std::all_of(parts.begin(), parts.end(), is_plain_segment))
+        return HttpResponse::error(404, "no such file");
+    fs::path file;
+    if (parts[0] == "three" && parts.size() > 1) {
+        file = options_.three_root;
+        for (std::size_t i = 1; i < parts.size(); ++i)
+            file /= parts[i];
+    } else if (parts.size() == 1) {
+        file = options_.web_root / parts[0];
+    } else {
+        return HttpResponse::error(404, "no such file");
+    }
+    const std::string type = content_type_of(file);
+    if (type.empty())
+        return HttpResponse::error(404, "no such file");
+    HttpResponse r = file_response(file, type);
+    r.headers.emplace_back("Content-Security-Policy",
+                           "default-src 'self'; img-src 'self' blob: data:; "
+                           "connect-src 'self'; style-src 'self'; frame-ancestors 'none'");
+    return r;
+}
+
+} // namespace fpp::scanner

@@ -1,0 +1,84 @@
+#include "fpp/scanner/network_face.hpp"
+
+#include "fpp/error.hpp"
+#include "fpp/scanner/access_token.hpp"
+#include "fpp/scanner/api.hpp"
+#include "fpp/scanner/event_hub.hpp"
+#include "fpp/scanner/http_server.hpp"
+#include "fpp/scanner/scanner_service.hpp"
+
+namespace fpp::scanner {
+
+namespace fs = std::filesystem;
+
+namespace {
+// Debian's libjs-three (the .deb depends on it).
+const fs::path kThreeRoot = "/usr/share/javascript/three";
+} // namespace
+
+fs::path find_web_root(const std::optional<fs::path>& configured) {
+    if (configured)
+        return *configured;
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) {
+        const fs::path installed = exe.parent_path().parent_path() / "share/fpp-scanner/web";
+        if (fs::exists(installed / "index.html"))
+            return installed;
+    }
+    return FPP_SOURCE_WEB_ROOT;
+}
+
+struct NetworkFace::Parts {
+    EventHub events;
+    ScannerService service;
+    Api api;
+    HttpServer server; // last: stopped first
+    Parts(BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
+          ServiceOptions service_options, ApiOptions api_options, HttpServerOptions http)
+        : service(board, scanner, devices, events, log, std::move(service_options)),
+          api(service, events, log, std::move(api_options)), server(http, api, log) {}
+};
+
+NetworkFace::NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
+                         NetworkFaceOptions options) {
+    const HttpConfig& h = *board.http;
+    ApiOptions api;
+    api.token = read_token_file(h.token_file);
+    const fs::path web_root = find_web_root(h.web_root);
+    api.web_root = web_root;
+    api.three_root = kThreeRoot;
+    // The largest table model is 14 floats a pixel; headers and tile CRCs
+    // are far below the extra MiB.
+    const Size camera = devices.camera.size();
+    api.max_table_bytes = 64ull * static_cast<std::uint64_t>(camera.width) *
+                              static_cast<std::uint64_t>(camera.height) +
+                          (1ull << 20);
+    const ListenAddress where = parse_listen_address(h.listen);
+    HttpServerOptions http;
+    http.host = where.host;
+    http.port = where.port;
+    http.max_connections = h.max_connections;
+    http.timeout = h.timeout;
+    ServiceOptions service{options.table_path, board.settings_file, options.session_board_yaml,
+                           options.simulated};
+    parts_ = std::make_unique<Parts>(board, scanner, devices, log, std::move(service),
+                                     std::move(api), http);
+    log.info("http: listening on " + parts_->server.address() + " (page from " +
+             web_root.string() + ")");
+}
+
+NetworkFace::~NetworkFace() {
+    // Open event streams end first, so that the server's threads can finish.
+    if (parts_)
+        parts_->events.close();
+}
+
+void NetworkFace::run(ScanMode button_mode, const std::atomic<bool>& stop) {
+    parts_->service.run(button_mode, stop);
+    parts_->events.close();
+}
+
+int NetworkFace::port() const { return parts_->server.port(); }
+
+} // namespace fpp::scanner

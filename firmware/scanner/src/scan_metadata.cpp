@@ -1,0 +1,59 @@
+#include "scan_metadata.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cinttypes>
+#include <cstdio>
+
+namespace fpp::scanner {
+
+std::string hex64(std::uint64_t v) {
+    char buf[24];
+    std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
+    return buf;
+}
+
+std::string scan_json(const ScanMetadata& m) {
+    const auto& s = m.board.camera.settings;
+    const ScanTimings& t = m.outcome.timings;
+    nlohmann::ordered_json flips = nlohmann::ordered_json::array();
+    for (const FrameRecord& r : m.records)
+        flips.push_back({{"pattern", r.flip.index},
+                         {"sequence", r.flip.sequence},
+                         {"flip_ns", r.flip.timestamp_ns},
+                         {"frame_id", r.frame_id},
+                         {"frame_ns", r.frame_timestamp_ns}});
+    // Keys in the order a person reads them (ordered_json keeps insertion).
+    nlohmann::ordered_json j;
+    j["format"] = "fpp-scan/1";
+    j["board"] = m.board.name;
+    j["mode"] = m.mode == ScanMode::scan ? "scan" : "capture";
+    j["started_utc"] = m.started_utc;
+    j["camera"] = {{"width", m.camera.width},
+                   {"height", m.camera.height},
+                   {"bit_depth", m.camera_bit_depth},
+                   {"pixel_format", s.pixel_format},
+                   {"exposure_us", s.exposure_us},
+                   {"trigger", s.trigger == drivers::TriggerMode::line ? "line" : "software"}};
+    j["projector"] = {{"width", m.projector.width}, {"height", m.projector.height}};
+    j["sequence"] = m.board.sequence_name.empty() ? "blocks" : m.board.sequence_name;
+    j["frames"] = m.outcome.frames;
+    j["timing_settings_us"] = {{"settle", m.board.timing.settle.count()},
+                               {"trigger_pulse", m.board.timing.trigger_pulse.count()}};
+    if (m.table)
+        j["table"] = {{"path", m.table->path.string()},
+                      {"model", to_string(m.table->model)},
+                      {"file_fnv1a64", hex64(m.table->file_hash)},
+                      {"calibration_fnv1a64", hex64(m.table->calibration_hash)}};
+    j["decode"] = {{"method_x", m.method_x}, {"method_y", m.method_y}};
+    j["points"] = m.outcome.points;
+    j["timings_ms"] = {{"capture", t.capture_ms},
+                       {"push_mean", t.push_mean_ms},
+                       {"push_max", t.push_max_ms},
+                       {"finish", t.finish_ms},
+                       {"apply", t.apply_ms}};
+    j["flips"] = std::move(flips);
+    return j.dump(2) + "\n";
+}
+
+} // namespace fpp::scanner

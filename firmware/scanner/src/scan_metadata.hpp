@@ -1,0 +1,49 @@
+#pragma once
+// scan.json (format fpp-scan/1): what a scan folder says about itself: board,
+// camera and projector, sequence, table, decode methods, points, timings and
+// every flip with its frame.
+#include "fpp/scanner/board_config.hpp"
+#include "fpp/scanner/scanner.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace fpp::scanner {
+
+// One flip and its frame.
+struct FrameRecord {
+    drivers::FlipEvent flip;
+    std::uint64_t frame_id = 0;
+    std::int64_t frame_timestamp_ns = 0;
+};
+
+struct TableSummary {
+    std::filesystem::path path;
+    TableModel model = TableModel::ray;
+    std::uint64_t file_hash = 0;
+    std::uint64_t calibration_hash = 0;
+};
+
+struct ScanMetadata {
+    const BoardConfig& board;
+    ScanMode mode = ScanMode::scan;
+    std::string started_utc;
+    Size camera;
+    int camera_bit_depth = 8;
+    Size projector;
+    std::optional<TableSummary> table;
+    std::string method_x;
+    std::string method_y;
+    const ScanOutcome& outcome;
+    const std::vector<FrameRecord>& records;
+};
+
+std::string scan_json(const ScanMetadata& m);
+
+// Lower-case hex of a 64-bit hash, 16 digits (how scan.json and the API
+// write table hashes).
+std::string hex64(std::uint64_t v);
+
+} // namespace fpp::scanner

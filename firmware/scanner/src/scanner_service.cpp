@@ -1,0 +1,459 @@
+#include "fpp/scanner/scanner_service.hpp"
+
+#include "fpp/atomic_file.hpp"
+#include "fpp/error.hpp"
+#include "fpp/image_io.hpp"
+#include "fpp/scanner/api_error.hpp"
+#include "fpp/scanner/scan_store.hpp"
+#include "fpp/scanner/settings_file.hpp"
+#include "scan_metadata.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <ctime>
+#include <future>
+#include <unistd.h>
+
+namespace fpp::scanner {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr auto kJobTimeout = std::chrono::seconds(30);
+
+json size_json(Size s) { return {{"width", s.width}, {"height", s.height}}; }
+
+json text_or_null(const std::string& s) { return s.empty() ? json(nullptr) : json(s); }
+
+std::string utc(std::int64_t unix_s) {
+    const auto t = static_cast<std::time_t>(unix_s);
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return buf;
+}
+
+// The largest value of a GenICam mono pixel format.
+double top_of(const std::string& pixel_format) {
+    for (const auto& [name, top] : {std::pair{"Mono10", 1023.0}, std::pair{"Mono12", 4095.0},
+                                    std::pair{"Mono14", 16383.0}, std::pair{"Mono16", 65535.0}})
+        if (pixel_format == name)
+            return top;
+    return 255.0;
+}
+
+// Mean level and saturated fraction of a frame (0..1 of the format's range).
+void frame_levels(const Frame& f, double top, Preview& p) {
+    const auto measure = [&](const auto& image) {
+        double sum = 0;
+        std::size_t saturated = 0;
+        const std::size_t n = static_cast<std::size_t>(image.width()) * image.height();
+        for (std::size_t i = 0; i < n; ++i) {
+            const double v = image.data()[i];
+            sum += v;
+            saturated += v >= top ? 1 : 0;
+        }
+        p.mean = n ? sum / (static_cast<double>(n) * top) : 0;
+        p.saturated = n ? static_cast<double>(saturated) / static_cast<double>(n) : 0;
+    };
+    if (f.bit_depth == 8)
+        measure(f.u8);
+    else
+        measure(f.u16);
+}
+
+void fsync_directory(const fs::path& dir) {
+    try {
+        fsync_path(dir);
+    } catch (const IoError&) {
+        // The rename is done; a directory that cannot be synced only risks
+        // the old name after a power cut.
+    }
+}
+
+} // namespace
+
+struct ScannerService::Job {
+    std::function<void(const std::atomic<bool>&)> work;
+    std::promise<void> done;
+};
+
+ScannerService::ScannerService(BoardConfig& board, Scanner& scanner, Devices devices,
+                               EventHub& events, const Logger& log, ServiceOptions options)
+    : board_(board), scanner_(scanner), dev_(devices), events_(events), log_(log),
+      options_(std::move(options)), camera_size_(devices.camera.size()),
+      camera_bit_depth_(devices.camera.bit_depth()), projector_size_(devices.display.size()),
+      exposure_us_(board.camera.settings.exposure_us) {
+    scanner_.set_observer(this);
+    refresh_table_json();
+}
+
+ScannerService::~ScannerService() { scanner_.set_observer(nullptr); }
+
+void ScannerService::refresh_table_json() {
+    json t = nullptr;
+    if (scanner_.has_table()) {
+        const TableInfo& info = scanner_.table().info();
+        std::error_code ec;
+        const auto bytes = fs::file_size(scanner_.table_path(), ec);
+        const auto written = fs::last_write_time(scanner_.table_path(), ec);
+        const auto installed = std::chrono::duration_cast<std::chrono::seconds>(
+            std::chrono::file_clock::to_sys(written).time_since_epoch());
+        t = {{"path", scanner_.table_path().string()},
+             {"model", to_string(info.model)},
+             {"camera", size_json(info.camera)},
+             {"projector", size_json(info.projector)},
+             {"bytes", ec ? 0 : bytes},
+             {"file_fnv1a64", hex64(scanner_.table_file_hash())},
+             {"calibration_fnv1a64", hex64(info.calibration_hash)},
+             {"created_utc", utc(info.created_unix_s)},
+             {"installed_utc", ec ? json(nullptr) : json(utc(installed.count()))}};
+    }
+    const std::lock_guard lock(mutex_);
+    table_json_ = std::move(t);
+}
+
+// ---------------------------------------------------------------- scanning thread
+
+void ScannerService::run(ScanMode button_mode, const std::atomic<bool>& stop) {
+    dev_.led.set(drivers::LedState::ready);
+    log_.info("idle: waiting for the button or a request");
+    try {
+        while (!stop.load()) {
+            std::shared_ptr<Job> job;
+            {
+                const std::lock_guard lock(mutex_);
+                if (!jobs_.empty()) {
+                    job = jobs_.front();
+                    jobs_.pop_front();
+                }
+            }
+            if (job) {
+                try {
+                    job->work(stop);
+                    job->done.set_value();
+                } catch (const ScanAborted&) {
+                    job->done.set_exception(std::current_exception());
+                    throw;
+                } catch (...) {
+                    job->done.set_exception(std::current_exception());
+                }
+                continue;
+            }
+            if (!dev_.button.wait_press(std::chrono::milliseconds(50)))
+                continue;
+            fs::path folder;
+            try {
+                const std::lock_guard lock(mutex_);
+                if (busy_) {
+                    log_.warning("button pressed while a scan is queued: ignored");
+                    continue;
+                }
+                folder = claim_scan_folder({});
+                busy_ = true;
+            } catch (const std::exception& e) {
+                log_.error(std::string("scan failed: ") + e.what());
+                set_state("error", e.what());
+                continue;
+            }
+            run_scan(button_mode, folder, "button", {}, stop);
+        }
+    } catch (...) {
+        shut_down();
+        throw;
+    }
+    shut_down();
+}
+
+void ScannerService::shut_down() {
+    std::deque<std::shared_ptr<Job>> left;
+    {
+        const std::lock_guard lock(mutex_);
+        stopping_ = true;
+        left.swap(jobs_);
+    }
+    for (auto& job : left)
+        job->done.set_exception(
+            std::make_exception_ptr(ApiError(503, "the scanner is stopping")));
+}
+
+void ScannerService::run_scan(ScanMode mode, const fs::path& folder, const std::string& source,
+                              const std::string& session, const std::atomic<bool>& stop) {
+    current_source_ = source;
+    current_session_ = session;
+    try {
+        scanner_.scan(mode, &stop, folder);
+    } catch (const ScanAborted&) {
+        const std::lock_guard lock(mutex_);
+        busy_ = false;
+        throw;
+    } catch (const std::exception&) {
+        // Logged by the scanner and reported through failed().
+    }
+    {
+        const std::lock_guard lock(mutex_);
+        busy_ = false;
+        store_bytes_at_ = {}; // measure again
+    }
+    if (const int ignored = dev_.button.drain(); ignored > 0)
+        log_.warning("button pressed " + std::to_string(ignored) +
+                     " time(s) during the scan: ignored");
+}
+
+void ScannerService::scan_started(const std::string& id, ScanMode mode, int frames) {
+    current_id_ = id;
+    current_mode_ = mode;
+    set_state("scanning", {});
+    events_.publish("scan-started",
+                    json{{"id", id},
+                         {"mode", mode == ScanMode::scan ? "scan" : "capture"},
+                         {"frames", frames},
+                         {"source", current_source_},
+                         {"session", text_or_null(current_session_)}}
+                        .dump());
+}
+
+void ScannerService::frame_captured(int frame, int frames) {
+    events_.publish("frame-captured",
+                    json{{"id", current_id_}, {"frame", frame}, {"frames", frames}}.dump());
+}
+
+void ScannerService::decoded() { events_.publish("decoded", json{{"id", current_id_}}.dump()); }
+
+void ScannerService::written(const ScanOutcome& outcome) {
+    const char* mode = current_mode_ == ScanMode::scan ? "scan" : "capture";
+    {
+        const std::lock_guard lock(mutex_);
+        last_scan_ = {{"id", current_id_}, {"mode", mode},       {"ok", true},
+                      {"points", outcome.points}, {"error", nullptr}, {"session", text_or_null(current_session_)}};
+        ++scans_completed_;
+    }
+    events_.publish("written", json{{"id", current_id_},
+                                    {"mode", mode},
+                                    {"points", outcome.points},
+                                    {"session", text_or_null(current_session_)}}
+                                   .dump());
+    set_state("idle", {});
+}
+
+void ScannerService::failed(const std::string& reason) {
+    {
+        const std::lock_guard lock(mutex_);
+        last_scan_ = {{"id", current_id_},
+                      {"mode", current_mode_ == ScanMode::scan ? "scan" : "capture"},
+                      {"ok", false},
+                      {"points", 0},
+                      {"error", reason},
+                      {"session", text_or_null(current_session_)}};
+    }
+    events_.publish("failed", json{{"id", current_id_}, {"error", reason}}.dump());
+    set_state("error", reason);
+}
+
+void ScannerService::set_state(const std::string& state, const std::string& error) {
+    {
+        const std::lock_guard lock(mutex_);
+        if (state_ == state && error_ == error)
+            return;
+        state_ = state;
+        error_ = error;
+    }
+    events_.publish("state", json{{"state", state}, {"error", text_or_null(error)}}.dump());
+}
+
+// ---------------------------------------------------------------- any thread
+
+fs::path ScannerService::claim_scan_folder(const std::string& session) {
+    if (session.empty()) {
+        prepare_store(board_.store.directory);
+        return new_scan_folder(board_.store.directory);
+    }
+    const fs::path dir = sessions_dir() / session;
+    if (!fs::is_directory(dir))
+        throw ApiError(404, "no session '" + session + "'");
+    return new_scan_folder(dir);
+}
+
+std::string ScannerService::start_scan(ScanMode mode, const std::string& session) {
+    const std::lock_guard lock(mutex_);
+    if (stopping_)
+        throw ApiError(503, "the scanner is stopping");
+    if (busy_)
+        throw ApiError(409, "a scan is running: one at a time");
+    if (mode == ScanMode::scan && table_json_.is_null())
+        throw ApiError(409, "no table is loaded: install one (PUT /api/v1/table) or scan in "
+                            "capture mode");
+    fs::path folder;
+    try {
+        folder = claim_scan_folder(session);
+    } catch (const IoError& e) {
+        throw ApiError(507, e.what());
+    }
+    busy_ = true;
+    auto job = std::make_shared<Job>();
+    job->work = [this, mode, folder, session](const std::atomic<bool>& stop) {
+        run_scan(mode, folder, "api", session, stop);
+    };
+    jobs_.push_back(std::move(job));
+    return folder.filename().string();
+}
+
+void ScannerService::run_on_scanner_thread(std::function<void()> work) {
+    auto job = std::make_shared<Job>();
+    job->work = [work = std::move(work)](const std::atomic<bool>&) { work(); };
+    std::future<void> done = job->done.get_future();
+    {
+        const std::lock_guard lock(mutex_);
+        if (stopping_)
+            throw ApiError(503, "the scanner is stopping");
+        if (busy_)
+            throw ApiError(409, "a scan is running: try again when it has ended");
+        jobs_.push_back(job);
+    }
+    if (done.wait_for(kJobTimeout) != std::future_status::ready)
+        throw ApiError(503, "the scanner did not answer within 30 s");
+    done.get();
+}
+
+Preview ScannerService::preview() {
+    Frame frame;
+    run_on_scanner_thread([&] {
+        try {
+            frame = scanner_.preview();
+        } catch (const std::exception& e) {
+            throw ApiError(503, std::string("preview failed: ") + e.what());
+        }
+    });
+    Preview p;
+    frame_levels(frame, frame.bit_depth == 8 ? 255.0 : top_of(board_.camera.settings.pixel_format),
+                 p);
+    p.png = encode_png(frame);
+    return p;
+}
+
+double ScannerService::exposure_us() const {
+    const std::lock_guard lock(mutex_);
+    return exposure_us_;
+}
+
+double ScannerService::set_exposure_us(double exposure_us) {
+    if (!(exposure_us >= kMinExposureUs && exposure_us <= kMaxExposureUs))
+        throw ApiError(400, "exposure_us: must be in 10..1000000");
+    if (!options_.settings_file)
+        throw ApiError(409, "the board names no settings file (board key settings, or "
+                            "--settings)");
+    run_on_scanner_thread([&] {
+        const double before = board_.camera.settings.exposure_us;
+        try {
+            dev_.camera.set_exposure_us(exposure_us);
+            write_settings_file(*options_.settings_file, ScannerSettings{exposure_us});
+        } catch (const std::exception& e) {
+            try {
+                dev_.camera.set_exposure_us(before);
+            } catch (const std::exception&) {
+            }
+            throw ApiError(503, std::string("exposure not changed: ") + e.what());
+        }
+        board_.camera.settings.exposure_us = exposure_us;
+    });
+    {
+        const std::lock_guard lock(mutex_);
+        exposure_us_ = exposure_us;
+    }
+    log_.info("exposure set to " + std::to_string(exposure_us) + " us");
+    events_.publish("settings", json{{"exposure_us", exposure_us}}.dump());
+    return exposure_us;
+}
+
+json ScannerService::install_table(const fs::path& uploaded) {
+    if (!options_.table_path)
+        throw ApiError(409, "the board names no table path (board key table, or --table)");
+    const fs::path target = *options_.table_path;
+    run_on_scanner_thread([&] {
+        // The strict loader first: a bad table is refused and the one in use stays.
+        try {
+            scanner_.reload_table(uploaded);
+        } catch (const InputError& e) {
+            throw ApiError(400, e.what());
+        }
+        try {
+            // The previous file kept by a second name, then the new one
+            // renamed over the old: the path always holds a whole table.
+            if (fs::exists(target)) {
+                const fs::path previous = target.string() + ".previous";
+                const fs::path link = target.string() + ".previous.tmp";
+                fs::remove(link);
+                fs::create_hard_link(target, link);
+                fs::rename(link, previous);
+            }
+            fs::rename(uploaded, target);
+            fsync_directory(target.parent_path());
+            scanner_.reload_table(target);
+        } catch (const std::exception& e) {
+            if (fs::exists(target))
+                scanner_.reload_table(target);
+            throw ApiError(507, std::string("table not installed: ") + e.what());
+        }
+        refresh_table_json();
+    });
+    const json t = table_json();
+    events_.publish("table", json{{"model", t["model"]}, {"file_fnv1a64", t["file_fnv1a64"]}}.dump());
+    return t;
+}
+
+json ScannerService::table_json() const {
+    const std::lock_guard lock(mutex_);
+    return table_json_;
+}
+
+std::uint64_t ScannerService::store_bytes() const {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - store_bytes_at_ > std::chrono::seconds(1)) {
+        store_bytes_ = folder_bytes(board_.store.directory);
+        store_bytes_at_ = now;
+    }
+    return store_bytes_;
+}
+
+std::string ScannerService::state_event() const {
+    const std::lock_guard lock(mutex_);
+    return EventHub::format("state", json{{"state", state_}, {"error", text_or_null(error_)}}.dump());
+}
+
+json ScannerService::status() const {
+    const std::size_t scans = list_scans(board_.store.directory).size();
+    std::size_t sessions = 0;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(sessions_dir(), ec))
+        sessions += e.is_directory() ? 1 : 0;
+    const std::lock_guard lock(mutex_);
+    const auto& s = board_.camera.settings;
+    return {{"api", 1},
+            {"state", state_},
+            {"error", text_or_null(error_)},
+            {"board", {{"name", board_.name}, {"simulated", options_.simulated}}},
+            {"camera",
+             {{"width", camera_size_.width},
+              {"height", camera_size_.height},
+              {"bit_depth", camera_bit_depth_},
+              {"pixel_format", s.pixel_format},
+              {"exposure_us", exposure_us_}}},
+            {"display", size_json(projector_size_)},
+            {"sequence",
+             {{"name", board_.sequence_name.empty() ? "blocks" : board_.sequence_name},
+              {"frames", scanner_.frames_per_scan()}}},
+            {"table", table_json_},
+            {"store",
+             {{"directory", board_.store.directory.string()},
+              {"used_bytes", store_bytes()},
+              {"max_bytes", board_.store.max_bytes},
+              {"scans", scans},
+              {"sessions", sessions}}},
+            {"last_scan", last_scan_},
+            {"scans_completed", scans_completed_}};
+}
+
+} // namespace fpp::scanner

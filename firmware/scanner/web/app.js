@@ -1,0 +1,750 @@
+// fpp-scanner's page: status, scans, the cloud viewer, the calibration
+// session helper, table upload and settings, all through the HTTP API
+// (firmware/scanner/http-api.md). Every /api/v1 request carries the token;
+// server text only ever reaches the page through textContent.
+'use strict';
+
+const TOKEN_KEY = 'fpp-scanner.token';
+const PREVIEW_PERIOD_MS = 1000;
+const EVENTS_RETRY_MS = 2000;
+// The server sends a keep-alive every 10 s; silence this long is a dead link.
+const EVENTS_SILENCE_MS = 25000;
+
+const page = {
+  token: '',
+  state: 'unknown',
+  viewer: null,
+  eventsGeneration: 0,
+  eventsAbort: null,
+  scanId: null,            // the scan the progress bar follows
+  finished: new Set(),     // scans whose end the page has shown
+  session: '',             // the calibration session shown
+  poseId: null,            // the pose being taken
+  thumbnails: new Map(),   // pose id -> object URL
+  previewTimer: null,
+  previewUrl: null,
+};
+
+const $ = id => document.getElementById(id);
+
+// ---- API ------------------------------------------------------------------
+
+class ApiError extends Error {
+  constructor(status, message) {
+    super(message);
+    this.status = status;
+  }
+}
+
+// fetch() on /api/v1 with the token; throws ApiError with the server's
+// {"error"} text for any status other than 2xx.
+async function api(path, options = {}) {
+  const token = page.token;
+  if (!token) {
+    showAuthProblem('Enter the API token to use the scanner.');
+    throw new ApiError(401, 'no token');
+  }
+  const headers = new Headers(options.headers || {});
+  headers.set('Authorization', 'Bearer ' + token);
+  const response = await fetch('/api/v1' + path, Object.assign({}, options, { headers, cache: 'no-store' }));
+  if (token !== page.token) throw new ApiError(0, 'the token changed'); // a stale answer
+  if (response.status === 401) {
+    showAuthProblem('The scanner refused the token (401 Unauthorized). Enter the API token: ' +
+                    "the first line of the scanner's token file.");
+    throw new ApiError(401, 'the scanner refused the token');
+  }
+  $('auth-message').hidden = true;
+  if (!response.ok) throw new ApiError(response.status, await errorText(response));
+  return response;
+}
+
+async function errorText(response) {
+  const fallback = response.status + ' ' + response.statusText;
+  try {
+    const body = await response.json();
+    return body && typeof body.error === 'string' ? body.error : fallback;
+  } catch (e) {
+    return fallback;
+  }
+}
+
+async function apiJson(path, options) {
+  const response = await api(path, options);
+  return response.status === 204 ? null : response.json();
+}
+
+function jsonBody(method, value) {
+  return { method, headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(value) };
+}
+
+function errorMessage(e) {
+  return e instanceof ApiError && e.status ? e.status + ': ' + e.message : e.message;
+}
+
+// Downloads go through fetch (the token is a header, which a plain link
+// cannot send), then a Blob URL with the file's name.
+async function downloadFile(path, fileName) {
+  const response = await api(path);
+  const blob = await response.blob();
+  const url = URL.createObjectURL(blob);
+  const link = document.createElement('a');
+  link.href = url;
+  link.download = fileName;
+  link.hidden = true;
+  document.body.appendChild(link);
+  link.click();
+  link.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 60000);
+}
+
+// ---- small helpers --------------------------------------------------------
+
+function setMessage(element, text, kind) {
+  element.textContent = text;
+  element.className = 'message' + (kind ? ' ' + kind : '');
+  element.hidden = !text;
+}
+
+function formatBytes(n) {
+  if (n == null) return '?';
+  const units = ['B', 'KiB', 'MiB', 'GiB', 'TiB'];
+  let i = 0;
+  while (n >= 1024 && i < units.length - 1) { n /= 1024; ++i; }
+  return (i === 0 ? n : n.toFixed(1)) + ' ' + units[i];
+}
+
+function formatCount(n) {
+  return n == null ? '?' : Number(n).toLocaleString('en');
+}
+
+function element(tag, text, className) {
+  const e = document.createElement(tag);
+  if (text != null) e.textContent = text;
+  if (className) e.className = className;
+  return e;
+}
+
+function sleep(ms) {
+  return new Promise(resolve => setTimeout(resolve, ms));
+}
+
+const pathId = encodeURIComponent;
+
+// ---- token ----------------------------------------------------------------
+
+function showAuthProblem(text) {
+  setMessage($('auth-message'), text, 'error');
+  setEventsBadge(false);
+}
+
+function useToken(token) {
+  page.token = token;
+  try {
+    localStorage.setItem(TOKEN_KEY, token);
+  } catch (e) { /* private mode: the token lasts for this page only */ }
+  $('auth-message').hidden = true;
+  startEvents();
+  refreshAll();
+}
+
+// ---- status ---------------------------------------------------------------
+
+function setState(state, error) {
+  page.state = state || 'unknown';
+  const s = $('state');
+  s.textContent = page.state;
+  s.className = 'state ' + page.state;
+  $('state-error').textContent = error ? '(' + error + ')' : '';
+  $('scan-button').disabled = page.state === 'scanning';
+}
+
+function describeTable(table) {
+  if (!table) return 'none loaded: scans need one (upload a table below)';
+  return table.model + ', camera ' + table.camera.width + ' × ' + table.camera.height +
+         ', projector ' + table.projector.width + ' × ' + table.projector.height +
+         ', ' + formatBytes(table.bytes) + ', hash ' + table.file_fnv1a64 +
+         ', installed ' + table.installed_utc;
+}
+
+function renderStatus(status) {
+  setState(status.state, status.error);
+  const board = status.board || {};
+  $('board').textContent = board.name + (board.simulated ? ' (simulated)' : '');
+  const c = status.camera || {};
+  $('camera').textContent = c.width + ' × ' + c.height + ', ' + c.bit_depth + '-bit ' +
+                            c.pixel_format + ', exposure ' + c.exposure_us + ' µs';
+  const d = status.display || {}, seq = status.sequence || {};
+  $('display').textContent = d.width + ' × ' + d.height + '; sequence ' + seq.name + ', ' + seq.frames + ' frames';
+  $('table').textContent = describeTable(status.table);
+  $('table').title = status.table ? status.table.path : '';
+  const st = status.store || {};
+  const percent = st.max_bytes ? ' (' + (100 * st.used_bytes / st.max_bytes).toFixed(1) + ' %)' : '';
+  $('store').textContent = formatBytes(st.used_bytes) + ' of ' + formatBytes(st.max_bytes) + percent +
+                           ', ' + st.scans + ' scans, ' + st.sessions + ' sessions';
+  const last = status.last_scan;
+  $('last-scan').textContent = !last ? 'none yet'
+    : last.id + ' (' + last.mode + '): ' + (last.ok ? formatCount(last.points) + ' points' : 'failed: ' + last.error);
+  reconcileScan(last);
+}
+
+async function refreshStatus() {
+  try {
+    renderStatus(await apiJson('/status'));
+    return true;
+  } catch (e) {
+    if (e.status !== 401 && e.status !== 0) $('state-error').textContent = '(status: ' + errorMessage(e) + ')';
+    return false;
+  }
+}
+
+async function refreshAll() {
+  if (!(await refreshStatus())) return;
+  refreshSettings();
+  refreshSessions();
+  const scans = await refreshScans();
+  // Show the newest cloud unless one is shown already.
+  const newest = scans && scans.find(s => s.cloud);
+  if (newest && !window.fppViewer) loadCloud(newest.id);
+}
+
+// ---- events (server-sent, read through fetch to send the token) -------------
+
+function setEventsBadge(live) {
+  const badge = $('events-state');
+  badge.textContent = live ? 'live' : 'offline';
+  badge.className = 'badge' + (live ? ' live' : '');
+}
+
+function startEvents() {
+  const generation = ++page.eventsGeneration;
+  if (page.eventsAbort) page.eventsAbort.abort();
+  runEvents(generation);
+}
+
+async function runEvents(generation) {
+  while (generation === page.eventsGeneration) {
+    const controller = new AbortController();
+    page.eventsAbort = controller;
+    let silence = null;
+    const watch = () => {
+      clearTimeout(silence);
+      silence = setTimeout(() => controller.abort(), EVENTS_SILENCE_MS);
+    };
+    try {
+      watch();
+      const response = await api('/events', { signal: controller.signal, headers: { Accept: 'text/event-stream' } });
+      setEventsBadge(true);
+      await readEventStream(response.body.getReader(), handleEvent, watch);
+    } catch (e) {
+      if (e.status === 401) return; // wait for a new token
+    } finally {
+      clearTimeout(silence);
+    }
+    if (generation !== page.eventsGeneration) return;
+    setEventsBadge(false);
+    await sleep(EVENTS_RETRY_MS);
+    // Whatever happened while the stream was down shows in the status.
+    if (generation === page.eventsGeneration) refreshStatus();
+  }
+}
+
+// The SSE wire format: "field: value" lines, a blank line ends an event,
+// lines starting with ':' are comments (the keep-alive).
+async function readEventStream(reader, onEvent, onBytes) {
+  const decoder = new TextDecoder();
+  let buffer = '', name = '', data = [];
+  for (;;) {
+    const { value, done } = await reader.read();
+    if (done) return;
+    onBytes();
+    buffer += decoder.decode(value, { stream: true });
+    let newline;
+    while ((newline = buffer.indexOf('\n')) >= 0) {
+      let line = buffer.slice(0, newline);
+      buffer = buffer.slice(newline + 1);
+      if (line.endsWith('\r')) line = line.slice(0, -1);
+      if (line === '') {
+        if (data.length) onEvent(name || 'message', data.join('\n'));
+        name = '';
+        data = [];
+        continue;
+      }
+      if (line.startsWith(':')) continue;
+      const colon = line.indexOf(':');
+      const field = colon < 0 ? line : line.slice(0, colon);
+      let text = colon < 0 ? '' : line.slice(colon + 1);
+      if (text.startsWith(' ')) text = text.slice(1);
+      if (field === 'event') name = text;
+      else if (field === 'data') data.push(text);
+    }
+  }
+}
+
+function handleEvent(name, text) {
+  let data;
+  try {
+    data = JSON.parse(text);
+  } catch (e) {
+    return; // not ours to show
+  }
+  switch (name) {
+    case 'state': onStateEvent(data); break;
+    case 'scan-started': onScanStarted(data); break;
+    case 'frame-captured': onFrameCaptured(data); break;
+    case 'decoded': onDecoded(data); break;
+    case 'written': onWritten(data); break;
+    case 'failed': onFailed(data); break;
+    case 'table':
+      setMessage($('table-message'), 'A new table is installed: ' + data.model + ', hash ' + data.file_fnv1a64 + '.');
+      refreshStatus();
+      break;
+    case 'settings':
+      if (document.activeElement !== $('exposure')) $('exposure').value = data.exposure_us;
+      refreshStatus();
+      break;
+  }
+}
+
+function onStateEvent(data) {
+  const wasScanning = page.state === 'scanning';
+  setState(data.state, data.error);
+  // A scan that ended while events were lost still ends on the page.
+  if (wasScanning && data.state !== 'scanning') refreshStatus();
+}
+
+// ---- scanning ---------------------------------------------------------------
+
+function onScanStarted(data) {
+  page.scanId = data.id;
+  const progress = $('progress');
+  progress.max = Math.max(1, data.frames);
+  progress.value = 0;
+  setMessage($('scan-status'), 'scanning ' + data.id + ' (' + data.mode + ', from the ' + data.source + '): 0 / ' + data.frames + ' frames');
+  setMessage($('scan-error'), '');
+  setState('scanning', null);
+}
+
+function onFrameCaptured(data) {
+  if (data.id !== page.scanId) onScanStarted({ id: data.id, mode: '?', source: '?', frames: data.frames });
+  const progress = $('progress');
+  progress.max = Math.max(1, data.frames);
+  progress.value = data.frame;
+  setMessage($('scan-status'), 'scanning ' + data.id + ': frame ' + data.frame + ' / ' + data.frames);
+}
+
+function onDecoded(data) {
+  if (data.id !== page.scanId) return;
+  setMessage($('scan-status'), 'decoded ' + data.id + ', writing…');
+}
+
+function onWritten(data) {
+  finishScan(data.id, true, data.mode, data.points, null, data.session);
+}
+
+function onFailed(data) {
+  finishScan(data.id, false, null, null, data.error, null);
+}
+
+// Shows a scan's end once, from its event or, if events were lost, the status.
+function finishScan(id, ok, mode, points, error, session) {
+  if (page.finished.has(id)) return;
+  page.finished.add(id);
+  page.scanId = id;
+  const progress = $('progress');
+  if (ok) {
+    progress.value = progress.max;
+    const what = mode === 'capture' ? 'capture set' : formatCount(points) + ' points';
+    setMessage($('scan-status'), 'written: ' + id + ', ' + what + (session ? ' (session ' + session + ')' : ''));
+    setMessage($('scan-error'), '');
+  } else {
+    setMessage($('scan-status'), 'failed: ' + id);
+    setMessage($('scan-error'), 'The scan failed: ' + error, 'error');
+  }
+  if (session || id === page.poseId) onPoseDone(id, ok, error);
+  refreshStatus();
+  refreshScans().then(scans => {
+    const scan = scans && scans.find(s => s.id === id);
+    if (ok && scan && scan.cloud) loadCloud(id);
+  });
+}
+
+function reconcileScan(last) {
+  if (!last || page.finished.has(last.id)) return;
+  if (last.id === page.scanId || last.id === page.poseId)
+    finishScan(last.id, last.ok, last.mode, last.points, last.error, null);
+}
+
+async function startScan() {
+  const mode = $('scan-capture').checked ? 'capture' : 'scan';
+  setMessage($('scan-error'), '');
+  $('scan-button').disabled = true;
+  try {
+    const started = await apiJson('/scans', jsonBody('POST', { mode }));
+    if (page.scanId !== started.id) {
+      page.scanId = started.id;
+      $('progress').value = 0;
+      setMessage($('scan-status'), 'started ' + started.id + ' (' + started.mode + ')');
+    }
+  } catch (e) {
+    setMessage($('scan-error'), errorMessage(e), 'error');
+    $('scan-button').disabled = page.state === 'scanning';
+  }
+}
+
+// ---- the cloud ----------------------------------------------------------------
+
+async function loadCloud(id) {
+  if (!page.viewer) return;
+  const message = $('viewer-message');
+  setMessage(message, 'loading ' + id + '…');
+  try {
+    const response = await api('/scans/' + pathId(id) + '/cloud.ply');
+    const parsed = FppViewer.parsePly(await response.arrayBuffer());
+    const quality = $('colour-by').querySelector('option[value="quality"]');
+    quality.disabled = !parsed.columns.quality;
+    if (quality.disabled) $('colour-by').value = 'depth';
+    const drawn = page.viewer.show(parsed, id, $('colour-by').value);
+    $('viewer-title').textContent = id;
+    $('viewer-info').textContent = formatCount(drawn.points) + ' of ' + formatCount(drawn.total) + ' points' +
+      (parsed.stride > 1 ? ' (every ' + parsed.stride + 'th)' : '');
+    setMessage(message, drawn.points ? '' : 'The cloud has no points.');
+  } catch (e) {
+    setMessage(message, 'Cannot show ' + id + ': ' + errorMessage(e), 'error');
+  }
+}
+
+// ---- the scan list ------------------------------------------------------------
+
+function downloadLink(text, path, fileName, className) {
+  const link = element('a', text, className);
+  link.href = '/api/v1' + path;
+  link.download = fileName;
+  link.addEventListener('click', event => {
+    event.preventDefault();
+    downloadFile(path, fileName).catch(e =>
+      setMessage($('scans-message'), 'Download of ' + fileName + ' failed: ' + errorMessage(e), 'error'));
+  });
+  return link;
+}
+
+function scanRow(scan) {
+  const row = document.createElement('tr');
+  row.dataset.scanId = scan.id;
+  row.appendChild(element('td', scan.id));
+  row.appendChild(element('td', scan.mode, 'optional'));
+  row.appendChild(element('td', scan.started_utc));
+  row.appendChild(element('td', scan.cloud ? formatCount(scan.points) : '–'));
+  row.appendChild(element('td', formatBytes(scan.bytes), 'optional'));
+  const actions = element('td', null, 'actions');
+  const base = '/scans/' + pathId(scan.id);
+  if (scan.cloud) {
+    const view = element('button', 'View', 'small view');
+    view.type = 'button';
+    view.addEventListener('click', () => loadCloud(scan.id));
+    actions.appendChild(view);
+    actions.appendChild(downloadLink('PLY', base + '/cloud.ply', scan.id + '-cloud.ply', 'download-ply'));
+  }
+  if (scan.capture)
+    actions.appendChild(downloadLink('capture.tar', base + '/capture.tar', scan.id + '-capture.tar', 'download-capture'));
+  const remove = element('button', 'Delete', 'small danger delete');
+  remove.type = 'button';
+  remove.addEventListener('click', () => deleteScan(scan.id));
+  actions.appendChild(remove);
+  row.appendChild(actions);
+  return row;
+}
+
+async function refreshScans() {
+  try {
+    const list = (await apiJson('/scans')).scans;
+    const body = $('scan-list').tBodies[0];
+    body.replaceChildren(...list.map(scanRow));
+    if (list.length === 0) {
+      const empty = element('td', 'No scans yet.', 'muted');
+      empty.colSpan = 6;
+      body.appendChild(element('tr')).appendChild(empty);
+    }
+    setMessage($('scans-message'), '');
+    return list;
+  } catch (e) {
+    if (e.status !== 401 && e.status !== 0) setMessage($('scans-message'), 'Scan list: ' + errorMessage(e), 'error');
+    return null;
+  }
+}
+
+async function deleteScan(id) {
+  if (!confirm('Delete ' + id + '? Its cloud and capture set are removed from the scanner.')) return;
+  try {
+    await api('/scans/' + pathId(id), { method: 'DELETE' });
+  } catch (e) {
+    setMessage($('scans-message'), 'Delete ' + id + ': ' + errorMessage(e), 'error');
+  }
+  refreshScans();
+  refreshStatus();
+}
+
+// ---- calibration sessions -------------------------------------------------------
+
+function helperOpen() {
+  return $('calibration').open;
+}
+
+async function refreshSessions() {
+  try {
+    const list = (await apiJson('/sessions')).sessions;
+    const select = $('session-select');
+    const options = [element('option', '(none)')];
+    options[0].value = '';
+    for (const s of list) {
+      const option = element('option', s.name + ' (' + s.poses + ' poses)');
+      option.value = s.name;
+      options.push(option);
+    }
+    select.replaceChildren(...options);
+    select.value = list.some(s => s.name === page.session) ? page.session : '';
+    if (select.value !== page.session) showSession('');
+  } catch (e) {
+    if (e.status !== 401 && e.status !== 0) setMessage($('session-message'), 'Sessions: ' + errorMessage(e), 'error');
+  }
+}
+
+async function createSession(event) {
+  event.preventDefault();
+  const name = $('session-name').value.trim();
+  const body = { name };
+  const yaml = $('board-yaml').value;
+  if (yaml.trim()) body.board_yaml = yaml;
+  try {
+    await apiJson('/sessions', jsonBody('POST', body));
+    setMessage($('session-message'), 'Session ' + name + ' created.');
+    page.session = name;
+    await refreshSessions();
+    showSession(name);
+  } catch (e) {
+    setMessage($('session-message'), 'Create session: ' + errorMessage(e), 'error');
+  }
+}
+
+async function showSession(name) {
+  page.session = name;
+  $('session-select').value = name;
+  $('take-pose').disabled = !name || page.poseId !== null;
+  $('session-download').disabled = !name;
+  if (!name) {
+    renderPoses([]);
+    return;
+  }
+  try {
+    const session = await apiJson('/sessions/' + pathId(name));
+    if (page.session === name) renderPoses(session.poses);
+  } catch (e) {
+    setMessage($('session-message'), 'Session ' + name + ': ' + errorMessage(e), 'error');
+  }
+}
+
+function renderPoses(poses) {
+  $('pose-count').textContent = String(poses.length);
+  const keep = new Set(poses.map(p => p.id));
+  for (const [id, url] of page.thumbnails) {
+    if (!keep.has(id)) {
+      URL.revokeObjectURL(url);
+      page.thumbnails.delete(id);
+    }
+  }
+  $('poses').replaceChildren(...poses.map(poseItem));
+}
+
+function poseItem(pose) {
+  const item = element('li');
+  item.dataset.poseId = pose.id;
+  const image = element('img');
+  image.alt = 'pose ' + pose.id;
+  loadThumbnail(page.session, pose.id, image);
+  item.appendChild(image);
+  item.appendChild(element('div', pose.id, 'pose-id'));
+  const remove = element('button', 'Delete', 'small danger');
+  remove.type = 'button';
+  remove.addEventListener('click', () => deletePose(pose.id));
+  item.appendChild(remove);
+  return item;
+}
+
+async function loadThumbnail(session, id, image) {
+  let url = page.thumbnails.get(id);
+  if (!url) {
+    try {
+      const response = await api('/sessions/' + pathId(session) + '/poses/' + pathId(id) + '/texture.png');
+      url = URL.createObjectURL(await response.blob());
+      page.thumbnails.set(id, url);
+    } catch (e) {
+      image.alt = 'no texture: ' + errorMessage(e);
+      return;
+    }
+  }
+  image.src = url;
+}
+
+async function takePose() {
+  const name = page.session;
+  if (!name) return;
+  $('take-pose').disabled = true;
+  try {
+    const started = await apiJson('/sessions/' + pathId(name) + '/poses', { method: 'POST' });
+    page.poseId = started.id;
+    page.scanId = started.id;
+    setMessage($('session-message'), 'Taking pose ' + started.id + '…');
+  } catch (e) {
+    setMessage($('session-message'), 'Take pose: ' + errorMessage(e), 'error');
+    $('take-pose').disabled = false;
+  }
+}
+
+function onPoseDone(id, ok, error) {
+  if (id === page.poseId) {
+    page.poseId = null;
+    setMessage($('session-message'), ok ? 'Pose ' + id + ' taken.' : 'Pose ' + id + ' failed: ' + error, ok ? '' : 'error');
+  }
+  $('take-pose').disabled = !page.session;
+  if (page.session) {
+    showSession(page.session);
+    refreshSessions();
+  }
+}
+
+async function deletePose(id) {
+  const name = page.session;
+  if (!confirm('Delete pose ' + id + ' from session ' + name + '?')) return;
+  try {
+    await api('/sessions/' + pathId(name) + '/poses/' + pathId(id), { method: 'DELETE' });
+  } catch (e) {
+    setMessage($('session-message'), 'Delete pose: ' + errorMessage(e), 'error');
+  }
+  showSession(name);
+  refreshSessions();
+}
+
+// ---- live preview ---------------------------------------------------------------
+
+function schedulePreview() {
+  clearTimeout(page.previewTimer);
+  page.previewTimer = setTimeout(updatePreview, PREVIEW_PERIOD_MS);
+}
+
+// One preview frame, then the next a second later, while the helper is open.
+async function updatePreview() {
+  if (!helperOpen()) return;
+  if (page.state === 'scanning' || !page.token || document.hidden) {
+    if (page.state === 'scanning') $('preview-info').textContent = 'preview paused: a scan is running';
+    schedulePreview();
+    return;
+  }
+  try {
+    const response = await api('/preview.png');
+    const saturated = parseFloat(response.headers.get('X-Preview-Saturated'));
+    const mean = parseFloat(response.headers.get('X-Preview-Mean'));
+    const url = URL.createObjectURL(await response.blob());
+    if (page.previewUrl) URL.revokeObjectURL(page.previewUrl);
+    page.previewUrl = url;
+    $('preview').src = url;
+    $('preview-info').textContent = 'mean level ' + mean.toFixed(3) + ', saturated ' + (100 * saturated).toFixed(2) + ' %';
+    setMessage($('preview-warning'), previewWarning(saturated, mean), 'warning');
+  } catch (e) {
+    $('preview-info').textContent = e.status === 409 ? 'preview paused: a scan is running' : 'preview: ' + errorMessage(e);
+  }
+  schedulePreview();
+}
+
+function previewWarning(saturated, mean) {
+  const warnings = [];
+  if (saturated > 0.01) warnings.push('saturated: lower the exposure');
+  if (mean < 0.05) warnings.push('too dark / board not in view');
+  return warnings.join('; ');
+}
+
+function onHelperToggle() {
+  if (helperOpen()) {
+    refreshSessions();
+    updatePreview();
+  } else {
+    clearTimeout(page.previewTimer);
+  }
+}
+
+// ---- table and settings ---------------------------------------------------------
+
+async function uploadTable() {
+  const file = $('table-file').files[0];
+  const message = $('table-message');
+  if (!file) {
+    setMessage(message, 'Choose a .fpt file first.', 'error');
+    return;
+  }
+  setMessage(message, 'Uploading ' + file.name + ' (' + formatBytes(file.size) + ')…');
+  try {
+    const table = await apiJson('/table', {
+      method: 'PUT', headers: { 'Content-Type': 'application/octet-stream' }, body: await file.arrayBuffer(),
+    });
+    setMessage(message, 'Installed ' + file.name + ': ' + describeTable(table) + '.');
+    refreshStatus();
+  } catch (e) {
+    setMessage(message, 'The scanner refused ' + file.name + ': ' + errorMessage(e), 'error');
+  }
+}
+
+async function refreshSettings() {
+  try {
+    const settings = await apiJson('/settings');
+    if (document.activeElement !== $('exposure')) $('exposure').value = settings.exposure_us;
+  } catch (e) {
+    if (e.status !== 401 && e.status !== 0) setMessage($('settings-message'), 'Settings: ' + errorMessage(e), 'error');
+  }
+}
+
+async function saveSettings(event) {
+  event.preventDefault();
+  const exposure = Number($('exposure').value);
+  try {
+    const settings = await apiJson('/settings', jsonBody('PUT', { exposure_us: exposure }));
+    $('exposure').value = settings.exposure_us;
+    setMessage($('settings-message'), 'Exposure now ' + settings.exposure_us + ' µs.');
+  } catch (e) {
+    setMessage($('settings-message'), 'Settings refused: ' + errorMessage(e), 'error');
+  }
+}
+
+// ---- start ----------------------------------------------------------------------
+
+function init() {
+  page.viewer = window.THREE ? FppViewer.create($('viewer'), text => setMessage($('viewer-message'), text, 'error')) : null;
+  if (!window.THREE) setMessage($('viewer-message'), 'three.js did not load: the 3D view is off.', 'error');
+
+  $('token-form').addEventListener('submit', event => {
+    event.preventDefault();
+    useToken($('token').value.trim());
+  });
+  $('status-refresh').addEventListener('click', refreshStatus);
+  $('scan-button').addEventListener('click', startScan);
+  $('colour-by').addEventListener('change', () => page.viewer && page.viewer.recolour($('colour-by').value));
+  $('scans-refresh').addEventListener('click', refreshScans);
+  $('calibration').addEventListener('toggle', onHelperToggle);
+  $('session-form').addEventListener('submit', createSession);
+  $('session-select').addEventListener('change', () => showSession($('session-select').value));
+  $('session-download').addEventListener('click', () => {
+    const name = page.session;
+    downloadFile('/sessions/' + pathId(name) + '/session.tar', name + '-session.tar')
+      .catch(e => setMessage($('session-message'), 'Download: ' + errorMessage(e), 'error'));
+  });
+  $('take-pose').addEventListener('click', takePose);
+  $('table-upload').addEventListener('click', uploadTable);
+  $('settings-form').addEventListener('submit', saveSettings);
+
+  let saved = '';
+  try {
+    saved = localStorage.getItem(TOKEN_KEY) || '';
+  } catch (e) { /* no storage */ }
+  $('token').value = saved;
+  if (saved) useToken(saved);
+  else showAuthProblem('Enter the API token to use the scanner.');
+}
+
+init();
