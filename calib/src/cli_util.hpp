@@ -14,6 +14,9 @@ namespace fpp::calib {
 // holding a `sequence:` list.
 Sequence sequence_from_argument(const std::string& name_or_path, Size projector);
 
+// "2.3 s": a duration for progress lines.
+std::string seconds_text(double seconds);
+
 class Stopwatch {
 public:
     double seconds() const {

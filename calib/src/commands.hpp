@@ -20,5 +20,10 @@ Action add_hybrid_command(CLI::App& app);
 Action add_calibrate_command(CLI::App& app);
 Action add_evaluate_command(CLI::App& app);
 Action add_paper_experiments_command(CLI::App& app);
+// Over a scanner's HTTP API (firmware/scanner/http-api.md).
+Action add_scanner_status_command(CLI::App& app);
+Action add_scanner_session_command(CLI::App& app);
+Action add_scanner_pull_command(CLI::App& app);
+Action add_scanner_push_table_command(CLI::App& app);
 
 } // namespace fpp::calib

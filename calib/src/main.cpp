@@ -1,5 +1,6 @@
 // fpp-calib: the host tool of the fpp scanner: simulation, decoding, stereo
-// and hybrid calibration, tables, reconstruction and evaluation.
+// and hybrid calibration, tables, reconstruction and evaluation, and a
+// scanner's sessions and tables over its HTTP API.
 
 #include "commands.hpp"
 
@@ -44,6 +45,10 @@ int main(int argc, char** argv) {
     add(fpp::calib::add_calibrate_command);
     add(fpp::calib::add_evaluate_command);
     add(fpp::calib::add_paper_experiments_command);
+    add(fpp::calib::add_scanner_status_command);
+    add(fpp::calib::add_scanner_session_command);
+    add(fpp::calib::add_scanner_pull_command);
+    add(fpp::calib::add_scanner_push_table_command);
 
     try {
         app.parse(argc, argv);

@@ -9,6 +9,7 @@
 #include "fpp/scanner/log.hpp"
 #include "fpp/scanner/network_face.hpp"
 #include "fpp/scanner/scanner.hpp"
+#include "fpp/scanner/scanner_service.hpp"
 #include "fpp/scanner/settings_file.hpp"
 #include "fpp/scanner/sim_board.hpp"
 
@@ -60,10 +61,15 @@ void apply_options(const Options& o, fpp::scanner::BoardConfig& board) {
         }
     }
     if (!o.web_root.empty() && board.http) board.http->web_root = o.web_root;
-    // The exposure a person set last, over the board file's.
-    if (board.settings_file)
-        if (const auto s = read_settings_file(*board.settings_file))
-            board.camera.settings.exposure_us = s->exposure_us;
+}
+
+// The exposure a person set last (through the API), over the board file's.
+void apply_settings_file(fpp::scanner::BoardConfig& board, fpp::drivers::Camera& camera) {
+    if (!board.settings_file) return;
+    if (const auto s = fpp::scanner::read_settings_file(*board.settings_file)) {
+        camera.set_exposure_us(s->exposure_us);
+        board.camera.settings.exposure_us = s->exposure_us;
+    }
 }
 
 int run(const Options& o, const fpp::scanner::Logger& log) {
@@ -102,6 +108,7 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
         }
     }
     Devices devices = sim ? sim->devices() : hardware->devices();
+    apply_settings_file(board, devices.camera);
     // Lines and display are released by the destructors, on every path.
     try {
         std::optional<Scanner> made;
@@ -128,7 +135,10 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
                                                 sim != nullptr});
             face.run(mode, g_stop);
         } else {
-            scanner.run(mode, g_stop);
+            EventHub events; // nobody listens without a network face
+            ScannerService service(board, scanner, devices, events, log,
+                                   ServiceOptions{table_path, board.settings_file, "", sim != nullptr});
+            service.run(mode, g_stop);
             log.info("stopped");
         }
         devices.display.restore();

@@ -11,6 +11,7 @@
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/scanner.hpp"
+#include "fpp/scanner/scanner_service.hpp"
 #include "fpp/scanner/sim_board.hpp"
 #include "fpp/sim/observed_display.hpp"
 #include "fpp/sim/sim_camera.hpp"
@@ -337,13 +338,15 @@ TEST(ScannerSim, ButtonDuringScanIsIgnoredAndLogged) {
     SimBoard sim(f.board);
     f.make_table(sim.rig());
     Scanner scanner(f.board, sim.devices(), f.log);
+    EventHub events;
+    ScannerService service(f.board, scanner, sim.devices(), events, f.log, {});
     sim.display().on_flip([&](const drivers::FlipEvent& e) {
         if (e.index == 3)
             sim.button().press(2); // one press, two bounces
     });
     std::atomic<bool> stop{false};
     sim.button().press();
-    std::thread loop([&] { scanner.run(ScanMode::scan, stop); });
+    std::thread loop([&] { service.run(ScanMode::scan, stop); });
     for (int i = 0; i < 600 && !f.logged("during the scan: ignored"); ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
     stop = true;

@@ -2,12 +2,17 @@
 # Builds the scanner's Debian package from a build folder and checks what a
 # board would get: the binary for the right architecture with few runtime
 # dependencies (no OpenCV, no GUI toolkit), the default board as a conffile,
-# every board description, the hardened service (systemd-analyze verify) and
-# its user and udev rule, and maintainer scripts that do not enable anything.
+# every board description, the HTTP API's page (firmware/scanner/web) with
+# the libraries and three.js it needs, the hardened service (systemd-analyze
+# verify, exposure at most 2.0, the API's port the only one it may bind) and
+# its user and udev rule, and maintainer scripts that do not enable anything
+# and make the API's token once (run with DPKG_ROOT in a scratch root, the
+# commands that would touch this machine replaced by stubs).
 # Usage: check_deb.sh BUILD_DIR DEB_ARCH
 set -euo pipefail
 build="$1"
 arch="$2"
+source_dir="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
@@ -22,7 +27,9 @@ grep -q "^ Package: fpp-scanner$" <<< "$info" || fail "package name"
 grep -q "^ Architecture: $arch$" <<< "$info" || fail "architecture is not $arch"
 depends="$(grep "^ Depends:" <<< "$info")"
 grep -qi "opencv\|gtk\|qt5\|qt6" <<< "$depends" && fail "heavy dependency: $depends"
-grep -q "libaravis-0.8-0" <<< "$depends" || fail "aravis missing from $depends"
+for dep in libaravis-0.8-0 libmicrohttpd12 libarchive13 libjs-three; do
+  grep -q "\b$dep\b" <<< "$depends" || fail "$dep missing from $depends"
+done
 
 contents="$(dpkg-deb -c "$deb")"
 for path in ./usr/bin/fpp-scanner ./etc/fpp-scanner/board.yaml \
@@ -33,11 +40,52 @@ for path in ./usr/bin/fpp-scanner ./etc/fpp-scanner/board.yaml \
   grep -q " $path$" <<< "$contents" || fail "$path not in the package"
 done
 grep -q "fpp-calib" <<< "$contents" && fail "the host tool does not belong on the device"
+# The page, file for file as in the source tree, where the daemon looks for
+# it (<bindir>/../share/fpp-scanner/web).
+web="$source_dir/firmware/scanner/web"
+[ -f "$web/index.html" ] || fail "no page in $web (index.html)"
+pages=0
+while IFS= read -r -d '' f; do
+  path="./usr/share/fpp-scanner/web/${f#"$web"/}"
+  grep -qF " $path" <<< "$contents" || fail "$path not in the package"
+  pages=$((pages + 1))
+done < <(find "$web" -type f -print0)
+echo "page: $pages files in /usr/share/fpp-scanner/web"
+grep -q " ./etc/fpp-scanner/token" <<< "$contents" && fail "the token must be made on the board, not shipped"
 
 dpkg-deb -e "$deb" "$work/control"
 grep -qx "/etc/fpp-scanner/board.yaml" "$work/control/conffiles" || fail "board.yaml is not a conffile"
 grep -v "^[[:space:]]*#" "$work/control/postinst" | grep -q "systemctl enable" &&
   fail "postinst must not enable the service"
+
+# postinst configure makes /etc/fpp-scanner/token once: 64 hex digits,
+# root:fpp-scanner 0640; an upgrade keeps it; postrm purge removes it.
+stubs="$work/stubs"
+mkdir -p "$stubs" "$work/pkgroot/etc/fpp-scanner"
+for c in systemd-sysusers udevadm systemctl chown; do
+  printf '#!/bin/sh\necho "%s $*" >> "%s/calls"\n' "$c" "$work" > "$stubs/$c"
+done
+printf '#!/bin/sh\n[ "$*" = "group fpp-scanner" ] && echo fpp-scanner:x:999: && exit 0\nexit 2\n' \
+  > "$stubs/getent"
+chmod +x "$stubs"/*
+maint() { PATH="$stubs:$PATH" DPKG_ROOT="$work/pkgroot" sh "$work/control/$1" "${@:2}"; }
+token="$work/pkgroot/etc/fpp-scanner/token"
+maint postinst configure "" || fail "postinst configure (first install)"
+[ -f "$token" ] || fail "postinst made no token"
+{ grep -Eqx '[0-9a-f]{64}' "$token" && [ "$(wc -l < "$token")" -eq 1 ]; } ||
+  fail "token is not one line of 64 hex digits: $(cat "$token")"
+[ "$(stat -c %a "$token")" = 640 ] || fail "token mode $(stat -c %a "$token"), not 640"
+grep -qx "chown root:fpp-scanner $token.dpkg-new" "$work/calls" ||
+  fail "token not given to group fpp-scanner: $(cat "$work/calls")"
+grep -q "^systemctl\|^udevadm" "$work/calls" && fail "postinst with DPKG_ROOT touched this machine"
+first="$(cat "$token")"
+maint postinst configure 0.0.9 || fail "postinst configure (upgrade)"
+[ "$(cat "$token")" = "$first" ] || fail "an upgrade replaced the token"
+maint postrm remove || fail "postrm remove"
+[ -f "$token" ] || fail "postrm remove took the token (only purge may)"
+maint postrm purge || fail "postrm purge"
+[ ! -e "$token" ] || fail "postrm purge left the token"
+echo "postinst: token made once (64 hex digits, root:fpp-scanner 0640), kept on upgrade, purged"
 
 dpkg-deb -x "$deb" "$work/root"
 binary="$work/root/usr/bin/fpp-scanner"
@@ -57,7 +105,17 @@ sed "s|/usr/bin/fpp-scanner|$binary|" "$work/root/lib/systemd/system/fpp-scanner
   > "$work/fpp-scanner.service"
 if command -v systemd-analyze > /dev/null; then
   systemd-analyze verify "$work/fpp-scanner.service" || fail "systemd-analyze verify"
-  systemd-analyze security --offline=true "$work/fpp-scanner.service" 2>/dev/null |
-    tail -n 1 || true
+  exposure="$(systemd-analyze security --offline=true "$work/fpp-scanner.service" 2> /dev/null |
+    sed -n 's/^.*Overall exposure level for [^:]*: \([0-9.]*\).*$/\1/p')"
+  echo "systemd-analyze security: exposure ${exposure:-?}"
+  [ -z "$exposure" ] || awk -v e="$exposure" 'BEGIN { exit !(e <= 2.0) }' ||
+    fail "the service's exposure is $exposure (at most 2.0)"
 fi
+# The default board's API port is the one port the unit lets it bind.
+port="$(sed -n 's/^  listen: .*:\([0-9]*\)$/\1/p' "$work/root/etc/fpp-scanner/board.yaml")"
+[ -n "$port" ] || fail "the default board has no http.listen"
+grep -qx "SocketBindAllow=tcp:$port" "$work/fpp-scanner.service" ||
+  fail "the unit does not let the service bind the board's port $port"
+grep -qx "token_file: /etc/fpp-scanner/token" <<< "$(sed 's/^ *//' "$work/root/etc/fpp-scanner/board.yaml")" ||
+  fail "the default board does not read the package's token"
 echo "OK"

@@ -7,7 +7,9 @@
 # and powers off. run-vm.sh reads the lines starting with "fpp-vm-init:" on
 # the serial console: "run" when the command starts, "exit N" with its status.
 # The gpio-keys driver is not loaded, so that the power button's line (PL061
-# line 3) stays free for libgpiod.
+# line 3) stays free for libgpiod. With /fpp/net (run-vm.sh --forward) eth0
+# gets QEMU's user-network address, 10.0.2.15/24 through 10.0.2.2, where the
+# host's forwarded ports arrive.
 /bin/busybox --install -s /bin
 export PATH=/fpp/bin:/usr/bin:/bin HOME=/tmp TERM=dumb
 umask 022
@@ -25,6 +27,15 @@ while read -r module; do
   insmod "/lib/modules/$module" || say "insmod $module failed"
 done < /lib/modules/load-order
 ifconfig lo 127.0.0.1 up || say "no loopback"
+if [ -e /fpp/net ]; then
+  i=0
+  while [ ! -e /sys/class/net/eth0 ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+  if ifconfig eth0 10.0.2.15 netmask 255.255.255.0 up && route add default gw 10.0.2.2; then
+    say "net eth0 10.0.2.15/24 via 10.0.2.2"
+  else
+    say "net: no eth0"
+  fi
+fi
 if ! mount -t 9p -o trans=virtio,version=9p2000.L,msize=262144 fppout /out; then
   say "cannot mount the result share at /out"
 fi

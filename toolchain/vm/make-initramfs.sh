@@ -14,11 +14,16 @@
 #                        and the dynamic loader
 #   /fpp/files/          the extra files (board file, rig, scene, table)
 #   /fpp/cmd, /fpp/collect  the guest command and the paths to bring back
+#   /fpp/net             with --net: the virtio-net driver is loaded and
+#                        guest-init.sh gives eth0 QEMU's user-network address
+#   any folder           --tree HOSTDIR=GUESTDIR (e.g. three.js, a web page)
 #
 # Usage: make-initramfs.sh --out FILE [--cache DIR] [--bin ELF]... [--files DIR]
 #          [--cmd-file FILE] [--collect-file FILE] [--module NAME]...
-#          [--lib-dir DIR]...
+#          [--lib-dir DIR]... [--net] [--tree HOSTDIR=GUESTDIR]...
 #   --lib-dir DIR  searched for libraries before the arm64 multiarch folders
+#   --net          a network card (virtio-net-pci on QEMU's user network)
+#   --tree H=G     host folder H copied to guest folder G (links dereferenced)
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
@@ -29,6 +34,8 @@ cmd_file=""
 collect_file=""
 bins=()
 lib_dirs=()
+trees=()
+net=0
 # virtio_pci: the PCI transport (virtio-gpu-pci, virtio-9p-pci);
 # virtio-gpu: /dev/dri/card0; 9pnet_virtio and 9p: the /out share.
 modules=(virtio_pci virtio-gpu 9pnet_virtio 9p)
@@ -43,6 +50,13 @@ while [ $# -gt 0 ]; do
     --collect-file) collect_file="$2"; shift 2 ;;
     --module) modules+=("$2"); shift 2 ;;
     --lib-dir) lib_dirs+=("$2"); shift 2 ;;
+    --net) net=1; shift ;;
+    --tree)
+      case "$2" in
+        /*=/*) trees+=("$2") ;;
+        *) echo "make-initramfs: --tree takes HOSTDIR=GUESTDIR, both absolute: '$2'" >&2; exit 2 ;;
+      esac
+      shift 2 ;;
     -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
     *) echo "make-initramfs: unknown argument '$1'" >&2; exit 2 ;;
   esac
@@ -56,6 +70,8 @@ release=$(cat "$cache/kernel-release")
 root="$cache/root"
 module_tree="$root/lib/modules/$release/kernel"
 lib_dirs+=(/lib/aarch64-linux-gnu /usr/lib/aarch64-linux-gnu)
+# virtio_net: eth0 (its dependencies net_failover and failover follow).
+[ "$net" -eq 0 ] || modules+=(virtio_net)
 
 stage=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-initramfs.XXXXXX")
 trap 'rm -rf "$stage"' EXIT
@@ -164,6 +180,13 @@ fi
 
 # --- Files, command, minimal /etc --------------------------------------------
 if [ -n "$files" ]; then cp -rL "$files/." "$stage/fpp/files/"; fi
+for t in "${trees[@]}"; do
+  host_dir=${t%%=*} guest_dir=${t#*=}
+  [ -d "$host_dir" ] || { echo "make-initramfs: no folder $host_dir (--tree)" >&2; exit 1; }
+  mkdir -p "$stage$guest_dir"
+  cp -rL "$host_dir/." "$stage$guest_dir/"
+done
+[ "$net" -eq 0 ] || : > "$stage/fpp/net"
 if [ -n "$cmd_file" ]; then cp "$cmd_file" "$stage/fpp/cmd"; else echo "true" > "$stage/fpp/cmd"; fi
 if [ -n "$collect_file" ]; then cp "$collect_file" "$stage/fpp/collect"; else : > "$stage/fpp/collect"; fi
 echo "root:x:0:0:root:/tmp:/bin/sh" > "$stage/etc/passwd"

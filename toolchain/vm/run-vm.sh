@@ -10,6 +10,9 @@
 #   lo               loopback up (for Aravis's fake GigE camera)
 #   /out             a host folder (virtio 9p): results written there, or
 #                    copied there with --collect, are on the host afterwards
+#   eth0             with --forward: QEMU's user network (restrict=on: the
+#                    guest reaches nothing outside), 10.0.2.15/24, and the
+#                    forwarded ports from the host's 127.0.0.1
 #
 # Usage: run-vm.sh [options] -- COMMAND [ARG...]
 #   --build DIR       cross build folder: adds DIR/firmware/scanner/fpp-scanner
@@ -23,6 +26,13 @@
 #                     new folder under $TMPDIR, printed). The serial console
 #                     is saved there as console.log
 #   --collect PATH    guest path copied into /out after the command; repeatable
+#   --tree H=G        host folder H copied to guest folder G; repeatable
+#   --forward [HP:]GP the host's 127.0.0.1:HP reaches the guest's TCP port GP
+#                     (on eth0, not the guest's loopback: listen on 0.0.0.0);
+#                     without HP a free port is picked. Repeatable; each is
+#                     written as a line "GP HP" to OUT/forwards before the
+#                     VM starts, so that the caller (running this in the
+#                     background) knows where to connect
 #   --press-on REGEX  press the button when a console line printed by the
 #                     command matches REGEX (bash ERE), each time it matches
 #   --press-after S   press the button S seconds after the command started
@@ -42,7 +52,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
 build="" files="" out="" press_on="" press_after="" quiet=0 fake_camera=0
 presses_max=-1 timeout_s=240 smp=2 mem=1024
-bins=() collects=() lib_dirs=()
+bins=() collects=() lib_dirs=() trees=() forwards=()
 
 usage() { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; }
 while [ $# -gt 0 ]; do
@@ -54,6 +64,10 @@ while [ $# -gt 0 ]; do
     --files) files="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
     --collect) collects+=("$2"); shift 2 ;;
+    --tree) trees+=("$2"); shift 2 ;;
+    --forward)
+      [[ "$2" =~ ^([0-9]+:)?[0-9]+$ ]] || { echo "run-vm: --forward takes [HOSTPORT:]GUESTPORT" >&2; exit 125; }
+      forwards+=("$2"); shift 2 ;;
     --press-on) press_on="$2"; shift 2 ;;
     --press-after) press_after="$2"; shift 2 ;;
     --presses) presses_max="$2"; shift 2 ;;
@@ -124,12 +138,43 @@ initramfs_args=(--cache "$cache" --out "$work/initramfs.cpio" --cmd-file "$work/
   --collect-file "$work/collect")
 for b in "${bins[@]}"; do initramfs_args+=(--bin "$b"); done
 for d in "${lib_dirs[@]}"; do initramfs_args+=(--lib-dir "$d"); done
+for t in "${trees[@]}"; do initramfs_args+=(--tree "$t"); done
+[ ${#forwards[@]} -eq 0 ] || initramfs_args+=(--net)
 [ -z "$files" ] || initramfs_args+=(--files "$files")
 if ! "$here/make-initramfs.sh" "${initramfs_args[@]}" >&2; then
   echo "run-vm: cannot build the initramfs" >&2
   exit 125
 fi
 t_initramfs=$(seconds_since "$t_start")
+
+# The user network with the forwarded ports (picked just before QEMU starts,
+# among those no socket of this machine uses).
+port_in_use() {
+  local hex
+  hex=$(printf ':%04X' "$1")
+  awk -v p="$hex" 'FNR > 1 && substr($2, length($2) - 4) == p { found = 1 } END { exit !found }' \
+    /proc/net/tcp /proc/net/tcp6 2> /dev/null
+}
+net_args=()
+if [ ${#forwards[@]} -gt 0 ]; then
+  netdev="user,id=net0,restrict=on"
+  : > "$out/forwards"
+  for f in "${forwards[@]}"; do
+    guest_port=${f#*:} host_port=""
+    [ "$f" = "$guest_port" ] || host_port=${f%%:*}
+    if [ -z "$host_port" ]; then
+      for _ in $(seq 1 100); do
+        host_port=$((20000 + RANDOM % 40000))
+        port_in_use "$host_port" || break
+      done
+    fi
+    netdev+=",hostfwd=tcp:127.0.0.1:$host_port-:$guest_port"
+    echo "$guest_port $host_port" >> "$out/forwards"
+    echo "run-vm: the guest's port $guest_port is 127.0.0.1:$host_port here" >&2
+  done
+  # romfile= : no option ROM (its iPXE file is in ipxe-qemu; the kernel needs none).
+  net_args=(-netdev "$netdev" -device "virtio-net-pci,netdev=net0,romfile=")
+fi
 
 # The console comes through a FIFO so that every line is seen as it is
 # printed; the monitor is a pair of FIFOs (monitor.in, monitor.out).
@@ -146,6 +191,7 @@ timeout --kill-after=10 "$((timeout_s + 30))" qemu-system-aarch64 -M virt -cpu c
   -device virtio-gpu-pci \
   -fsdev local,id=fppout,path="$out",security_model=none \
   -device virtio-9p-pci,fsdev=fppout,mount_tag=fppout \
+  "${net_args[@]}" \
   < /dev/null > "$work/console" 2> "$work/qemu.err" &
 qemu_pid=$!
 exec 3< "$work/console"

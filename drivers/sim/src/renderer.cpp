@@ -238,7 +238,8 @@ Image<float> Renderer::render_radiance(const Image<std::uint8_t>& projector_imag
     return out;
 }
 
-Frame Renderer::render(const Image<std::uint8_t>& projector_image, std::uint64_t noise_seed) const {
+Frame Renderer::render(const Image<std::uint8_t>& projector_image, std::uint64_t noise_seed,
+                       double exposure_scale) const {
     Scratch& scratch = thread_scratch();
     radiance_into(projector_image, scratch.radiance, scratch.light, scratch.blur);
     const std::vector<float>& radiance = scratch.radiance;
@@ -271,6 +272,7 @@ Frame Renderer::render(const Image<std::uint8_t>& projector_image, std::uint64_t
         const float full_dn = full;
         const int msb_shift = shift;
         const float noise_read_var = read_var, noise_shot_per_dn = shot_per_dn;
+        const float scale = static_cast<float>(exposure_scale);
         float* v = scratch.noisy_rows.data() +
                    static_cast<std::size_t>(worker) * static_cast<std::size_t>(width);
         for (int y = y0; y < y1; ++y) {
@@ -280,12 +282,15 @@ Frame Renderer::render(const Image<std::uint8_t>& projector_image, std::uint64_t
                 for (int x = 0; x < width; ++x)
                     v[x] = normal(key, first + static_cast<std::size_t>(x));
                 // Signal-dependent sigma, in a separate loop that vectorises.
-                for (int x = 0; x < width; ++x)
-                    v[x] = in[x] +
-                           std::sqrt(noise_read_var + noise_shot_per_dn * std::max(in[x], 0.0f)) *
+                for (int x = 0; x < width; ++x) {
+                    const float signal = scale * in[x];
+                    v[x] = signal +
+                           std::sqrt(noise_read_var + noise_shot_per_dn * std::max(signal, 0.0f)) *
                                v[x];
+                }
             } else {
-                std::copy(in, in + width, v);
+                for (int x = 0; x < width; ++x)
+                    v[x] = scale * in[x];
             }
             // Round to the nearest DN, clip to [0, full scale] (saturation).
             if (frame.bit_depth == 8) {

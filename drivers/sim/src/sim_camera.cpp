@@ -15,7 +15,8 @@ const char* const kDevice = "sim camera";
 SimCamera::SimCamera(const Renderer& renderer, const Screen& display, drivers::Clock& clock,
                      const drivers::CameraSettings& settings, std::uint64_t noise_seed)
     : renderer_(&renderer), display_(display), clock_(clock), settings_(settings),
-      seed_(noise_seed), dark_(renderer.rig().projector_size) {}
+      nominal_exposure_us_(settings.exposure_us), seed_(noise_seed),
+      dark_(renderer.rig().projector_size) {}
 
 Size SimCamera::size() const {
     return renderer_->rig().camera_size;
@@ -124,7 +125,8 @@ drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) 
             : display_.pattern(static_cast<std::size_t>(p.exposure.pattern));
     drivers::CapturedFrame out;
     out.frame = renderer_->render(
-        light, Renderer::frame_seed(seed_, static_cast<int>(p.exposure.frame_id)));
+        light, Renderer::frame_seed(seed_, static_cast<int>(p.exposure.frame_id)),
+        settings_.exposure_us / nominal_exposure_us_);
     out.frame_id = p.exposure.frame_id;
     out.timestamp_ns = p.exposure.start_ns;
     return out;

@@ -336,25 +336,4 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
     write_file_synced(temp / "scan.json", scan_json(metadata));
 }
 
-void Scanner::run(ScanMode mode, const std::atomic<bool>& stop) {
-    dev_.led.set(LedState::ready);
-    log_.info("idle: waiting for the button");
-    while (!stop.load()) {
-        if (!dev_.button.wait_press(std::chrono::milliseconds(100)))
-            continue;
-        try {
-            scan(mode, &stop);
-        } catch (const ScanAborted&) {
-            break;
-        } catch (const std::exception&) {
-            // Logged by scan(); the LED stays in its error state until the
-            // next successful scan.
-        }
-        if (const int ignored = dev_.button.drain(); ignored > 0)
-            log_.warning("button pressed " + std::to_string(ignored) +
-                         " time(s) during the scan: ignored");
-        log_.info("idle: waiting for the button");
-    }
-}
-
 } // namespace fpp::scanner

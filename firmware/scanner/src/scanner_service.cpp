@@ -21,6 +21,15 @@ using nlohmann::json;
 
 namespace {
 
+void throw_if_aborted(const std::exception_ptr& e) {
+    try {
+        std::rethrow_exception(e);
+    } catch (const ScanAborted&) {
+        throw;
+    } catch (...) {
+    }
+}
+
 constexpr auto kJobTimeout = std::chrono::seconds(30);
 
 json size_json(Size s) { return {{"width", s.width}, {"height", s.height}}; }
@@ -122,50 +131,51 @@ void ScannerService::run(ScanMode button_mode, const std::atomic<bool>& stop) {
     dev_.led.set(drivers::LedState::ready);
     log_.info("idle: waiting for the button or a request");
     try {
-        while (!stop.load()) {
-            std::shared_ptr<Job> job;
-            {
-                const std::lock_guard lock(mutex_);
-                if (!jobs_.empty()) {
-                    job = jobs_.front();
-                    jobs_.pop_front();
-                }
-            }
-            if (job) {
-                try {
-                    job->work(stop);
-                    job->done.set_value();
-                } catch (const ScanAborted&) {
-                    job->done.set_exception(std::current_exception());
-                    throw;
-                } catch (...) {
-                    job->done.set_exception(std::current_exception());
-                }
-                continue;
-            }
-            if (!dev_.button.wait_press(std::chrono::milliseconds(50)))
-                continue;
-            fs::path folder;
-            try {
-                const std::lock_guard lock(mutex_);
-                if (busy_) {
-                    log_.warning("button pressed while a scan is queued: ignored");
-                    continue;
-                }
-                folder = claim_scan_folder({});
-                busy_ = true;
-            } catch (const std::exception& e) {
-                log_.error(std::string("scan failed: ") + e.what());
-                set_state("error", e.what());
-                continue;
-            }
-            run_scan(button_mode, folder, "button", {}, stop);
-        }
-    } catch (...) {
-        shut_down();
-        throw;
+        while (!stop.load())
+            serve_once(button_mode, stop);
+    } catch (const ScanAborted&) {
+        // A stop request during a scan: logged by the scanner, nothing written.
     }
     shut_down();
+}
+
+// One queued piece of work, or one wait for the button (and its scan).
+void ScannerService::serve_once(ScanMode button_mode, const std::atomic<bool>& stop) {
+    std::shared_ptr<Job> job;
+    {
+        const std::lock_guard lock(mutex_);
+        if (!jobs_.empty()) {
+            job = jobs_.front();
+            jobs_.pop_front();
+        }
+    }
+    if (job) {
+        try {
+            job->work(stop);
+            job->done.set_value();
+        } catch (...) {
+            job->done.set_exception(std::current_exception());
+            throw_if_aborted(std::current_exception());
+        }
+        return;
+    }
+    if (!dev_.button.wait_press(std::chrono::milliseconds(50)))
+        return;
+    fs::path folder;
+    try {
+        const std::lock_guard lock(mutex_);
+        if (busy_) {
+            log_.warning("button pressed while a scan is queued: ignored");
+            return;
+        }
+        folder = claim_scan_folder({});
+        busy_ = true;
+    } catch (const std::exception& e) {
+        log_.error(std::string("scan failed: ") + e.what());
+        set_state("error", e.what());
+        return;
+    }
+    run_scan(button_mode, folder, "button", {}, stop);
 }
 
 void ScannerService::shut_down() {
@@ -184,23 +194,20 @@ void ScannerService::run_scan(ScanMode mode, const fs::path& folder, const std::
                               const std::string& session, const std::atomic<bool>& stop) {
     current_source_ = source;
     current_session_ = session;
+    // busy_ ends in written() or failed(), before their events go out: a
+    // request sent on `written` is taken. Clearing it here, after them,
+    // refused such a request (409) and could end the busy_ of the next one.
     try {
         scanner_.scan(mode, &stop, folder);
     } catch (const ScanAborted&) {
-        const std::lock_guard lock(mutex_);
-        busy_ = false;
         throw;
     } catch (const std::exception&) {
         // Logged by the scanner and reported through failed().
     }
-    {
-        const std::lock_guard lock(mutex_);
-        busy_ = false;
-        store_bytes_at_ = {}; // measure again
-    }
     if (const int ignored = dev_.button.drain(); ignored > 0)
         log_.warning("button pressed " + std::to_string(ignored) +
                      " time(s) during the scan: ignored");
+    log_.info("idle: waiting for the button or a request");
 }
 
 void ScannerService::scan_started(const std::string& id, ScanMode mode, int frames) {
@@ -230,6 +237,8 @@ void ScannerService::written(const ScanOutcome& outcome) {
         last_scan_ = {{"id", current_id_}, {"mode", mode},       {"ok", true},
                       {"points", outcome.points}, {"error", nullptr}, {"session", text_or_null(current_session_)}};
         ++scans_completed_;
+        busy_ = false;
+        store_bytes_at_ = {}; // measure again
     }
     events_.publish("written", json{{"id", current_id_},
                                     {"mode", mode},
@@ -248,6 +257,8 @@ void ScannerService::failed(const std::string& reason) {
                       {"points", 0},
                       {"error", reason},
                       {"session", text_or_null(current_session_)}};
+        busy_ = false;
+        store_bytes_at_ = {};
     }
     events_.publish("failed", json{{"id", current_id_}, {"error", reason}}.dump());
     set_state("error", reason);
@@ -377,7 +388,11 @@ json ScannerService::install_table(const fs::path& uploaded) {
         try {
             scanner_.reload_table(uploaded);
         } catch (const InputError& e) {
-            throw ApiError(400, e.what());
+            // The spool file's name means nothing to the client.
+            std::string why = e.what();
+            if (why.starts_with(uploaded.string()))
+                why = "the uploaded table" + why.substr(uploaded.string().size());
+            throw ApiError(400, why);
         }
         try {
             // The previous file kept by a second name, then the new one

@@ -43,9 +43,12 @@ class Renderer {
 
     // One camera frame of the scene lit by `projector_image` (8-bit drive
     // levels at projector resolution). Noise is seeded by `noise_seed` so
-    // that renders are reproducible.
+    // that renders are reproducible. `exposure_scale`: the exposure over the
+    // rig's nominal one (the signal, and so its shot noise, scales with it;
+    // read noise does not).
     // Throws std::invalid_argument if the image is not projector-sized, 1 channel.
-    Frame render(const Image<std::uint8_t>& projector_image, std::uint64_t noise_seed) const;
+    Frame render(const Image<std::uint8_t>& projector_image, std::uint64_t noise_seed,
+                 double exposure_scale = 1.0) const;
     // The noise-free, unquantised camera image (DN, after camera defocus).
     Image<float> render_radiance(const Image<std::uint8_t>& projector_image) const;
 

@@ -38,7 +38,9 @@ struct Exposure {
 class SimCamera final : public drivers::Camera {
 public:
     // The renderer must outlive the camera. Settings: trigger mode, exposure
-    // (time spent before the frame is read out) and frame timeout are used.
+    // (time spent before the frame is read out; the rig's brightness is that
+    // of this first exposure, and scales with later ones) and frame timeout
+    // are used.
     SimCamera(const Renderer& renderer, const Screen& screen, drivers::Clock& clock,
               const drivers::CameraSettings& settings, std::uint64_t noise_seed = 1);
 
@@ -74,6 +76,7 @@ private:
     const Screen& display_;
     drivers::Clock& clock_;
     drivers::CameraSettings settings_;
+    double nominal_exposure_us_;
     std::uint64_t seed_;
     bool streaming_ = false;
     bool gone_ = false;

@@ -18,7 +18,7 @@
 //   table: <path.fpt>                  optional: without it only capture mode works
 //   store: {directory: <path>, max_mb: N}   oldest scans pruned beyond N MiB
 //   timing: {settle_us: N, trigger_pulse_us: N, flip_timeout_ms: N}
-//   http: {listen: ADDRESS:PORT, token_file: <path>, max_connections: N (default 32),
+//   http: {listen: ADDRESS:PORT, token_file: <path>, max_connections: N (default 64),
 //          timeout_s: N (default 30), web_root: <path> (optional)}
 //                                      optional: without it no socket is opened
 //   settings: <path>                   optional: the settings the API may change
@@ -92,7 +92,7 @@ struct TimingConfig {
 struct HttpConfig {
     std::string listen;                  // "ADDRESS:PORT"; port 0 = any free port
     std::filesystem::path token_file;    // the API's bearer token, first line
-    int max_connections = 32;
+    int max_connections = 64;
     std::chrono::seconds timeout{30};    // an idle connection is closed after this
     std::optional<std::filesystem::path> web_root; // the page's files
 };

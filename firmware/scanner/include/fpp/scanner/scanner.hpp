@@ -106,10 +106,6 @@ public:
 
     void set_observer(ScanObserver* observer) { observer_ = observer; }
 
-    // Idle loop: LED ready, a button press starts a scan; presses during a
-    // scan are discarded and logged. Returns when `stop` is set. Scan
-    // failures are logged and the loop goes back to idle.
-    void run(ScanMode mode, const std::atomic<bool>& stop);
 
     int frames_per_scan() const { return static_cast<int>(patterns_); }
     const Sequence& sequence() const { return sequence_; }

@@ -45,7 +45,7 @@ public:
     ~ScannerService() override;
 
     // On the scanning thread: button presses (scans in `button_mode`) and
-    // queued work until `stop`. Ends early only for ScanAborted (rethrown).
+    // queued work until `stop` (which also aborts a scan in progress).
     void run(ScanMode button_mode, const std::atomic<bool>& stop);
 
     // --- Any thread. Refusals throw ApiError (409 busy, 400 bad value, ...).
@@ -76,6 +76,7 @@ public:
 
 private:
     struct Job;
+    void serve_once(ScanMode button_mode, const std::atomic<bool>& stop);
     void run_scan(ScanMode mode, const std::filesystem::path& folder, const std::string& source,
                   const std::string& session, const std::atomic<bool>& stop);
     void shut_down(); // queued work is refused
