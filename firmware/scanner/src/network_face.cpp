@@ -46,6 +46,9 @@ NetworkFace::NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, 
     ApiOptions api;
     api.token = read_token_file(h.token_file);
     const fs::path web_root = find_web_root(h.web_root);
+    if (!fs::exists(web_root / "index.html"))
+        throw InputError(board.file, "http.web_root",
+                         "no index.html in " + web_root.string() + " (the page's files)");
     api.web_root = web_root;
     api.three_root = kThreeRoot;
     // The largest table model is 14 floats a pixel; headers and tile CRCs

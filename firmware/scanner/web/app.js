@@ -17,6 +17,7 @@ const page = {
   eventsGeneration: 0,
   eventsAbort: null,
   scanId: null,            // the scan the progress bar follows
+  cloudWanted: null,       // the scan whose cloud the viewer is to show
   finished: new Set(),     // scans whose end the page has shown
   session: '',             // the calibration session shown
   poseId: null,            // the pose being taken
@@ -204,7 +205,7 @@ async function refreshAll() {
   const scans = await refreshScans();
   // Show the newest cloud unless one is shown already.
   const newest = scans && scans.find(s => s.cloud);
-  if (newest && !window.fppViewer) loadCloud(newest.id);
+  if (newest && !window.fppViewer && !page.cloudWanted) loadCloud(newest.id);
 }
 
 // ---- events (server-sent, read through fetch to send the token) -------------
@@ -353,7 +354,8 @@ function finishScan(id, ok, mode, points, error, session) {
   const progress = $('progress');
   if (ok) {
     progress.value = progress.max;
-    const what = mode === 'capture' ? 'capture set' : formatCount(points) + ' points';
+    const what = (mode === 'capture' ? 'capture set' + (points ? ' and ' : '') : '') +
+                 (points || mode !== 'capture' ? formatCount(points) + ' points' : '');
     setMessage($('scan-status'), 'written: ' + id + ', ' + what + (session ? ' (session ' + session + ')' : ''));
     setMessage($('scan-error'), '');
   } else {
@@ -395,21 +397,24 @@ async function startScan() {
 
 async function loadCloud(id) {
   if (!page.viewer) return;
+  page.cloudWanted = id; // the latest request wins over slower earlier ones
   const message = $('viewer-message');
   setMessage(message, 'loading ' + id + '…');
   try {
     const response = await api('/scans/' + pathId(id) + '/cloud.ply');
-    const parsed = FppViewer.parsePly(await response.arrayBuffer());
+    const buffer = await response.arrayBuffer();
+    if (page.cloudWanted !== id) return;
+    const parsed = FppViewer.parsePly(buffer);
     const quality = $('colour-by').querySelector('option[value="quality"]');
     quality.disabled = !parsed.columns.quality;
     if (quality.disabled) $('colour-by').value = 'depth';
     const drawn = page.viewer.show(parsed, id, $('colour-by').value);
     $('viewer-title').textContent = id;
     $('viewer-info').textContent = formatCount(drawn.points) + ' of ' + formatCount(drawn.total) + ' points' +
-      (parsed.stride > 1 ? ' (every ' + parsed.stride + 'th)' : '');
+      (parsed.stride > 1 ? ' (1 in ' + parsed.stride + ')' : '');
     setMessage(message, drawn.points ? '' : 'The cloud has no points.');
   } catch (e) {
-    setMessage(message, 'Cannot show ' + id + ': ' + errorMessage(e), 'error');
+    if (page.cloudWanted === id) setMessage(message, 'Cannot show ' + id + ': ' + errorMessage(e), 'error');
   }
 }
 
@@ -496,7 +501,7 @@ async function refreshSessions() {
     const options = [element('option', '(none)')];
     options[0].value = '';
     for (const s of list) {
-      const option = element('option', s.name + ' (' + s.poses + ' poses)');
+      const option = element('option', s.name + ' (' + s.poses + (s.poses === 1 ? ' pose)' : ' poses)'));
       option.value = s.name;
       options.push(option);
     }

@@ -195,15 +195,18 @@ const FppViewer = (function () {
     controls.screenSpacePanning = true;
     let points = null;
     let cloud = null;
+    let userMoved = false; // until the user turns the view, a resize re-frames the cloud
 
     function render() { renderer.render(scene, camera); }
     controls.addEventListener('change', render);
+    controls.addEventListener('start', () => { userMoved = true; });
 
     function resize() {
       const w = Math.max(1, container.clientWidth), h = Math.max(1, container.clientHeight);
       renderer.setSize(w, h, false);
       camera.aspect = w / h;
       camera.updateProjectionMatrix();
+      if (points && !userMoved && points.geometry.getAttribute('position').count > 0) frame(points.geometry);
       render();
     }
     if (window.ResizeObserver) new ResizeObserver(resize).observe(container);
@@ -265,6 +268,7 @@ const FppViewer = (function () {
       points = new THREE.Points(geometry, material);
       scene.add(points);
       const range = applyColours(mode);
+      userMoved = false;
       if (n > 0) frame(geometry);
       render();
       const drawn = { points: n, total: parsed.total, scanId: scanId, colourBy: mode, range: range,
