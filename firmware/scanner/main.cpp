@@ -26,7 +26,9 @@ namespace {
 
 std::atomic<bool> g_stop{false};
 
-extern "C" void on_stop_signal(int) { g_stop.store(true); }
+extern "C" void on_stop_signal(int) {
+    g_stop.store(true);
+}
 
 struct Options {
     std::string board;
@@ -44,13 +46,19 @@ struct Options {
 // The command line over the board file.
 void apply_options(const Options& o, fpp::scanner::BoardConfig& board) {
     using namespace fpp::scanner;
-    if (!o.store.empty()) board.store.directory = o.store;
-    if (!o.table.empty()) board.table = o.table;
-    if (!o.settings.empty()) board.settings_file = o.settings;
+    if (!o.store.empty())
+        board.store.directory = o.store;
+    if (!o.table.empty())
+        board.table = o.table;
+    if (!o.settings.empty())
+        board.settings_file = o.settings;
     if (!o.http.empty() || !o.token_file.empty()) {
-        if (!board.http) board.http.emplace();
-        if (!o.http.empty()) board.http->listen = o.http;
-        if (!o.token_file.empty()) board.http->token_file = o.token_file;
+        if (!board.http)
+            board.http.emplace();
+        if (!o.http.empty())
+            board.http->listen = o.http;
+        if (!o.token_file.empty())
+            board.http->token_file = o.token_file;
         if (board.http->listen.empty() || board.http->token_file.empty())
             throw fpp::InputError("command line", "--http",
                                   "--http ADDRESS:PORT and --token-file FILE go together");
@@ -60,12 +68,14 @@ void apply_options(const Options& o, fpp::scanner::BoardConfig& board) {
             throw fpp::InputError("command line", "--http", e.what());
         }
     }
-    if (!o.web_root.empty() && board.http) board.http->web_root = o.web_root;
+    if (!o.web_root.empty() && board.http)
+        board.http->web_root = o.web_root;
 }
 
 // The exposure a person set last (through the API), over the board file's.
 void apply_settings_file(fpp::scanner::BoardConfig& board, fpp::drivers::Camera& camera) {
-    if (!board.settings_file) return;
+    if (!board.settings_file)
+        return;
     if (const auto s = fpp::scanner::read_settings_file(*board.settings_file)) {
         camera.set_exposure_us(s->exposure_us);
         board.camera.settings.exposure_us = s->exposure_us;
@@ -84,7 +94,8 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
     // Capture mode records calibration sessions, made before any table
     // exists: it neither needs nor loads one. A network scanner starts
     // without one too, and takes one over the network.
-    if (mode == ScanMode::capture && !serving) board.table.reset();
+    if (mode == ScanMode::capture && !serving)
+        board.table.reset();
     if (serving && board.table && !std::filesystem::exists(*board.table)) {
         log.warning("no table at " + board.table->string() +
                     ": capture mode only until one is installed (PUT /api/v1/table)");
@@ -94,12 +105,14 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
     // the hardware. Devices that cannot be opened throw DeviceError.
     std::unique_ptr<SimBoard> sim;
     std::unique_ptr<HardwareBoard> hardware;
-    if (board.sim) sim = std::make_unique<SimBoard>(board);
+    if (board.sim)
+        sim = std::make_unique<SimBoard>(board);
     else {
         hardware = std::make_unique<HardwareBoard>(board);
         // As a service the scanner waits for a camera that does not answer
         // yet (LED in error); --once and --scans fail at once.
-        if (scans > 0) hardware->open_camera();
+        if (scans > 0)
+            hardware->open_camera();
         else if (!hardware->wait_for_camera(log, g_stop)) {
             hardware->led().set(fpp::drivers::LedState::off);
             hardware->display().restore();
@@ -117,7 +130,8 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
         } catch (const fpp::InputError& e) {
             // A network scanner with a bad table still serves, so that a
             // good one can be installed.
-            if (!serving || !board.table || e.file() != *board.table) throw;
+            if (!serving || !board.table || e.file() != *board.table)
+                throw;
             log.error(std::string(e.what()) + ": serving without a table until one is installed");
             board.table.reset();
             made.emplace(board, devices, log);
@@ -136,8 +150,9 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
             face.run(mode, g_stop);
         } else {
             EventHub events; // nobody listens without a network face
-            ScannerService service(board, scanner, devices, events, log,
-                                   ServiceOptions{table_path, board.settings_file, "", sim != nullptr});
+            ScannerService service(
+                board, scanner, devices, events, log,
+                ServiceOptions{table_path, board.settings_file, "", sim != nullptr});
             service.run(mode, g_stop);
             log.info("stopped");
         }
@@ -160,7 +175,8 @@ int main(int argc, char** argv) {
     CLI::App app{"fpp-scanner: the scanner head's firmware. Without --once or --scans it runs "
                  "until SIGTERM: a button press scans, and with --http (or the board's http "
                  "section) so does a request."};
-    app.add_option("--board", o.board, "board configuration (fpp-scanner-board/1, e.g. board/sim.yaml)")
+    app.add_option("--board", o.board,
+                   "board configuration (fpp-scanner-board/1, e.g. board/sim.yaml)")
         ->required();
     app.add_flag("--once", o.once,
                  "scan once as if the button had been pressed, print the output folder and exit "

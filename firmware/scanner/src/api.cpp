@@ -13,7 +13,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <regex>
+#include <chrono>
+#include <ctime>
+#include <string_view>
 
 namespace fpp::scanner {
 
@@ -38,30 +40,55 @@ std::vector<std::string> split_path(const std::string& path) {
     return parts;
 }
 
+bool is_digits(std::string_view s, std::size_t min, std::size_t max) {
+    return s.size() >= min && s.size() <= max &&
+           std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// scan-YYYYMMDD-HHMMSS-mmm[-N] (scan_store.cpp's names).
 bool is_scan_id(const std::string& s) {
-    static const std::regex id(R"(scan-\d{8}-\d{6}-\d{3}(-\d{1,6})?)");
-    return std::regex_match(s, id);
+    constexpr std::string_view prefix = "scan-";
+    if (!s.starts_with(prefix) || s.size() < 24 || s[13] != '-' || s[20] != '-')
+        return false;
+    const std::string_view v = s;
+    return is_digits(v.substr(5, 8), 8, 8) && is_digits(v.substr(14, 6), 6, 6) &&
+           is_digits(v.substr(21, 3), 3, 3) &&
+           (s.size() == 24 || (s[24] == '-' && is_digits(v.substr(25), 1, 6)));
+}
+
+// 1 to `max` of A-Z a-z 0-9 . _ -, not starting with '.' (so never "." or
+// "..", nor a hidden file).
+bool is_plain_name(std::string_view s, std::size_t max) {
+    const auto allowed = [](char c) {
+        return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
+               c == '.' || c == '_' || c == '-';
+    };
+    return !s.empty() && s.size() <= max && s[0] != '.' && std::all_of(s.begin(), s.end(), allowed);
 }
 
 bool is_session_name(const std::string& s) {
-    static const std::regex name(R"([A-Za-z0-9_-][A-Za-z0-9._-]{0,63})");
-    return std::regex_match(s, name);
+    return is_plain_name(s, 64);
 }
 
-// A path segment of a static file: no "..", no hidden files, no escapes.
+// A path segment of a static file.
 bool is_plain_segment(const std::string& s) {
-    static const std::regex segment(R"([A-Za-z0-9_-][A-Za-z0-9._-]{0,127})");
-    return std::regex_match(s, segment);
+    return is_plain_name(s, 128);
 }
 
 std::string content_type_of(const fs::path& file) {
     const std::string ext = file.extension().string();
-    if (ext == ".html") return "text/html; charset=utf-8";
-    if (ext == ".js") return "text/javascript; charset=utf-8";
-    if (ext == ".css") return "text/css; charset=utf-8";
-    if (ext == ".png") return "image/png";
-    if (ext == ".svg") return "image/svg+xml";
-    if (ext == ".ico") return "image/x-icon";
+    if (ext == ".html")
+        return "text/html; charset=utf-8";
+    if (ext == ".js")
+        return "text/javascript; charset=utf-8";
+    if (ext == ".css")
+        return "text/css; charset=utf-8";
+    if (ext == ".png")
+        return "image/png";
+    if (ext == ".svg")
+        return "image/svg+xml";
+    if (ext == ".ico")
+        return "image/x-icon";
     return "";
 }
 
@@ -92,7 +119,8 @@ json parse_body(const HttpRequest& request) {
         if (!j.is_object())
             throw ApiError(400, "the body must be a JSON object");
         return j;
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {
+        // parse_error, and out_of_range for a number beyond a double (1e400).
         throw ApiError(400, std::string("the body is not JSON: ") + e.what());
     }
 }
@@ -118,6 +146,23 @@ ScanMode mode_of(const std::string& text) {
     if (text == "capture")
         return ScanMode::capture;
     throw ApiError(400, "mode: must be scan or capture");
+}
+
+// When a session was made: its board.yaml is written then, and only then.
+json session_created_utc(const fs::path& session) {
+    std::error_code ec;
+    const auto written = fs::last_write_time(session / "board.yaml", ec);
+    if (ec)
+        return nullptr;
+    const auto t =
+        static_cast<std::time_t>(std::chrono::duration_cast<std::chrono::seconds>(
+                                     std::chrono::file_clock::to_sys(written).time_since_epoch())
+                                     .count());
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return buf;
 }
 
 // One entry of GET /scans (and a session's pose list).
@@ -169,8 +214,8 @@ public:
     explicit EventStream(std::shared_ptr<EventHub::Subscription> s) : subscription_(std::move(s)) {}
     std::size_t read(char* out, std::size_t max) override {
         while (offset_ == pending_.size()) {
-            std::optional<std::string> next =
-                subscription_->next(std::chrono::duration_cast<std::chrono::milliseconds>(kKeepAlive));
+            std::optional<std::string> next = subscription_->next(
+                std::chrono::duration_cast<std::chrono::milliseconds>(kKeepAlive));
             if (!next)
                 return 0; // the scanner stops
             pending_ = next->empty() ? std::string(": keep-alive\n\n") : std::move(*next);
@@ -197,7 +242,8 @@ std::optional<HttpResponse> Api::begin(const HttpRequest& request, BodyPolicy& p
     if (!request.path.starts_with("/api/"))
         return std::nullopt; // static files: no body
     if (!authorized(request.authorization, options_.token)) {
-        HttpResponse r = HttpResponse::error(401, "a valid token is needed: Authorization: Bearer TOKEN");
+        HttpResponse r =
+            HttpResponse::error(401, "a valid token is needed: Authorization: Bearer TOKEN");
         r.headers.emplace_back("WWW-Authenticate", "Bearer");
         return r;
     }
@@ -218,8 +264,13 @@ std::optional<HttpResponse> Api::begin(const HttpRequest& request, BodyPolicy& p
 
 HttpResponse Api::handle(HttpRequest& request) {
     try {
-        if (!request.path.starts_with("/api/"))
+        if (!request.path.starts_with("/api/")) {
+            // The page's files are only read (libmicrohttpd answers HEAD
+            // from the GET response).
+            if (request.method != "GET" && request.method != "HEAD")
+                return method_not_allowed("GET, HEAD");
             return static_file(request.path);
+        }
         const auto parts = split_path(request.path);
         if (parts.size() < 2 || parts[1] != "v1")
             return HttpResponse::error(404, "no such path (the API is /api/v1)");
@@ -268,7 +319,8 @@ HttpResponse Api::scans(HttpRequest& request, const std::vector<std::string>& pa
             const ScanMode mode = mode_of(string_field(body, "mode", "scan"));
             const std::string id = service_.start_scan(mode);
             HttpResponse r = HttpResponse::json(
-                202, json{{"id", id}, {"mode", mode == ScanMode::scan ? "scan" : "capture"}}.dump());
+                202,
+                json{{"id", id}, {"mode", mode == ScanMode::scan ? "scan" : "capture"}}.dump());
             r.headers.emplace_back("Location", "/api/v1/scans/" + id);
             return r;
         }
@@ -361,7 +413,9 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
                 folders.push_back(e.path());
         std::sort(folders.begin(), folders.end());
         for (const auto& f : folders)
-            list.push_back({{"name", f.filename().string()}, {"poses", list_scans(f).size()}});
+            list.push_back({{"name", f.filename().string()},
+                            {"poses", list_scans(f).size()},
+                            {"created_utc", session_created_utc(f)}});
         return HttpResponse::json(200, json{{"sessions", list}}.dump());
     }
     const std::string& name = parts[3];
@@ -393,8 +447,7 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
         HttpResponse r;
         r.content_type = "application/x-tar";
         r.stream = std::make_shared<TarStream>(tar_entries_of(folder, name + "/"));
-        r.headers.emplace_back("Content-Disposition",
-                               "attachment; filename=\"" + name + ".tar\"");
+        r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + name + ".tar\"");
         return r;
     }
     if (parts[4] != "poses")
@@ -403,8 +456,7 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
         if (m != "POST")
             return method_not_allowed("POST");
         const std::string id = service_.start_scan(ScanMode::capture, name);
-        HttpResponse r =
-            HttpResponse::json(202, json{{"id", id}, {"session", name}}.dump());
+        HttpResponse r = HttpResponse::json(202, json{{"id", id}, {"session", name}}.dump());
         r.headers.emplace_back("Location", "/api/v1/sessions/" + name + "/poses/" + id);
         return r;
     }

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstdarg>
 #include <cstdio>
+#include <cstring>
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -71,7 +72,9 @@ ssize_t read_stream(void* cls, std::uint64_t, char* buf, std::size_t max) {
     }
 }
 
-void free_stream(void* cls) { delete static_cast<std::shared_ptr<HttpStream>*>(cls); }
+void free_stream(void* cls) {
+    delete static_cast<std::shared_ptr<HttpStream>*>(cls);
+}
 
 MHD_Response* make_response(HttpResponse& r) {
     if (r.stream) {
@@ -153,16 +156,16 @@ MHD_Result on_request(void* cls, MHD_Connection* connection, const char* url, co
             std::optional<HttpResponse> early = server.handler.begin(ctx->request, ctx->policy);
             if (!early) {
                 const std::string length = header(connection, MHD_HTTP_HEADER_CONTENT_LENGTH);
-                if (!length.empty() && std::strtoull(length.c_str(), nullptr, 10) >
-                                           ctx->policy.max_bytes)
-                    early = HttpResponse::error(
-                        413, "the body is " + length + " bytes, at most " +
-                                 std::to_string(ctx->policy.max_bytes) + " are taken here");
+                if (!length.empty() &&
+                    std::strtoull(length.c_str(), nullptr, 10) > ctx->policy.max_bytes)
+                    early = HttpResponse::error(413, "the body is " + length + " bytes, at most " +
+                                                         std::to_string(ctx->policy.max_bytes) +
+                                                         " are taken here");
                 else if (ctx->policy.spool_dir && !open_spool(*ctx))
-                    early = HttpResponse::error(
-                        507, describe_errno("cannot store the upload in " +
-                                                ctx->policy.spool_dir->string(),
-                                            errno));
+                    early =
+                        HttpResponse::error(507, describe_errno("cannot store the upload in " +
+                                                                    ctx->policy.spool_dir->string(),
+                                                                errno));
             }
             RequestContext* raw = ctx.release();
             *con_cls = raw;
@@ -186,14 +189,26 @@ MHD_Result on_request(void* cls, MHD_Connection* connection, const char* url, co
             ::close(ctx.spool_fd);
             ctx.spool_fd = -1;
             if (!synced)
-                return queue(connection, HttpResponse::error(
-                                             507, describe_errno("cannot store the upload", errno)));
+                return queue(
+                    connection,
+                    HttpResponse::error(507, describe_errno("cannot store the upload", errno)));
         }
         return queue(connection, server.handler.handle(ctx.request));
     } catch (const std::exception& e) {
         server.log.error(std::string("http: ") + method + " " + url + ": " + e.what());
         return queue(connection, HttpResponse::error(500, e.what()));
     }
+}
+
+// Percent escapes decoded as libmicrohttpd does, except in a URL holding an
+// escaped NUL ("%00"), which is left as it came: decoded, the NUL would end
+// the C string the handler gets and cut the path short
+// ("/api/v1/scans/ID%00/x" would name the scan ID), so it stays a path that
+// names nothing (404).
+std::size_t unescape(void*, MHD_Connection*, char* s) {
+    if (std::strstr(s, "%00"))
+        return std::strlen(s);
+    return MHD_http_unescape(s);
 }
 
 void on_completed(void*, MHD_Connection*, void** con_cls, MHD_RequestTerminationCode) {
@@ -252,7 +267,9 @@ int listen_on(const std::string& host, int port, int& bound_port, bool& ipv6) {
 
 } // namespace
 
-void HttpServer::DaemonStop::operator()(MHD_Daemon* d) const { MHD_stop_daemon(d); }
+void HttpServer::DaemonStop::operator()(MHD_Daemon* d) const {
+    MHD_stop_daemon(d);
+}
 
 HttpServer::HttpServer(const HttpServerOptions& options, HttpHandler& handler, const Logger& log)
     : options_(options), context_(new Context{handler, log}) {
@@ -264,11 +281,11 @@ HttpServer::HttpServer(const HttpServerOptions& options, HttpHandler& handler, c
         flags |= MHD_USE_IPv6;
     MHD_Daemon* d = MHD_start_daemon(
         flags, 0, nullptr, nullptr, &on_request, context_.get(), MHD_OPTION_EXTERNAL_LOGGER,
-        &on_log, context_.get(), MHD_OPTION_LISTEN_SOCKET, fd,
-        MHD_OPTION_CONNECTION_LIMIT, static_cast<unsigned>(options.max_connections),
-        MHD_OPTION_CONNECTION_TIMEOUT, static_cast<unsigned>(options.timeout.count()),
-        MHD_OPTION_CONNECTION_MEMORY_LIMIT, options.connection_memory,
-        MHD_OPTION_NOTIFY_COMPLETED, &on_completed, nullptr, MHD_OPTION_END);
+        &on_log, context_.get(), MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_CONNECTION_LIMIT,
+        static_cast<unsigned>(options.max_connections), MHD_OPTION_CONNECTION_TIMEOUT,
+        static_cast<unsigned>(options.timeout.count()), MHD_OPTION_CONNECTION_MEMORY_LIMIT,
+        options.connection_memory, MHD_OPTION_NOTIFY_COMPLETED, &on_completed, nullptr,
+        MHD_OPTION_UNESCAPE_CALLBACK, &unescape, nullptr, MHD_OPTION_END);
     if (!d) {
         ::close(fd);
         throw IoError(address(), "the HTTP server did not start (libmicrohttpd)");

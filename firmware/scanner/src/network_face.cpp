@@ -67,8 +67,8 @@ NetworkFace::NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, 
                            options.simulated};
     parts_ = std::make_unique<Parts>(board, scanner, devices, log, std::move(service),
                                      std::move(api), http);
-    log.info("http: listening on " + parts_->server.address() + " (page from " +
-             web_root.string() + ")");
+    log.info("http: listening on " + parts_->server.address() + " (page from " + web_root.string() +
+             ")");
 }
 
 NetworkFace::~NetworkFace() {
@@ -82,6 +82,8 @@ void NetworkFace::run(ScanMode button_mode, const std::atomic<bool>& stop) {
     parts_->events.close();
 }
 
-int NetworkFace::port() const { return parts_->server.port(); }
+int NetworkFace::port() const {
+    return parts_->server.port();
+}
 
 } // namespace fpp::scanner

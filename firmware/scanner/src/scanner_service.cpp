@@ -32,9 +32,13 @@ void throw_if_aborted(const std::exception_ptr& e) {
 
 constexpr auto kJobTimeout = std::chrono::seconds(30);
 
-json size_json(Size s) { return {{"width", s.width}, {"height", s.height}}; }
+json size_json(Size s) {
+    return {{"width", s.width}, {"height", s.height}};
+}
 
-json text_or_null(const std::string& s) { return s.empty() ? json(nullptr) : json(s); }
+json text_or_null(const std::string& s) {
+    return s.empty() ? json(nullptr) : json(s);
+}
 
 std::string utc(std::int64_t unix_s) {
     const auto t = static_cast<std::time_t>(unix_s);
@@ -100,7 +104,9 @@ ScannerService::ScannerService(BoardConfig& board, Scanner& scanner, Devices dev
     refresh_table_json();
 }
 
-ScannerService::~ScannerService() { scanner_.set_observer(nullptr); }
+ScannerService::~ScannerService() {
+    scanner_.set_observer(nullptr);
+}
 
 void ScannerService::refresh_table_json() {
     json t = nullptr;
@@ -186,8 +192,7 @@ void ScannerService::shut_down() {
         left.swap(jobs_);
     }
     for (auto& job : left)
-        job->done.set_exception(
-            std::make_exception_ptr(ApiError(503, "the scanner is stopping")));
+        job->done.set_exception(std::make_exception_ptr(ApiError(503, "the scanner is stopping")));
 }
 
 void ScannerService::run_scan(ScanMode mode, const fs::path& folder, const std::string& source,
@@ -214,13 +219,12 @@ void ScannerService::scan_started(const std::string& id, ScanMode mode, int fram
     current_id_ = id;
     current_mode_ = mode;
     set_state("scanning", {});
-    events_.publish("scan-started",
-                    json{{"id", id},
-                         {"mode", mode == ScanMode::scan ? "scan" : "capture"},
-                         {"frames", frames},
-                         {"source", current_source_},
-                         {"session", text_or_null(current_session_)}}
-                        .dump());
+    events_.publish("scan-started", json{{"id", id},
+                                         {"mode", mode == ScanMode::scan ? "scan" : "capture"},
+                                         {"frames", frames},
+                                         {"source", current_source_},
+                                         {"session", text_or_null(current_session_)}}
+                                        .dump());
 }
 
 void ScannerService::frame_captured(int frame, int frames) {
@@ -228,14 +232,17 @@ void ScannerService::frame_captured(int frame, int frames) {
                     json{{"id", current_id_}, {"frame", frame}, {"frames", frames}}.dump());
 }
 
-void ScannerService::decoded() { events_.publish("decoded", json{{"id", current_id_}}.dump()); }
+void ScannerService::decoded() {
+    events_.publish("decoded", json{{"id", current_id_}}.dump());
+}
 
 void ScannerService::written(const ScanOutcome& outcome) {
     const char* mode = current_mode_ == ScanMode::scan ? "scan" : "capture";
     {
         const std::lock_guard lock(mutex_);
-        last_scan_ = {{"id", current_id_}, {"mode", mode},       {"ok", true},
-                      {"points", outcome.points}, {"error", nullptr}, {"session", text_or_null(current_session_)}};
+        last_scan_ = {{"id", current_id_}, {"mode", mode},
+                      {"ok", true},        {"points", outcome.points},
+                      {"error", nullptr},  {"session", text_or_null(current_session_)}};
         ++scans_completed_;
         busy_ = false;
         store_bytes_at_ = {}; // measure again
@@ -251,12 +258,10 @@ void ScannerService::written(const ScanOutcome& outcome) {
 void ScannerService::failed(const std::string& reason) {
     {
         const std::lock_guard lock(mutex_);
-        last_scan_ = {{"id", current_id_},
-                      {"mode", current_mode_ == ScanMode::scan ? "scan" : "capture"},
-                      {"ok", false},
-                      {"points", 0},
-                      {"error", reason},
-                      {"session", text_or_null(current_session_)}};
+        last_scan_ = {
+            {"id", current_id_}, {"mode", current_mode_ == ScanMode::scan ? "scan" : "capture"},
+            {"ok", false},       {"points", 0},
+            {"error", reason},   {"session", text_or_null(current_session_)}};
         busy_ = false;
         store_bytes_at_ = {};
     }
@@ -415,7 +420,8 @@ json ScannerService::install_table(const fs::path& uploaded) {
         refresh_table_json();
     });
     const json t = table_json();
-    events_.publish("table", json{{"model", t["model"]}, {"file_fnv1a64", t["file_fnv1a64"]}}.dump());
+    events_.publish("table",
+                    json{{"model", t["model"]}, {"file_fnv1a64", t["file_fnv1a64"]}}.dump());
     return t;
 }
 
@@ -435,7 +441,8 @@ std::uint64_t ScannerService::store_bytes() const {
 
 std::string ScannerService::state_event() const {
     const std::lock_guard lock(mutex_);
-    return EventHub::format("state", json{{"state", state_}, {"error", text_or_null(error_)}}.dump());
+    return EventHub::format("state",
+                            json{{"state", state_}, {"error", text_or_null(error_)}}.dump());
 }
 
 json ScannerService::status() const {

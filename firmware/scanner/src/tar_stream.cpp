@@ -16,7 +16,9 @@ namespace fs = std::filesystem;
 namespace {
 constexpr std::size_t kChunk = 64 * 1024;
 
-int no_close(std::FILE*) { return 0; }
+int no_close(std::FILE*) {
+    return 0;
+}
 } // namespace
 
 std::vector<TarEntry> tar_entries_of(const fs::path& folder, const std::string& prefix) {
@@ -31,8 +33,8 @@ std::vector<TarEntry> tar_entries_of(const fs::path& folder, const std::string& 
             continue;
         }
         if (it->is_regular_file())
-            entries.push_back({prefix + fs::relative(it->path(), folder).generic_string(),
-                               it->path()});
+            entries.push_back(
+                {prefix + fs::relative(it->path(), folder).generic_string(), it->path()});
     }
     if (ec)
         throw IoError(folder, "cannot list: " + ec.message());
@@ -47,8 +49,7 @@ TarStream::TarStream(std::vector<TarEntry> entries)
     archive* a = archive_.get();
     if (!a || archive_write_set_format_pax_restricted(a) != ARCHIVE_OK ||
         archive_write_set_bytes_in_last_block(a, 1) != ARCHIVE_OK ||
-        archive_write_open2(a, this, nullptr, &TarStream::on_write, nullptr, nullptr) !=
-            ARCHIVE_OK)
+        archive_write_open2(a, this, nullptr, &TarStream::on_write, nullptr, nullptr) != ARCHIVE_OK)
         throw IoError("tar", a ? archive_error_string(a) : "libarchive: out of memory");
 }
 

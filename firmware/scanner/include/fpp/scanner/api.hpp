@@ -15,10 +15,10 @@
 namespace fpp::scanner {
 
 struct ApiOptions {
-    std::string token;                  // the bearer token (access_token.hpp)
-    std::filesystem::path web_root;     // the page's files
-    std::filesystem::path three_root;   // three.js (Debian's libjs-three)
-    std::uint64_t max_table_bytes = 0;  // uploads beyond are refused (413)
+    std::string token;                 // the bearer token (access_token.hpp)
+    std::filesystem::path web_root;    // the page's files
+    std::filesystem::path three_root;  // three.js (Debian's libjs-three)
+    std::uint64_t max_table_bytes = 0; // uploads beyond are refused (413)
 };
 
 class Api final : public HttpHandler {

@@ -25,8 +25,8 @@ struct HttpRequest {
     std::string path;          // percent-decoded, without the query
     std::string authorization; // the Authorization header, "" when absent
     std::string content_type;
-    std::string body;                  // when the body is kept in memory
-    std::filesystem::path body_file;   // when it was spooled to a file
+    std::string body;                // when the body is kept in memory
+    std::filesystem::path body_file; // when it was spooled to a file
     std::uint64_t body_bytes = 0;
 };
 
@@ -70,7 +70,7 @@ public:
 
 struct HttpServerOptions {
     std::string host = "127.0.0.1"; // IPv4 or IPv6 literal
-    int port = 0;                    // 0: any free port (see HttpServer::port)
+    int port = 0;                   // 0: any free port (see HttpServer::port)
     int max_connections = 64;
     std::chrono::seconds timeout{30};
     std::size_t connection_memory = 32 * 1024; // headers and buffers of one connection

@@ -79,13 +79,13 @@ private:
     void serve_once(ScanMode button_mode, const std::atomic<bool>& stop);
     void run_scan(ScanMode mode, const std::filesystem::path& folder, const std::string& source,
                   const std::string& session, const std::atomic<bool>& stop);
-    void shut_down(); // queued work is refused
+    void shut_down();                                                    // queued work is refused
     std::filesystem::path claim_scan_folder(const std::string& session); // under mutex_
     // Queues `work` for the scanning thread and waits for it (ApiError 409
     // while a scan is queued or running, 503 when it does not run in 30 s).
     void run_on_scanner_thread(std::function<void()> work);
     void set_state(const std::string& state, const std::string& error);
-    void refresh_table_json(); // after the table changed
+    void refresh_table_json();         // after the table changed
     std::uint64_t store_bytes() const; // under mutex_
 
     BoardConfig& board_;
