@@ -16,6 +16,7 @@
 #include "sim_board_yaml.hpp"
 #include "test_support.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <barrier>
 #include <chrono>
@@ -256,4 +257,64 @@ TEST(ScannerService, ScanRequestedOnWrittenIsTaken) {
     EXPECT_EQ(refused, 0);
     EXPECT_EQ(scanner.scans_completed(), kScans);
     EXPECT_EQ(list_scans(store).size(), static_cast<std::size_t>(kScans));
+}
+
+// A scan that fails (the camera gone mid-scan, after its one retry) is
+// reported to every client: a `failed` event with the reason, then the
+// error state with it, the last scan marked failed, nothing in the store.
+TEST(ScannerService, FailedScanIsReportedWithItsReason) {
+    fpp::test::TempDir dir;
+    const fs::path store = dir / "scans";
+    {
+        fpp::test::SimBoardYaml b;
+        b.store = store;
+        b.table = "table.fpt";
+        std::ofstream(dir / "board.yaml") << b.text();
+    }
+    BoardConfig board = read_board_config(dir / "board.yaml");
+    SimBoard sim(board);
+    write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
+    const Logger log([](LogLevel, const std::string&) {});
+    Scanner scanner(board, sim.devices(), log);
+    EventHub events;
+    ScannerService service(board, scanner, sim.devices(), events, log,
+                           ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
+    const auto stream = events.subscribe("");
+    std::atomic<bool> stop{false};
+    std::thread loop([&] { service.run(ScanMode::scan, stop); });
+
+    sim.camera().inject_fault(sim::CameraFault::gone, 5);
+    const std::string id = service.start_scan(ScanMode::scan);
+    std::vector<std::pair<std::string, std::string>> seen;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (std::chrono::steady_clock::now() < deadline) {
+        const auto next = stream->next(std::chrono::milliseconds(100));
+        ASSERT_TRUE(next.has_value());
+        if (next->empty())
+            continue;
+        seen.push_back(parse_event(*next));
+        if (seen.back().first == "state" &&
+            seen.back().second.find("\"state\":\"error\"") != std::string::npos)
+            break;
+    }
+    stop = true;
+    loop.join();
+
+    std::vector<std::string> names;
+    for (const auto& [name, data] : seen)
+        names.push_back(name);
+    const auto failed = std::find(names.begin(), names.end(), "failed");
+    ASSERT_NE(failed, names.end());
+    const std::string& data = seen[static_cast<std::size_t>(failed - names.begin())].second;
+    EXPECT_EQ(id_of(data), id);
+    EXPECT_NE(data.find("camera"), std::string::npos) << data;
+    EXPECT_EQ(std::count(names.begin(), names.end(), "written"), 0);
+    EXPECT_EQ(names.back(), "state"); // the error state comes after the event
+    const nlohmann::json status = service.status();
+    EXPECT_EQ(status["state"], "error");
+    EXPECT_NE(status["error"].get<std::string>().find("camera"), std::string::npos);
+    EXPECT_EQ(status["last_scan"]["id"], id);
+    EXPECT_EQ(status["last_scan"]["ok"], false);
+    EXPECT_TRUE(list_scans(store).empty());
+    EXPECT_EQ(sim.led().state(), drivers::LedState::error);
 }
