@@ -50,19 +50,23 @@ std::string id_of(const std::string& json) {
     return json.substr(at + 6, json.find('"', at + 6) - at - 6);
 }
 
+// The test board (camera binned 4 x 4: 400 x 300, virtual clock) in `dir`,
+// its table at dir/table.fpt, a store without pruning (a folder per scan stays).
+BoardConfig sim_board_in(const fs::path& dir, const fs::path& store) {
+    fpp::test::SimBoardYaml b;
+    b.store = store;
+    b.table = "table.fpt";
+    b.max_mb = 4096;
+    std::ofstream(dir / "board.yaml") << b.text();
+    return read_board_config(dir / "board.yaml");
+}
+
 } // namespace
 
 TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
     fpp::test::TempDir dir;
     const fs::path store = dir / "scans";
-    {
-        fpp::test::SimBoardYaml b; // binned 4 (400 x 300), virtual clock
-        b.store = store;
-        b.table = "table.fpt";
-        b.max_mb = 4096; // no pruning: one folder per round stays
-        std::ofstream(dir / "board.yaml") << b.text();
-    }
-    BoardConfig board = read_board_config(dir / "board.yaml");
+    BoardConfig board = sim_board_in(dir.path(), store);
     SimBoard sim(board);
     write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
 
@@ -207,14 +211,7 @@ TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
 TEST(ScannerService, ScanRequestedOnWrittenIsTaken) {
     fpp::test::TempDir dir;
     const fs::path store = dir / "scans";
-    {
-        fpp::test::SimBoardYaml b;
-        b.store = store;
-        b.table = "table.fpt";
-        b.max_mb = 4096;
-        std::ofstream(dir / "board.yaml") << b.text();
-    }
-    BoardConfig board = read_board_config(dir / "board.yaml");
+    BoardConfig board = sim_board_in(dir.path(), store);
     SimBoard sim(board);
     write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
     const Logger log([](LogLevel, const std::string&) {});
@@ -265,13 +262,7 @@ TEST(ScannerService, ScanRequestedOnWrittenIsTaken) {
 TEST(ScannerService, FailedScanIsReportedWithItsReason) {
     fpp::test::TempDir dir;
     const fs::path store = dir / "scans";
-    {
-        fpp::test::SimBoardYaml b;
-        b.store = store;
-        b.table = "table.fpt";
-        std::ofstream(dir / "board.yaml") << b.text();
-    }
-    BoardConfig board = read_board_config(dir / "board.yaml");
+    BoardConfig board = sim_board_in(dir.path(), store);
     SimBoard sim(board);
     write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
     const Logger log([](LogLevel, const std::string&) {});

@@ -7,14 +7,13 @@
 #include "fpp/scanner/api_error.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/yaml_fields.hpp"
+#include "scan_metadata.hpp"
 #include "tar_stream.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cctype>
-#include <chrono>
-#include <ctime>
 #include <string_view>
 
 namespace fpp::scanner {
@@ -150,19 +149,8 @@ ScanMode mode_of(const std::string& text) {
 
 // When a session was made: its board.yaml is written then, and only then.
 json session_created_utc(const fs::path& session) {
-    std::error_code ec;
-    const auto written = fs::last_write_time(session / "board.yaml", ec);
-    if (ec)
-        return nullptr;
-    const auto t =
-        static_cast<std::time_t>(std::chrono::duration_cast<std::chrono::seconds>(
-                                     std::chrono::file_clock::to_sys(written).time_since_epoch())
-                                     .count());
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return buf;
+    const auto t = file_written_utc(session / "board.yaml");
+    return t ? json(*t) : json(nullptr);
 }
 
 // One entry of GET /scans (and a session's pose list).

@@ -2,8 +2,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cinttypes>
 #include <cstdio>
+#include <ctime>
 
 namespace fpp::scanner {
 
@@ -11,6 +13,25 @@ std::string hex64(std::uint64_t v) {
     char buf[24];
     std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
     return buf;
+}
+
+std::string utc_text(std::int64_t unix_s) {
+    const auto t = static_cast<std::time_t>(unix_s);
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return buf;
+}
+
+std::optional<std::string> file_written_utc(const std::filesystem::path& path) {
+    std::error_code ec;
+    const auto written = std::filesystem::last_write_time(path, ec);
+    if (ec)
+        return std::nullopt;
+    return utc_text(std::chrono::duration_cast<std::chrono::seconds>(
+                        std::chrono::file_clock::to_sys(written).time_since_epoch())
+                        .count());
 }
 
 std::string scan_json(const ScanMetadata& m) {

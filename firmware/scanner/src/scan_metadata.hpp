@@ -42,6 +42,13 @@ struct ScanMetadata {
 
 std::string scan_json(const ScanMetadata& m);
 
+// "2026-11-26T14:31:25Z" of seconds since 1970 (how scan.json and the API
+// write times).
+std::string utc_text(std::int64_t unix_s);
+
+// When `path` was last written, as utc_text; nullopt when it cannot be read.
+std::optional<std::string> file_written_utc(const std::filesystem::path& path);
+
 // Lower-case hex of a 64-bit hash, 16 digits (how scan.json and the API
 // write table hashes).
 std::string hex64(std::uint64_t v);

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <memory>
 
 namespace fpp::scanner {
@@ -38,15 +39,6 @@ std::uint64_t hash_file(const fs::path& path) {
     if (std::fread(bytes.data(), 1, bytes.size(), file.get()) != bytes.size())
         throw IoError(path, "short read while hashing");
     return fnv1a64(bytes.data(), bytes.size());
-}
-
-std::string utc_now() {
-    const std::time_t t = std::time(nullptr);
-    std::tm utc{};
-    gmtime_r(&t, &utc);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &utc);
-    return buf;
 }
 
 } // namespace
@@ -187,7 +179,7 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop,
 
     ScanOutcome outcome;
     Captured captured;
-    captured.started_utc = utc_now();
+    captured.started_utc = utc_text(std::time(nullptr));
     StreamingDecoder& decoder = *decoder_;
     decoder.restart(std::move(recycled_));
     double push_total = 0;

@@ -40,15 +40,6 @@ json text_or_null(const std::string& s) {
     return s.empty() ? json(nullptr) : json(s);
 }
 
-std::string utc(std::int64_t unix_s) {
-    const auto t = static_cast<std::time_t>(unix_s);
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return buf;
-}
-
 // The largest value of a GenICam mono pixel format.
 double top_of(const std::string& pixel_format) {
     for (const auto& [name, top] : {std::pair{"Mono10", 1023.0}, std::pair{"Mono12", 4095.0},
@@ -114,9 +105,7 @@ void ScannerService::refresh_table_json() {
         const TableInfo& info = scanner_.table().info();
         std::error_code ec;
         const auto bytes = fs::file_size(scanner_.table_path(), ec);
-        const auto written = fs::last_write_time(scanner_.table_path(), ec);
-        const auto installed = std::chrono::duration_cast<std::chrono::seconds>(
-            std::chrono::file_clock::to_sys(written).time_since_epoch());
+        const auto installed = file_written_utc(scanner_.table_path());
         t = {{"path", scanner_.table_path().string()},
              {"model", to_string(info.model)},
              {"camera", size_json(info.camera)},
@@ -124,8 +113,8 @@ void ScannerService::refresh_table_json() {
              {"bytes", ec ? 0 : bytes},
              {"file_fnv1a64", hex64(scanner_.table_file_hash())},
              {"calibration_fnv1a64", hex64(info.calibration_hash)},
-             {"created_utc", utc(info.created_unix_s)},
-             {"installed_utc", ec ? json(nullptr) : json(utc(installed.count()))}};
+             {"created_utc", utc_text(info.created_unix_s)},
+             {"installed_utc", installed ? json(*installed) : json(nullptr)}};
     }
     const std::lock_guard lock(mutex_);
     table_json_ = std::move(t);
