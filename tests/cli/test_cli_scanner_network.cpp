@@ -34,7 +34,6 @@
 #include <fstream>
 #include <map>
 #include <mutex>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -76,6 +75,21 @@ std::string hex64(std::uint64_t value) {
 // fpp-scanner as a child process; its stdout and stderr read by a thread
 // into log() (a daemon must never stall on a full pipe). SIGTERM and
 // waitpid when the object goes, whether the test passed or not.
+// The port of the daemon's "info: http: listening on 127.0.0.1:PORT" line
+// ("" before it).
+std::string listening_port(const std::string& log) {
+    const std::string line = "info: http: listening on 127.0.0.1:";
+    const std::size_t at = log.find(line);
+    if (at == std::string::npos)
+        return {};
+    const std::size_t first = at + line.size();
+    std::size_t end = first;
+    while (end < log.size() && log[end] >= '0' && log[end] <= '9')
+        ++end;
+    // Digits at the end of what has been read may be a port cut short.
+    return end > first && end < log.size() ? log.substr(first, end - first) : std::string();
+}
+
 class ScannerDaemon {
 public:
     explicit ScannerDaemon(const std::vector<std::string>& args) {
@@ -105,20 +119,20 @@ public:
         }
         reader_ = std::thread([this, fd = pipe_fds[0]] { read_output(fd); });
         // With port 0 the daemon says which port it took.
-        const std::regex listening(R"(info: http: listening on 127\.0\.0\.1:([0-9]+))");
         std::unique_lock lock(mutex_);
-        std::smatch match;
+        std::string port;
         const bool found = changed_.wait_for(lock, std::chrono::seconds(30), [&] {
-            return std::regex_search(log_, match, listening) || output_closed_;
+            port = listening_port(log_);
+            return !port.empty() || output_closed_;
         });
-        if (!found || !std::regex_search(log_, match, listening)) {
+        if (!found || port.empty()) {
             const std::string log = log_;
             lock.unlock();
             stop();
             throw std::runtime_error("fpp-scanner did not say where it listens within 30 s:\n" +
                                      log);
         }
-        url_ = "http://127.0.0.1:" + match[1].str();
+        url_ = "http://127.0.0.1:" + port;
     }
 
     ~ScannerDaemon() { stop(); }

@@ -1,7 +1,7 @@
 #pragma once
-// CRC-32 as zlib's crc32() and IEEE 802.3 compute it: reflected polynomial
-// 0xEDB88320, initial value and final XOR 0xFFFFFFFF. crc32("123456789") is
-// 0xCBF43926. Used by the coefficient table file (.fpt).
+// CRC-32 of IEEE 802.3 (reflected polynomial 0xEDB88320, initial value and
+// final XOR 0xFFFFFFFF; crc32("123456789") is 0xCBF43926), computed by
+// zlib's crc32(). Used by the coefficient table file (.fpt).
 
 #include <cstddef>
 #include <cstdint>
