@@ -5,6 +5,7 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include "test_support.hpp"
 
@@ -460,6 +461,22 @@ TEST(CaptureSetRejects, MissingFrameFile) {
     fs::remove(folder / "f3.png");
     expect_input_error([&] { fpp::read_capture_set(folder); }, folder / "f3.png", "frames[3]",
                        "not found");
+}
+
+// A name the file system cannot look up (longer than NAME_MAX) is the
+// reader's InputError naming the field, not a std::filesystem error (found
+// by fuzzing the reader).
+TEST(CaptureSetRejects, FrameNameTheFileSystemCannotLookUp) {
+    TempDir dir;
+    const fs::path folder = make_set(dir);
+    const std::string name = std::string(300, 'a') + ".png";
+    std::string text = fpp::yaml_fields::read_text_file(folder / "capture.yaml");
+    const auto at = text.find("f3.png");
+    ASSERT_NE(at, std::string::npos);
+    text.replace(at, 6, name);
+    write_text(folder / "capture.yaml", text);
+    expect_input_error([&] { fpp::read_capture_set(folder); }, folder / name, "frames[3]",
+                       "cannot be looked up");
 }
 
 TEST(CaptureSet, ReadsOnlyTheFramesOfTheKeptBlocks) {

@@ -5,6 +5,7 @@
 
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include "test_support.hpp"
 
@@ -343,6 +344,41 @@ TEST(ImageIo, TiffReaderRejectsOtherKindsAndCorruptFiles) {
         truncate_file(dir / "cut.tiff", cut);
         expect_input_error_naming(dir / "cut.tiff",
                                   [&] { fpp::read_tiff_float(dir / "cut.tiff"); });
+    }
+}
+
+// A small TIFF whose header claims a huge image is refused before the
+// samples are allocated (found by fuzzing: a few hundred bytes made the
+// reader allocate gigabytes).
+TEST(ImageIo, TiffClaimingMoreThanItsFileHoldsIsRefused) {
+    TempDir dir;
+    fpp::write_tiff(dir / "small.tiff", fpp::Image<float>(4, 4, 1, 0.5f));
+    std::string bytes = fpp::yaml_fields::read_text_file(dir / "small.tiff");
+    ASSERT_EQ(bytes.substr(0, 2), "II");
+    const auto u16 = [&](std::size_t at) {
+        return static_cast<unsigned>(static_cast<unsigned char>(bytes[at])) |
+               static_cast<unsigned>(static_cast<unsigned char>(bytes[at + 1])) << 8;
+    };
+    const std::size_t ifd = u16(4) | static_cast<std::size_t>(u16(6)) << 16;
+    int patched = 0;
+    for (unsigned e = 0; e < u16(ifd); ++e) {
+        const std::size_t entry = ifd + 2 + 12 * e;
+        if (u16(entry) != 256 && u16(entry) != 257) // ImageWidth, ImageLength
+            continue;
+        // 16384 (0x4000) as a SHORT or the low half of a LONG.
+        bytes[entry + 8] = 0x00;
+        bytes[entry + 9] = 0x40;
+        ++patched;
+    }
+    ASSERT_EQ(patched, 2);
+    std::ofstream(dir / "claims.tiff", std::ios::binary) << bytes;
+    ASSERT_LT(fs::file_size(dir / "claims.tiff"), 4096u);
+    try {
+        fpp::read_tiff_float(dir / "claims.tiff");
+        FAIL() << "accepted";
+    } catch (const fpp::InputError& e) {
+        EXPECT_EQ(e.file(), dir / "claims.tiff");
+        EXPECT_NE(std::string(e.what()).find("16384x16384x1"), std::string::npos) << e.what();
     }
 }
 

@@ -19,6 +19,19 @@ namespace fpp {
 
 namespace {
 
+// "" for a regular file, else why not: "not found", or the file system's
+// reason for a name it cannot look up (too long, a loop of links, ...),
+// which must not escape as std::filesystem::filesystem_error.
+std::string not_a_regular_file(const std::filesystem::path& path) {
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (std::filesystem::is_regular_file(status))
+        return {};
+    if (ec && ec != std::errc::no_such_file_or_directory)
+        return "cannot be looked up: " + ec.message();
+    return std::filesystem::exists(status) ? "is not a regular file" : "not found";
+}
+
 namespace fs = std::filesystem;
 using yaml_fields::child;
 using yaml_fields::format_real;
@@ -580,8 +593,8 @@ CaptureSet read_capture_set(const std::filesystem::path& folder,
     for (std::size_t i = 0; i < n; ++i) {
         const fs::path path = folder / m.frames[i];
         const std::string field = item("frames", listed[i]);
-        if (!fs::is_regular_file(path)) {
-            throw InputError(path, field, "frame file not found (listed in " +
+        if (const std::string why = not_a_regular_file(path); !why.empty()) {
+            throw InputError(path, field, "frame file " + why + " (listed in " +
                                               (folder / kManifestName).string() + ")");
         }
         try {
@@ -616,8 +629,8 @@ CaptureSet read_capture_set(const std::filesystem::path& folder,
              {std::pair{m.truth->xyz, "xyz"}, std::pair{m.truth->projector, "projector"}}) {
             if (name.empty()) continue;
             const fs::path path = folder / name;
-            if (!fs::is_regular_file(path)) {
-                throw InputError(path, child("truth", key), "truth file not found (listed in " +
+            if (const std::string why = not_a_regular_file(path); !why.empty()) {
+                throw InputError(path, child("truth", key), "truth file " + why + " (listed in " +
                                                                 (folder / kManifestName).string() +
                                                                 ")");
             }

@@ -534,6 +534,20 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
                                        std::to_string(height));
     }
 
+    // Not more samples than the file can hold: Deflate or LZW expand a byte
+    // at most a few thousand times, so a header of a few hundred bytes that
+    // claims gigabytes is refused before anything is allocated.
+    std::error_code size_error;
+    const std::uint64_t file_bytes = fs::file_size(path, size_error);
+    const std::uint64_t holdable = 4096 * (size_error ? 0 : file_bytes) + (std::uint64_t{1} << 20);
+    const std::uint64_t claimed = std::uint64_t{width} * height * channels * sizeof(float);
+    if (claimed > holdable) {
+        throw InputError(path, "", "the header claims " + std::to_string(width) + "x" +
+                                       std::to_string(height) + "x" + std::to_string(channels) +
+                                       " floats, more than a " + std::to_string(file_bytes) +
+                                       "-byte file can hold");
+    }
+
     Image<float> image(static_cast<int>(width), static_cast<int>(height), channels);
     const std::size_t row_floats = std::size_t(width) * channels;
     auto fail = [&]() {
@@ -543,7 +557,9 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
         std::uint32_t tile_w = 0, tile_h = 0;
         TIFFGetField(t, TIFFTAG_TILEWIDTH, &tile_w);
         TIFFGetField(t, TIFFTAG_TILELENGTH, &tile_h);
-        if (tile_w == 0 || tile_h == 0) throw fail();
+        if (tile_w == 0 || tile_h == 0 || tile_w > kMaxSide || tile_h > kMaxSide ||
+            std::uint64_t{tile_w} * tile_h * channels * sizeof(float) > holdable)
+            throw fail();
         const std::size_t tile_floats = std::size_t(tile_w) * tile_h * channels;
         if (static_cast<std::size_t>(TIFFTileSize(t)) != tile_floats * sizeof(float)) throw fail();
         std::vector<float> tile(tile_floats);
