@@ -143,17 +143,17 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
                 std::printf("%s\n", outcome.folder.string().c_str());
                 std::fflush(stdout);
             }
-        } else if (serving) {
-            NetworkFace face(board, scanner, devices, log,
-                             NetworkFaceOptions{table_path, sim ? sim->session_board_yaml() : "",
-                                                sim != nullptr});
-            face.run(mode, g_stop);
         } else {
-            EventHub events; // nobody listens without a network face
-            ScannerService service(
-                board, scanner, devices, events, log,
-                ServiceOptions{table_path, board.settings_file, "", sim != nullptr});
-            service.run(mode, g_stop);
+            const ServiceOptions options{table_path, board.settings_file,
+                                         sim ? sim->session_board_yaml() : "", sim != nullptr};
+            if (serving) {
+                NetworkFace face(board, scanner, devices, log, options);
+                face.run(mode, g_stop);
+            } else {
+                EventHub events; // nobody listens without a network face
+                ScannerService service(board, scanner, devices, events, log, options);
+                service.run(mode, g_stop);
+            }
             log.info("stopped");
         }
         devices.display.restore();

@@ -382,9 +382,12 @@ class BadRequests(DaemonCase):
             closed[name] = time.monotonic() - opened
             self.assertNotIn(b"200 OK", data)
             sock.close()
+        # Not before the timeout; the upper bound only has to tell "closed by
+        # the timeout" from "never closed" (the socket's own 30 s), with room
+        # for a machine loaded by other tests.
         for name, after in closed.items():
             self.assertGreater(after, self.TIMEOUT_S - 0.5, (name, after))
-            self.assertLess(after, self.TIMEOUT_S + 3, (name, after))
+            self.assertLess(after, self.TIMEOUT_S + 10, (name, after))
         self.assert_served()
 
     def test_more_connections_than_the_limit_wait_or_are_refused(self):
@@ -396,14 +399,14 @@ class BadRequests(DaemonCase):
         # never a hang beyond the timeout.
         started = time.monotonic()
         try:
-            r = d.request("GET", "/api/v1/status", timeout=self.TIMEOUT_S + 5)
+            r = d.request("GET", "/api/v1/status", timeout=self.TIMEOUT_S + 15)
             outcome = r.status
         except (ConnectionError, OSError) as e:
             outcome = type(e).__name__
         waited = time.monotonic() - started
         self.assertIn(outcome, (200, "ConnectionResetError", "RemoteDisconnected",
                                 "ConnectionAbortedError", "BrokenPipeError"), outcome)
-        self.assertLess(waited, self.TIMEOUT_S + 3)
+        self.assertLess(waited, self.TIMEOUT_S + 10)  # as above: not a hang
         for sock in idle:
             sock.close()
         time.sleep(0.3)

@@ -23,6 +23,7 @@
 #include <fstream>
 #include <iterator>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
@@ -61,18 +62,48 @@ BoardConfig sim_board_in(const fs::path& dir, const fs::path& store) {
     return read_board_config(dir / "board.yaml");
 }
 
+// The service on the test board, its table made from the rig's truth, run
+// on its own thread, its events followed from the start; stopped and joined
+// at the end.
+struct RunningService {
+    explicit RunningService(Logger::Sink sink = [](LogLevel, const std::string&) {})
+        : board(sim_board_in(dir.path(), dir / "scans")), sim(board), log(std::move(sink)) {
+        write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
+        scanner.emplace(board, sim.devices(), log);
+        service.emplace(board, *scanner, sim.devices(), events, log,
+                        ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
+        stream = events.subscribe("");
+        loop = std::thread([this] { service->run(ScanMode::scan, stop); });
+    }
+    ~RunningService() { stop_loop(); }
+    RunningService(const RunningService&) = delete;
+    RunningService& operator=(const RunningService&) = delete;
+
+    void stop_loop() {
+        stop = true;
+        if (loop.joinable())
+            loop.join();
+    }
+    fs::path store() const { return dir / "scans"; }
+
+    fpp::test::TempDir dir;
+    BoardConfig board;
+    SimBoard sim;
+    Logger log;
+    std::optional<Scanner> scanner;
+    EventHub events;
+    std::optional<ScannerService> service; // after what it uses: destroyed first
+    std::shared_ptr<EventHub::Subscription> stream;
+    std::atomic<bool> stop{false};
+    std::thread loop;
+};
+
 } // namespace
 
 TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
-    fpp::test::TempDir dir;
-    const fs::path store = dir / "scans";
-    BoardConfig board = sim_board_in(dir.path(), store);
-    SimBoard sim(board);
-    write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
-
     std::mutex lines_mutex;
     std::vector<std::string> lines;
-    const Logger log([&](LogLevel, const std::string& m) {
+    RunningService rs([&](LogLevel, const std::string& m) {
         const std::lock_guard lock(lines_mutex);
         lines.push_back(m);
     });
@@ -84,13 +115,11 @@ TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
         return n;
     };
 
-    Scanner scanner(board, sim.devices(), log);
-    EventHub events;
-    ScannerService service(board, scanner, sim.devices(), events, log,
-                           ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
-    const auto stream = events.subscribe("");
-    std::atomic<bool> stop{false};
-    std::thread loop([&] { service.run(ScanMode::scan, stop); });
+    Scanner& scanner = *rs.scanner;
+    ScannerService& service = *rs.service;
+    SimBoard& sim = rs.sim;
+    const auto& stream = rs.stream;
+    const fs::path store = rs.store();
 
     // Every event, in order, read by one thread: scans must never overlap.
     std::vector<std::pair<std::string, std::string>> seen;
@@ -159,8 +188,7 @@ TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
         EXPECT_EQ(list_scans(store).size(), static_cast<std::size_t>(round + 1))
             << "round " << round;
     }
-    stop = true;
-    loop.join();
+    rs.stop_loop();
     reading = false;
     reader.join();
 
@@ -209,19 +237,11 @@ TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
 // request: a client that starts a scan the moment it reads the event (the
 // page, fpp-calib's session recorder) must not be refused as busy.
 TEST(ScannerService, ScanRequestedOnWrittenIsTaken) {
-    fpp::test::TempDir dir;
-    const fs::path store = dir / "scans";
-    BoardConfig board = sim_board_in(dir.path(), store);
-    SimBoard sim(board);
-    write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
-    const Logger log([](LogLevel, const std::string&) {});
-    Scanner scanner(board, sim.devices(), log);
-    EventHub events;
-    ScannerService service(board, scanner, sim.devices(), events, log,
-                           ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
-    const auto stream = events.subscribe("");
-    std::atomic<bool> stop{false};
-    std::thread loop([&] { service.run(ScanMode::scan, stop); });
+    RunningService rs;
+    Scanner& scanner = *rs.scanner;
+    ScannerService& service = *rs.service;
+    const auto& stream = rs.stream;
+    const fs::path store = rs.store();
 
     constexpr int kScans = 15;
     int refused = 0;
@@ -249,8 +269,7 @@ TEST(ScannerService, ScanRequestedOnWrittenIsTaken) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (scanner.scans_completed() < kScans && std::chrono::steady_clock::now() < deadline)
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    stop = true;
-    loop.join();
+    rs.stop_loop();
     EXPECT_EQ(refused, 0);
     EXPECT_EQ(scanner.scans_completed(), kScans);
     EXPECT_EQ(list_scans(store).size(), static_cast<std::size_t>(kScans));
@@ -260,19 +279,11 @@ TEST(ScannerService, ScanRequestedOnWrittenIsTaken) {
 // reported to every client: a `failed` event with the reason, then the
 // error state with it, the last scan marked failed, nothing in the store.
 TEST(ScannerService, FailedScanIsReportedWithItsReason) {
-    fpp::test::TempDir dir;
-    const fs::path store = dir / "scans";
-    BoardConfig board = sim_board_in(dir.path(), store);
-    SimBoard sim(board);
-    write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
-    const Logger log([](LogLevel, const std::string&) {});
-    Scanner scanner(board, sim.devices(), log);
-    EventHub events;
-    ScannerService service(board, scanner, sim.devices(), events, log,
-                           ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
-    const auto stream = events.subscribe("");
-    std::atomic<bool> stop{false};
-    std::thread loop([&] { service.run(ScanMode::scan, stop); });
+    RunningService rs;
+    ScannerService& service = *rs.service;
+    SimBoard& sim = rs.sim;
+    const auto& stream = rs.stream;
+    const fs::path store = rs.store();
 
     sim.camera().inject_fault(sim::CameraFault::gone, 5);
     const std::string id = service.start_scan(ScanMode::scan);
@@ -288,8 +299,7 @@ TEST(ScannerService, FailedScanIsReportedWithItsReason) {
             seen.back().second.find("\"state\":\"error\"") != std::string::npos)
             break;
     }
-    stop = true;
-    loop.join();
+    rs.stop_loop();
 
     std::vector<std::string> names;
     for (const auto& [name, data] : seen)

@@ -330,7 +330,7 @@ HttpResponse Api::scans(HttpRequest& request, const std::vector<std::string>& pa
         if (m == "DELETE") {
             remove_folder(folder);
             log_.info("http: scan " + parts[3] + " deleted");
-            return HttpResponse{204, "application/json", {}, {}, {}, {}};
+            return HttpResponse::no_content();
         }
         return m == "GET" ? file_response(folder / "scan.json", "application/json")
                           : method_not_allowed("GET, DELETE");
@@ -414,7 +414,7 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
         if (m == "DELETE") {
             remove_folder(folder);
             log_.info("http: session " + name + " deleted");
-            return HttpResponse{204, "application/json", {}, {}, {}, {}};
+            return HttpResponse::no_content();
         }
         if (m != "GET")
             return method_not_allowed("GET, DELETE");
@@ -454,7 +454,7 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
     if (parts.size() == 6) {
         if (m == "DELETE") {
             remove_folder(pose);
-            return HttpResponse{204, "application/json", {}, {}, {}, {}};
+            return HttpResponse::no_content();
         }
         return m == "GET" ? file_response(pose / "scan.json", "application/json")
                           : method_not_allowed("GET, DELETE");

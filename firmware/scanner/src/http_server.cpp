@@ -29,6 +29,12 @@ HttpResponse HttpResponse::json(int status, std::string body) {
     return r;
 }
 
+HttpResponse HttpResponse::no_content() {
+    HttpResponse r;
+    r.status = 204;
+    return r;
+}
+
 HttpResponse HttpResponse::error(int status, const std::string& message) {
     return json(status, nlohmann::json{{"error", message}}.dump());
 }

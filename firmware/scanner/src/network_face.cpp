@@ -41,7 +41,7 @@ struct NetworkFace::Parts {
 };
 
 NetworkFace::NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
-                         NetworkFaceOptions options) {
+                         ServiceOptions options) {
     const HttpConfig& h = *board.http;
     ApiOptions api;
     api.token = read_token_file(h.token_file);
@@ -63,9 +63,7 @@ NetworkFace::NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, 
     http.port = where.port;
     http.max_connections = h.max_connections;
     http.timeout = h.timeout;
-    ServiceOptions service{options.table_path, board.settings_file, options.session_board_yaml,
-                           options.simulated};
-    parts_ = std::make_unique<Parts>(board, scanner, devices, log, std::move(service),
+    parts_ = std::make_unique<Parts>(board, scanner, devices, log, std::move(options),
                                      std::move(api), http);
     log.info("http: listening on " + parts_->server.address() + " (page from " + web_root.string() +
              ")");

@@ -50,6 +50,7 @@ struct HttpResponse {
 
     static HttpResponse json(int status, std::string body);
     static HttpResponse error(int status, const std::string& message); // {"error": message}
+    static HttpResponse no_content();                                  // 204
 };
 
 // Where a request's body may go, decided once its headers are in.

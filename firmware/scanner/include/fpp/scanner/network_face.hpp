@@ -11,14 +11,9 @@
 #include <fpp/scanner/board_config.hpp>
 #include <fpp/scanner/log.hpp>
 #include <fpp/scanner/scanner.hpp>
+#include <fpp/scanner/scanner_service.hpp>
 
 namespace fpp::scanner {
-
-struct NetworkFaceOptions {
-    std::optional<std::filesystem::path> table_path; // where uploaded tables go
-    std::string session_board_yaml;                  // a simulated session board's own
-    bool simulated = false;
-};
 
 class NetworkFace {
 public:
@@ -26,7 +21,7 @@ public:
     // "http: listening on ADDRESS:PORT"). Throws InputError for a bad token
     // file, IoError when it cannot listen.
     NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
-                NetworkFaceOptions options);
+                ServiceOptions options);
     ~NetworkFace();
     NetworkFace(const NetworkFace&) = delete;
     NetworkFace& operator=(const NetworkFace&) = delete;
