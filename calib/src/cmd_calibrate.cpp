@@ -7,10 +7,12 @@
 // defaults, reading and searching every pose once: the table's view of each
 // board (its corners, lit fraction and the column on its bright parts) is
 // kept while the stereo calibration reads the poses. Writes what the two
-// commands write, byte for byte.
+// commands write, byte for byte, and, when the session holds a response ramp
+// (response/), the projector's response as `response` would.
 
 #include "calibration_outputs.hpp"
 #include "commands.hpp"
+#include "response_fit.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
@@ -20,6 +22,7 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 
 namespace fpp::calib {
 
@@ -30,6 +33,7 @@ struct CalibrateArgs {
     std::string table;
     std::string stereo_report;
     std::string hybrid_report;
+    std::string response;
     std::string model = "rational";
     std::string samples = "boards+model";
     int min_poses = 6;
@@ -42,6 +46,18 @@ int run_calibrate(const CalibrateArgs& args) {
     check_output_file(table, "--table names the table file to write");
     check_report_folder(args.stereo_report, "calibration");
     check_report_folder(args.hybrid_report, "hybrid calibration");
+    // The ramp first: a bad one stops the command before the long work.
+    const std::filesystem::path ramp =
+        std::filesystem::path(args.session) / kSessionResponseFolder;
+    std::optional<ProjectorResponse> response;
+    const std::filesystem::path response_file =
+        args.response.empty() ? out.parent_path() / kProjectorResponseFile
+                              : std::filesystem::path(args.response);
+    if (std::filesystem::is_directory(ramp)) {
+        check_output_file(response_file, "--response names the response file to write");
+        std::cerr << "== projector response\n";
+        response = fit_and_report_response(ramp, std::cerr);
+    }
 
     HybridOptions hybrid;
     hybrid.model = parse_table_model(args.model);
@@ -70,6 +86,11 @@ int run_calibrate(const CalibrateArgs& args) {
         calibrate_hybrid(args.session, calibration, fnv1a64(calib_bytes.data(), calib_bytes.size()),
                          hybrid, {hybrid.model}, views);
     write_hybrid_outputs(results.front(), table, args.hybrid_report);
+    if (response) {
+        save_projector_response(response_file, *response);
+        std::cout << "wrote " << response_file.string()
+                  << " (the projector's response, for the board file's projector_response)\n";
+    }
     return 0;
 }
 } // namespace
@@ -81,7 +102,8 @@ Action add_calibrate_command(CLI::App& app) {
         "Calibrate a scanner from one checkerboard session: `stereo` (camera first, correction "
         "grids) and then `hybrid` (boards placed by the camera), each with its defaults, reading "
         "and searching every pose once. Writes the calibration file and the table, the same as "
-        "the two commands would");
+        "the two commands would, and the projector's response (as `response`) when the "
+        "session holds a response ramp");
     cmd->add_option("session", args->session, "session folder (board.yaml kind checkerboard)")
         ->required();
     cmd->add_option("--out", args->out, "calibration file to write (YAML)")->required();
@@ -90,6 +112,9 @@ Action add_calibrate_command(CLI::App& app) {
                     "the stereo calibration's report folder (as `stereo --report`)");
     cmd->add_option("--hybrid-report", args->hybrid_report,
                     "the table's report folder (as `hybrid --report`)");
+    cmd->add_option("--response", args->response,
+                    "where to write the projector's response when the session holds a response "
+                    "ramp (response/; default: projector-response.yaml beside --out)");
     cmd->add_option("--model", args->model, "table model (as `hybrid --model`)")
         ->capture_default_str()
         ->check(CLI::IsMember({"rational", "ray", "polynomial"}));

@@ -1,4 +1,4 @@
-// fpp-calib decode CAPTURE --out DIR
+// fpp-calib decode CAPTURE --out DIR [--correct-phase-error]
 
 #include "cli_util.hpp"
 #include "commands.hpp"
@@ -51,6 +51,10 @@ Action add_decode_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--threads", args->options.threads, "worker threads (0 = all cores)")
         ->capture_default_str();
+    cmd->add_flag("--correct-phase-error", args->options.correct_phase_error,
+                  "remove, from the capture alone, the periodic phase error a non-linear "
+                  "projector response leaves (for captures whose response was never measured; "
+                  "the result is reported in decode.md)");
     return [args] { return run_decode(*args); };
 }
 

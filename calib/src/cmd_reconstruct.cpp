@@ -1,5 +1,6 @@
 // fpp-calib reconstruct CAPTURE (--calib FILE | --table table.fpt) --out cloud.ply
 //                       [--xyz xyz.tiff] [--smooth RADIUS [--smooth-tolerance PX]]
+//                       [--correct-phase-error]
 //
 // Decodes a capture set and reconstructs it with the stereo (SV) model of a
 // calibration file: ours, SLStudio's calibration.xml or SLMaster's
@@ -327,6 +328,11 @@ int run_reconstruct(const ReconstructArgs& args) {
                << (smooth.tolerance_px > 0 ? "" : " (5 x the noise estimated from the scan)")
                << "\n";
     }
+    for (const auto* c : {&decoded.phase_correction_x, &decoded.phase_correction_y})
+        if (c->attempted)
+            report << "phase-error correction ("
+                   << (c == &decoded.phase_correction_x ? "x" : "y") << "): " << describe(*c)
+                   << "\n";
     report << "points: " << stats.points << " of " << pixels << " pixels ("
            << 100.0 * double(stats.points) / double(pixels) << " %); ";
     if (use_table)
@@ -413,6 +419,10 @@ Action add_reconstruct_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--threads", args->decode.threads, "worker threads (0 = all cores)")
         ->capture_default_str();
+    cmd->add_flag("--correct-phase-error", args->decode.correct_phase_error,
+                  "remove, from the capture alone, the periodic phase error a non-linear "
+                  "projector response leaves, before reconstructing (for captures whose "
+                  "response was never measured)");
     return [args] { return run_reconstruct(*args); };
 }
 

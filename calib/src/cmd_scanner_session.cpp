@@ -1,8 +1,10 @@
 // fpp-calib scanner-session --scanner URL --token-file FILE --name NAME --out DIR
 //                           [--poses N] [--board-yaml FILE] [--no-wait] [--pose-timeout S]
+//                           [--response]
 //
 // Records a calibration session on a scanner over its HTTP API, one
-// capture-mode scan per pose, then pulls it as a session folder for
+// capture-mode scan per pose (with --response, first the projector's
+// response ramp at the first pose), then pulls it as a session folder for
 // `calibrate`.
 
 #include "cli_util.hpp"
@@ -27,6 +29,7 @@ struct ScannerSessionArgs {
     std::string board_yaml;
     int poses = 30;
     bool no_wait = false;
+    bool response = false;
     double pose_timeout_s = 600;
 };
 
@@ -153,6 +156,12 @@ int run_scanner_session(const ScannerSessionArgs& args) {
                                          "waiting); the poses so far stay in session " +
                                          args.name + " on the scanner");
         }
+        if (pose == 1 && args.response) {
+            const nlohmann::json ramp =
+                client.post_json("/api/v1/sessions/" + args.name + "/response", nullptr);
+            std::cerr << "projector response ramp recorded: " << int_field(ramp, "frames")
+                      << " grey levels\n";
+        }
         record_pose(client, args, pose);
     }
     pull_scanner_session(client, args.name, out);
@@ -184,6 +193,10 @@ Action add_scanner_session_command(CLI::App& app) {
     cmd->add_flag("--no-wait", args->no_wait,
                   "scan the poses back to back without waiting for Enter (a simulated session "
                   "board moves its board at every scan)");
+    cmd->add_flag("--response", args->response,
+                  "first record the projector's response (a ramp of grey levels on the board "
+                  "at the first pose), which `calibrate` fits into projector-response.yaml "
+                  "for the board file's projector_response");
     cmd->add_option("--pose-timeout", args->pose_timeout_s,
                     "seconds a pose's scan may take before the command gives up")
         ->capture_default_str();

@@ -3,8 +3,12 @@
 #include "cli_util.hpp"
 #include "commands.hpp"
 
+#include "fpp/atomic_file.hpp"
+#include "fpp/projector_response.hpp"
+#include "fpp/sim/renderer.hpp"
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/session.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include <iostream>
 #include <memory>
@@ -23,6 +27,30 @@ struct SimulateSessionArgs {
     double read_noise = -1;
     bool no_effects = false;
 };
+
+// The projector's response ramp at the first pose, as the scanner records it
+// (POST /api/v1/sessions/{name}/response): one frame per standard level,
+// rendered through the rig's projector response, with noise seeds of their
+// own (poses use seed * 1000003 + pose, pose < 999).
+ResponseRamp simulate_response_ramp(const sim::Rig& rig, const sim::SessionOptions& options) {
+    const sim::Pose first = sim::session_poses(rig, options).front();
+    const sim::Renderer renderer(rig, sim::session_scene(options, first));
+    const std::uint64_t seed = options.seed * 1000003ULL + 999;
+    ResponseRamp ramp;
+    ramp.levels = standard_ramp_levels();
+    for (std::size_t k = 0; k < ramp.levels.size(); ++k)
+        ramp.frames.push_back(
+            renderer.render(ramp_pattern(ramp.levels[k], rig.projector_size),
+                            sim::Renderer::frame_seed(seed, static_cast<int>(k))));
+    // The rig's truth, so that `fpp-calib response` can report the fit's error.
+    ramp.metadata_yaml = "simulated: true\nrig: " + yaml_fields::format_string(rig.name) +
+                         "\nprojector_gamma: " +
+                         yaml_fields::format_real(rig.projector_optics.gamma) +
+                         "\nprojector_black_level: " +
+                         yaml_fields::format_real(rig.projector_optics.black_level) +
+                         "\nsession_pose: 1\nseed: " + std::to_string(seed);
+    return ramp;
+}
 
 int run_simulate_session(const SimulateSessionArgs& args) {
     if (std::filesystem::exists(args.out))
@@ -43,10 +71,20 @@ int run_simulate_session(const SimulateSessionArgs& args) {
               << frame_count(sequence) << " frames on rig '" << rig.name << "' (camera "
               << rig.camera_size.width << " x " << rig.camera_size.height << ")\n";
     Stopwatch watch;
-    sim::write_session(args.out, rig, sequence, options, [&](int done, int total) {
-        std::cerr << "  pose " << done << "/" << total << " written ("
-                  << static_cast<int>(watch.seconds()) << " s)\n";
+    const ResponseRamp ramp = simulate_response_ramp(rig, options);
+    // The poses and the ramp appear together or not at all: write_session
+    // publishes its folder onto our temporary one, which is then published.
+    write_folder_atomically(args.out, [&](const std::filesystem::path& temp) {
+        std::filesystem::remove(temp);
+        sim::write_session(temp, rig, sequence, options, [&](int done, int total) {
+            std::cerr << "  pose " << done << "/" << total << " written ("
+                      << static_cast<int>(watch.seconds()) << " s)\n";
+        });
+        write_response_ramp(temp / kSessionResponseFolder, ramp);
     });
+    std::cerr << "  projector response ramp (" << ramp.levels.size()
+              << " grey levels at the first pose) written to " << kSessionResponseFolder
+              << "/\n";
     std::cout << "wrote " << args.out << " (" << args.poses << " poses, " << watch.seconds()
               << " s)\n";
     return 0;
@@ -57,8 +95,9 @@ Action add_simulate_session_command(CLI::App& app) {
     auto args = std::make_shared<SimulateSessionArgs>();
     auto* cmd = app.add_subcommand(
         "simulate-session",
-        "Render a calibration session on the virtual scanner: board.yaml and one capture set per "
-        "board pose (pose-01, ...), poses spread through the calibration volume (400-560 mm, tilts "
+        "Render a calibration session on the virtual scanner: board.yaml, one capture set per "
+        "board pose (pose-01, ...) and the projector's response ramp at the first pose "
+        "(response/), poses spread through the calibration volume (400-560 mm, tilts "
         "up to ~28 deg), each fully visible to camera and projector. Checkerboard: 11 x 8 inner "
         "corners of 15 mm in the middle of a 420 x 375 mm white board (one session for the "
         "stereo calibration and the hybrid table); plane: a white board filling the field (the "

@@ -18,6 +18,7 @@ Action add_stereo_command(CLI::App& app);
 Action add_reconstruct_command(CLI::App& app);
 Action add_hybrid_command(CLI::App& app);
 Action add_calibrate_command(CLI::App& app);
+Action add_response_command(CLI::App& app);
 Action add_evaluate_command(CLI::App& app);
 Action add_paper_experiments_command(CLI::App& app);
 // Over a scanner's HTTP API (firmware/scanner/http-api.md).

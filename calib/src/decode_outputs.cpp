@@ -84,6 +84,10 @@ std::string decode_summary(const DecodeResult& result, const CaptureSet& capture
     md << "- decode time: " << fixed(decode_seconds * 1000.0, 1) << " ms\n";
     if (!result.method_x.empty()) md << "- x unwrapped by: " << result.method_x << "\n";
     if (!result.method_y.empty()) md << "- y unwrapped by: " << result.method_y << "\n";
+    for (const auto* c : {&result.phase_correction_x, &result.phase_correction_y})
+        if (c->attempted)
+            md << "- phase-error correction (" << (c == &result.phase_correction_x ? "x" : "y")
+               << "): " << describe(*c) << "\n";
 
     if (!m.truth) {
         md << "\nNo ground truth in this capture set: no error figures.\n";

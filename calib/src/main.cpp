@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
     add(fpp::calib::add_reconstruct_command);
     add(fpp::calib::add_hybrid_command);
     add(fpp::calib::add_calibrate_command);
+    add(fpp::calib::add_response_command);
     add(fpp::calib::add_evaluate_command);
     add(fpp::calib::add_paper_experiments_command);
     add(fpp::calib::add_scanner_status_command);

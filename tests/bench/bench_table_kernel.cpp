@@ -3,6 +3,9 @@
 // plain copy of the bytes the kernel must read (phase image + table) measured
 // in the same run: the kernel streams the table once, so the copy is the
 // memory-bandwidth floor. Target: a full frame in 10 ms or less on one core.
+// Also with the predicted depth sigma (a coordinate-sigma image in, sigma_z
+// out: 15 MB more memory traffic at this size), reported as a ratio to the
+// kernel without it.
 // Run with --benchmark_repetitions=N on a shared machine: the summary takes
 // the best of the repetitions.
 
@@ -82,8 +85,20 @@ fpp::Image<float> make_phase() {
     return phase;
 }
 
+// A coordinate sigma per pixel (projector px), as fpp::coordinate_sigma gives.
+fpp::Image<float> make_sigma() {
+    fpp::Image<float> sigma(kCamera, 1);
+    for (int y = 0; y < kCamera.height; ++y) {
+        float* row = sigma.row(y);
+        for (int x = 0; x < kCamera.width; ++x)
+            row[x] = 0.02f + 0.0001f * static_cast<float>((x + y) % 300);
+    }
+    return sigma;
+}
+
 struct Fixture {
     fpp::Image<float> phase = make_phase();
+    fpp::Image<float> sigma = make_sigma();
     fpp::CoefficientTable polynomial = make_table(fpp::TableModel::polynomial);
     fpp::CoefficientTable ray = make_table(fpp::TableModel::ray);
     fpp::CoefficientTable rational = make_table(fpp::TableModel::rational);
@@ -124,15 +139,19 @@ void copy_input(benchmark::State& state, fpp::TableModel model) {
                             static_cast<std::int64_t>(phase_bytes + table_bytes));
 }
 
-// Into the same cloud every frame, as a scanner does.
-void apply(benchmark::State& state, fpp::TableModel model, int threads) {
+// Into the same cloud every frame, as a scanner does; with `sigma`, also
+// sigma_z from the coordinate sigma.
+void apply(benchmark::State& state, fpp::TableModel model, int threads, bool sigma) {
     const Fixture& fx = Fixture::get();
     fpp::ThreadPool& pool = fpp::ThreadPool::shared(threads);
     fpp::PointCloud cloud;
-    fpp::TableApplyStats stats = fpp::apply_table(fx.table(model), fx.phase, cloud, &pool);
+    const fpp::Image<float>* coordinate_sigma = sigma ? &fx.sigma : nullptr;
+    fpp::TableApplyStats stats =
+        fpp::apply_table(fx.table(model), fx.phase, cloud, &pool, coordinate_sigma);
     for (auto _ : state) {
-        stats = fpp::apply_table(fx.table(model), fx.phase, cloud, &pool);
+        stats = fpp::apply_table(fx.table(model), fx.phase, cloud, &pool, coordinate_sigma);
         benchmark::DoNotOptimize(cloud.xyz.data());
+        benchmark::DoNotOptimize(cloud.sigma_z.data());
     }
     state.counters["threads"] = pool.size();
     state.counters["points"] = static_cast<double>(stats.points);
@@ -178,13 +197,17 @@ int main(int argc, char** argv) {
         benchmark::RegisterBenchmark(("copy_input/" + m).c_str(), copy_input, model)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
-        benchmark::RegisterBenchmark(("apply_table/" + m + "/1_thread").c_str(), apply, model, 1)
-            ->Unit(benchmark::kMillisecond)
-            ->UseRealTime();
-        benchmark::RegisterBenchmark(("apply_table/" + m + "/all_threads").c_str(), apply, model,
-                                     all)
-            ->Unit(benchmark::kMillisecond)
-            ->UseRealTime();
+        for (const bool sigma : {false, true}) {
+            const std::string tail = sigma ? "/sigma" : "";
+            benchmark::RegisterBenchmark(("apply_table/" + m + "/1_thread" + tail).c_str(), apply,
+                                         model, 1, sigma)
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
+            benchmark::RegisterBenchmark(("apply_table/" + m + "/all_threads" + tail).c_str(),
+                                         apply, model, all, sigma)
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
+        }
         benchmark::RegisterBenchmark(("load_table/" + m + "/mapped").c_str(), load, model, true)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
@@ -210,6 +233,12 @@ int main(int argc, char** argv) {
         std::printf("  %-10s reads %5.1f MB: 1 thread %6.2f ms (target <= 10, %.2fx the copy),"
                     " all threads %6.2f ms (%.2fx); copy %6.2f ms\n",
                     m.c_str(), mb, one, one / copy, many, many > 0 ? many / copy : 0.0, copy);
+        const double one_sigma = 1e3 * reporter.seconds("apply_table/" + m + "/1_thread/sigma");
+        const double many_sigma = 1e3 * reporter.seconds("apply_table/" + m + "/all_threads/sigma");
+        if (one_sigma > 0 && many_sigma > 0 && many > 0)
+            std::printf("  %-10s with sigma_z: 1 thread %6.2f ms (%.2fx without), all threads "
+                        "%6.2f ms (%.2fx without)\n",
+                        "", one_sigma, one_sigma / one, many_sigma, many_sigma / many);
         const double mapped = 1e3 * reporter.seconds("load_table/" + m + "/mapped");
         const double read = 1e3 * reporter.seconds("load_table/" + m + "/read");
         if (mapped > 0 && read > 0)

@@ -147,6 +147,51 @@ TEST(AravisCamera, OpensByAddressWithTheFakeCamerasRegion) {
     }
 }
 
+// The range comes from the camera's ExposureTime bounds (the fake camera's
+// GenICam file: 10 us .. 10 s); times outside it are refused naming it, at
+// opening and later, before anything is sent to the camera.
+TEST(AravisCamera, ReportsTheCamerasExposureRangeAndRefusesTimesOutsideIt) {
+    AravisFakeCamera fake({64, 48}, kAddress);
+    // At opening (one controller at a time: before the camera below opens).
+    CameraSettings too_long = software_triggered();
+    too_long.exposure_us = 2e7;
+    try {
+        AravisCamera refused(kAddress, too_long);
+        ADD_FAILURE() << "an exposure beyond the camera's range was accepted at opening";
+    } catch (const fpp::InputError& e) {
+        EXPECT_EQ(e.field(), "exposure_us");
+        EXPECT_NE(std::string(e.what()).find("exposure range 10..10000000 us"), std::string::npos)
+            << e.what();
+    }
+    AravisCamera camera(kAddress, software_triggered());
+    const fpp::drivers::ExposureRange range = camera.exposure_range_us();
+    std::cout << "[ figures  ] fake camera exposure range " << range.min_us << ".." << range.max_us
+              << " us\n";
+    EXPECT_GT(range.min_us, 0.0);
+    EXPECT_LE(range.min_us, 100.0);
+    EXPECT_GE(range.max_us, 1e6);
+    EXPECT_LE(range.max_us, 1e8);
+    EXPECT_TRUE(range.contains(5000.0)); // the settings' exposure
+    EXPECT_NO_THROW(camera.set_exposure_us(range.min_us));
+    EXPECT_NO_THROW(camera.set_exposure_us(range.max_us));
+    EXPECT_NO_THROW(camera.set_exposure_us(5000.0));
+    for (const double bad : {range.min_us / 2, range.max_us * 2, 0.0}) {
+        try {
+            camera.set_exposure_us(bad);
+            ADD_FAILURE() << bad << " us accepted";
+        } catch (const fpp::InputError& e) {
+            EXPECT_EQ(e.field(), "exposure_us");
+            EXPECT_NE(std::string(e.what()).find("exposure range"), std::string::npos) << e.what();
+        }
+    }
+    // The camera still delivers frames after the refusals.
+    fpp::Frame frame;
+    frame.u8 = fpp::Image<std::uint8_t>({64, 48}, 1, 77);
+    camera.start();
+    EXPECT_TRUE(same_pixels(capture(fake, camera, frame).frame, frame));
+    camera.stop();
+}
+
 TEST(AravisCamera, DeliversRenderedFramesInOrderPixelForPixel) {
     for (const int bit_depth : {8, 16}) {
         SCOPED_TRACE(bit_depth);

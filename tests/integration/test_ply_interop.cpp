@@ -94,12 +94,15 @@ std::string python_with_open3d() {
 }
 
 // A small organised cloud: 7 x 5 slots, some without a point, coordinates
-// that are not round in binary, quality and intensity per slot.
+// that are not round in binary, quality, intensity and sigma_z per slot (so
+// the readers also meet the optional sigma_z property; the simulated cloud
+// below has the plain layout).
 fpp::PointCloud small_cloud() {
     fpp::PointCloud c;
     c.xyz = fpp::Image<float>(7, 5, 3, kNaN);
     c.quality = fpp::Image<float>(7, 5, 1, kNaN);
     c.intensity = fpp::Image<float>(7, 5, 1, kNaN);
+    c.sigma_z = fpp::Image<float>(7, 5, 1, kNaN);
     for (int y = 0; y < 5; ++y)
         for (int x = 0; x < 7; ++x) {
             if ((x + 2 * y) % 4 == 1 || (x == 6 && y == 4))
@@ -110,6 +113,7 @@ fpp::PointCloud small_cloud() {
             c.xyz.at(x, y, 2) = 480.0f + 1.0f / 3.0f * fx + 2000.125f * (y == 3 ? 1.0f : 0.0f);
             c.quality.at(x, y) = 10.5f + fx;
             c.intensity.at(x, y) = 100.25f - fy;
+            c.sigma_z.at(x, y) = 0.0123f + 0.001f * fx * fy;
         }
     return c;
 }

@@ -26,6 +26,10 @@ struct SimBoardYaml {
     // trigger); otherwise the sim camera on the sim trigger line.
     bool gige = false;
     int frame_timeout_ms = 200;
+    std::string sequence = "gray-x";
+    std::string scene = "composite";
+    std::string camera_extra; // more camera fields, e.g. ", noise: {...}"
+    std::string extra;        // more top-level lines (hdr, points, projector_response)
 
     std::string text() const {
         const std::string camera =
@@ -46,14 +50,13 @@ struct SimBoardYaml {
                "led_active_low: false,\n"
                "       debounce_ms: 30}\n" +
                camera + "         frame_timeout_ms: " + std::to_string(frame_timeout_ms) +
-               "}\n"
-               "sequence: gray-x\n" +
+               camera_extra + "}\n" + "sequence: " + sequence + "\n" + extra +
                (table.empty() ? std::string() : "table: " + table + "\n") +
                "store: {directory: " + store.string() + ", max_mb: " + std::to_string(max_mb) +
                "}\n"
                "timing: {settle_us: 2000, trigger_pulse_us: 100, flip_timeout_ms: 100}\n"
                "sim: {rig: " +
-               rig.string() + ", scene: composite, binning: " + std::to_string(binning) +
+               rig.string() + ", scene: " + scene + ", binning: " + std::to_string(binning) +
                ",\n"
                "      flip_latency_us: " +
                std::to_string(flip_latency_us) +

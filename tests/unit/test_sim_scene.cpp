@@ -424,4 +424,91 @@ TEST(SimSceneYaml, Rejections) {
     EXPECT_THROW(scene_from_argument((dir / "none.yaml").string()), fpp::InputError);
 }
 
+TEST(SimSceneYaml, MaterialsAndNames) {
+    fpp::test::TempDir dir;
+    const Scene s = scene_from_text(dir, R"(format: fpp-scene/1
+shapes:
+  - {type: plane, name: background, centre: [0, 0, 540], size: [400, 300], albedo: 0.8}
+  - {type: sphere, name: metal, centre: [0, 0, 450], radius: 10,
+     material: {albedo: 0.2, specular: 0.5, shininess: 100}}
+  - {type: cylinder, centre: [50, 0, 480], axis: [0, 1, 0], radius: 10, length: 50,
+     material: {albedo: 0.3, specular: 0.25, roughness: 0.2}}
+  - {type: checkerboard, name: board, centre: [0, 0, 500], inner_corners: [9, 6], square_size: 8,
+     black_albedo: 0.05, white_albedo: 0.9, material: {specular: 0.1, shininess: 20}}
+  - {type: ball_bar, name: bar, centre: [-60, 0, 470], axis: [0, 1, 0], distance: 60, radius: 10,
+     material: {albedo: 0.7}}
+  - {type: relief, name: dark, centre: [100, 0, 520], size: [40, 40],
+     material: {albedo: 0.03, specular: 0}, bumps: [[0, 0, 10, 15, 15]]}
+)");
+    ASSERT_EQ(s.size(), 7u);
+    const char* names[] = {"background", "metal", "object2", "board", "bar", "bar", "dark"};
+    for (std::size_t i = 0; i < s.size(); ++i)
+        EXPECT_EQ(s.object_name(i), names[i]) << i;
+    EXPECT_FALSE(s.specular(0).active());
+    EXPECT_EQ(s.specular(1).specular, 0.5);
+    EXPECT_EQ(s.specular(1).shininess, 100);
+    // roughness 0.2 -> 2 / 0.04 - 2 = 48.
+    EXPECT_EQ(s.specular(2).specular, 0.25);
+    EXPECT_NEAR(s.specular(2).shininess, 48, 1e-9);
+    EXPECT_EQ(s.specular(3).shininess, 20);
+    EXPECT_FALSE(s.specular(4).active());
+    EXPECT_FALSE(s.specular(6).active());
+    fpp::sim::Hit hit;
+    ASSERT_TRUE(s.intersect({0, 0, 0}, {0, 0, 1}, hit));
+    EXPECT_EQ(hit.object, 1);
+    EXPECT_EQ(hit.albedo, 0.2);
+    ASSERT_TRUE(s.intersect({-60, 30, 0}, {0, 0, 1}, hit));
+    EXPECT_EQ(hit.albedo, 0.7);
+    // The lobe's reflectance relative to white paper: ks (n + 8) / 8 cos^n.
+    EXPECT_NEAR(s.specular(1).relative_reflectance(1.0), 0.5 * 108 / 8, 1e-12);
+    EXPECT_NEAR(s.specular(1).relative_reflectance(std::cos(0.1)),
+                0.5 * 108 / 8 * std::pow(std::cos(0.1), 100), 1e-12);
+    EXPECT_EQ(s.specular(1).relative_reflectance(-0.5), 0.0);
+    EXPECT_EQ(s.specular(0).relative_reflectance(1.0), 0.0);
+}
+
+TEST(SimSceneYaml, MaterialAndNameRejections) {
+    const std::string sphere = "  - {type: sphere, centre: [0, 0, 500], radius: 5, ";
+    expect_scene_rejected(sphere + "albedo: 0.5, material: {albedo: 0.5}}\n", "shapes[0].albedo");
+    expect_scene_rejected(sphere + "name: plain}\n", "shapes[0].albedo");
+    expect_scene_rejected(sphere + "material: {specular: 0.5, shininess: 10}}\n",
+                          "shapes[0].material.albedo");
+    expect_scene_rejected(sphere + "material: {albedo: 1.2}}\n", "shapes[0].material.albedo");
+    expect_scene_rejected(sphere + "material: {albedo: 0.2, specular: 1.5, shininess: 10}}\n",
+                          "shapes[0].material.specular");
+    expect_scene_rejected(sphere + "material: {albedo: 0.2, specular: 0.5}}\n",
+                          "shapes[0].material");
+    expect_scene_rejected(sphere + "material: {albedo: 0.2, specular: 0.5, shininess: 0.5}}\n",
+                          "shapes[0].material.shininess");
+    expect_scene_rejected(sphere + "material: {albedo: 0.2, specular: 0.5, shininess: 2e5}}\n",
+                          "shapes[0].material.shininess");
+    expect_scene_rejected(sphere + "material: {albedo: 0.2, specular: 0.5, roughness: 0.9}}\n",
+                          "shapes[0].material.roughness");
+    expect_scene_rejected(
+        sphere + "material: {albedo: 0.2, specular: 0.5, shininess: 10, roughness: 0.1}}\n",
+        "shapes[0].material.roughness");
+    expect_scene_rejected(sphere + "material: {albedo: 0.2, shininess: 10}}\n",
+                          "shapes[0].material.shininess");
+    expect_scene_rejected(sphere + "material: {albedo: 0.6, specular: 0.5, shininess: 10}}\n",
+                          "shapes[0].material.specular");
+    expect_scene_rejected(sphere + "material: {albedo: 0.2, colour: red}}\n",
+                          "shapes[0].material.colour");
+    expect_scene_rejected(sphere + "material: {albedo: 0.2, specular: .nan, shininess: 10}}\n",
+                          "shapes[0].material.specular");
+    expect_scene_rejected(sphere + "material: 0.5}\n", "shapes[0].material");
+    expect_scene_rejected(sphere + "albedo: 0.5, name: ''}\n", "shapes[0].name");
+    expect_scene_rejected(sphere + "albedo: 0.5, name: [a, b]}\n", "shapes[0].name");
+    // A checkerboard's albedos are its own fields; its lobe counts against the white one.
+    const std::string board =
+        "  - {type: checkerboard, centre: [0, 0, 500], inner_corners: [5, 4], "
+        "square_size: 8, black_albedo: 0.05, white_albedo: 0.9, ";
+    expect_scene_rejected(board + "material: {albedo: 0.5}}\n", "shapes[0].material.albedo");
+    expect_scene_rejected(board + "material: {specular: 0.2, shininess: 10}}\n",
+                          "shapes[0].material.specular");
+    // The second shape's field is named.
+    expect_scene_rejected(sphere + "albedo: 0.5}\n" + sphere +
+                              "material: {albedo: 0.2, specular: 0.5, roughness: 0}}\n",
+                          "shapes[1].material.roughness");
+}
+
 } // namespace

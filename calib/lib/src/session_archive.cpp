@@ -2,6 +2,7 @@
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
+#include "fpp/projector_response.hpp"
 #include "fpp/unique_fd.hpp"
 
 #include <archive.h>
@@ -129,8 +130,10 @@ ExtractedSession extract_session_tar(const fs::path& tar, const std::string& ses
         const UniqueFd folder(::open(temp.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
         if (!folder.valid() || ::syncfs(folder.get()) != 0)
             throw IoError(temp, describe_errno("cannot sync to disk", errno));
+        // Poses are the folders of scans; response/ holds the projector's
+        // response ramp (fpp/projector_response.hpp), not a pose.
         for (const auto& item : fs::directory_iterator(temp))
-            if (item.is_directory())
+            if (item.is_directory() && item.path().filename() != kSessionResponseFolder)
                 result.poses.push_back(item.path().filename().string());
         std::sort(result.poses.begin(), result.poses.end());
     });

@@ -18,6 +18,8 @@
 #include <atomic>
 #include <bit>
 #include <charconv>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <ctime>
@@ -120,8 +122,9 @@ void validate(const CameraSettings& settings) {
         throw InputError(kSettings, "pixel_format",
                          "'" + settings.pixel_format +
                              "' is not supported (Mono8, Mono10, Mono12, Mono14, Mono16)");
-    if (!(settings.exposure_us > 0.0) || settings.exposure_us > 1e7)
-        throw InputError(kSettings, "exposure_us", "must lie in (0, 1e7] microseconds");
+    // The camera's own bounds are checked once it is reached (configure()).
+    if (!(settings.exposure_us > 0.0) || !std::isfinite(settings.exposure_us))
+        throw InputError(kSettings, "exposure_us", "must be a positive number of microseconds");
     if (settings.trigger == TriggerMode::line && settings.trigger_source.empty())
         throw InputError(kSettings, "trigger_source", "a line trigger needs a source line");
     if (settings.packet_size < 0 || settings.packet_size > 16384)
@@ -132,6 +135,21 @@ void validate(const CameraSettings& settings) {
         throw InputError(kSettings, "frame_timeout", "must be positive");
 }
 
+// Microseconds as people write them: "10", "10000000", "2.5".
+std::string format_us(double us) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.10g", us);
+    return text;
+}
+
+// InputError naming the camera's range when `exposure_us` lies outside it.
+void check_exposure(double exposure_us, const ExposureRange& range) {
+    if (!(exposure_us > 0.0) || !range.contains(exposure_us))
+        throw InputError(kSettings, "exposure_us",
+                         format_us(exposure_us) + " us is outside the camera's exposure range " +
+                             format_us(range.min_us) + ".." + format_us(range.max_us) + " us");
+}
+
 } // namespace
 
 struct AravisCamera::Impl {
@@ -139,6 +157,7 @@ struct AravisCamera::Impl {
     CameraSettings settings;
     PixelLayout layout{8, 8};
     Size size;
+    ExposureRange exposure_range; // the camera's ExposureTime bounds, read at opening
     glib::ObjectPtr<ArvCamera> camera;
     glib::ObjectPtr<ArvStream> stream;
     gulong control_lost_handler = 0;
@@ -167,6 +186,15 @@ struct AravisCamera::Impl {
 
         // Cameras of SFNC 2 have ExposureTime, older ones ExposureTimeAbs; Aravis
         // picks the one present.
+        arv_camera_get_exposure_time_bounds(cam, &exposure_range.min_us, &exposure_range.max_us,
+                                            error.out());
+        error.throw_if_set(name, "cannot read the ExposureTime bounds");
+        if (!(exposure_range.min_us <= exposure_range.max_us) ||
+            !std::isfinite(exposure_range.min_us) || !std::isfinite(exposure_range.max_us))
+            throw DeviceError(name, "reports an empty ExposureTime range " +
+                                        format_us(exposure_range.min_us) + ".." +
+                                        format_us(exposure_range.max_us) + " us");
+        check_exposure(settings.exposure_us, exposure_range);
         arv_camera_set_exposure_time(cam, settings.exposure_us, error.out());
         error.throw_if_set(name, "cannot set ExposureTime = " +
                                      std::to_string(settings.exposure_us) + " us");
@@ -370,10 +398,11 @@ void AravisCamera::stop() {
     d.recycle_queued_buffers();
 }
 
+ExposureRange AravisCamera::exposure_range_us() const { return impl_->exposure_range; }
+
 void AravisCamera::set_exposure_us(double exposure_us) {
     Impl& d = *impl_;
-    if (!(exposure_us > 0.0) || exposure_us > 1e7)
-        throw InputError(kSettings, "exposure_us", "must lie in (0, 1e7] microseconds");
+    check_exposure(exposure_us, d.exposure_range);
     if (d.streaming) throw DeviceError(d.name, "exposure changed while acquiring");
     glib::Error error;
     arv_camera_set_exposure_time(d.camera.get(), exposure_us, error.out());

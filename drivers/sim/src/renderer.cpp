@@ -57,6 +57,10 @@ Renderer::Renderer(const Rig& rig, const Scene& scene, int threads)
     const int PW = rig_.projector_size.width, PH = rig_.projector_size.height;
     truth_xyz_ = Image<float>(W, H, 3, kNaN);
     truth_projector_ = Image<float>(W, H, 2, kNaN);
+    truth_object_ = Image<std::int32_t>(W, H, 1, kNoObject);
+    object_names_.reserve(scene.size());
+    for (std::size_t k = 0; k < scene.size(); ++k)
+        object_names_.push_back(scene.object_name(k));
     radiance_gain_ = Image<float>(W, H, 1, 0.0f);
     ambient_ = Image<float>(W, H, 1, 0.0f);
     albedo_ = Image<float>(W, H, 1, 0.0f);
@@ -112,8 +116,11 @@ Renderer::Renderer(const Rig& rig, const Scene& scene, int threads)
                 xyz[0] = static_cast<float>(hit.point[0]);
                 xyz[1] = static_cast<float>(hit.point[1]);
                 xyz[2] = static_cast<float>(hit.point[2]);
+                truth_object_.row(y)[x] = hit.object;
+                const SpecularLobe& lobe = scene.specular(static_cast<std::size_t>(hit.object));
                 albedo_.row(y)[x] = static_cast<float>(albedo);
-                ambient_.row(y)[x] = static_cast<float>(sensor.ambient * albedo);
+                // Without a lobe the sums add an exact 0: renders stay bit-identical.
+                ambient_.row(y)[x] = static_cast<float>(sensor.ambient * (albedo + lobe.specular));
 
                 // Projector pixel lighting the point, through the distorted projector model.
                 const Vec3 Xp = add(mul(rig_.R, hit.point), rig_.t);
@@ -140,8 +147,15 @@ Renderer::Renderer(const Rig& rig, const Scene& scene, int threads)
                                            ? (sensor.reference_distance_mm / dist) *
                                                  (sensor.reference_distance_mm / dist)
                                            : 1.0;
-                radiance_gain_.row(y)[x] =
-                    static_cast<float>(sensor.white_level * albedo * cos_inc * falloff);
+                // Specular lobe: half vector of the directions to the
+                // projector and to the camera (-d).
+                double specular = 0;
+                if (lobe.active()) {
+                    const Vec3 h = normalised(sub(l, d));
+                    specular = lobe.relative_reflectance(dot(hit.normal, h));
+                }
+                radiance_gain_.row(y)[x] = static_cast<float>(
+                    sensor.white_level * (albedo + specular) * cos_inc * falloff);
                 float* tp = truth_projector_.row(y) + 2 * x;
                 tp[0] = static_cast<float>(pp[0]);
                 tp[1] = static_cast<float>(pp[1]);
@@ -156,6 +170,15 @@ Renderer::Renderer(const Rig& rig, const Scene& scene, int threads)
             }
         }
     });
+}
+
+const std::string& Renderer::object_name(std::int32_t object) const {
+    static const std::string none = "none";
+    if (object == kNoObject)
+        return none;
+    if (object < 0 || static_cast<std::size_t>(object) >= object_names_.size())
+        throw std::out_of_range("Renderer::object_name: no object " + std::to_string(object));
+    return object_names_[static_cast<std::size_t>(object)];
 }
 
 void Renderer::set_threads(int threads) {

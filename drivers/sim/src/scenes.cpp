@@ -6,6 +6,7 @@
 #include "fpp/yaml_fields.hpp"
 #include "vec_math.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace fpp::sim {
@@ -25,11 +26,51 @@ constexpr double kSphereRadius = 38;
 
 Scene composite_scene() {
     Scene s;
-    s.add(std::make_unique<Plane>(Pose{{0, 0, 540}, {1, 0, 0, 0, 1, 0, 0, 0, 1}}, 420, 330, 0.85));
+    s.add(std::make_unique<Plane>(Pose{{0, 0, 540}, {1, 0, 0, 0, 1, 0, 0, 0, 1}}, 420, 330, 0.85),
+          "background");
     s.add(std::make_unique<Relief>(
-        Pose{{kRelief[0], kRelief[1], kRelief[2]}, {1, 0, 0, 0, 1, 0, 0, 0, 1}}, 160, 220,
-        Relief::face_bumps(), 0.8));
-    s.add(std::make_unique<Sphere>(Vec3{kSphere[0], kSphere[1], kSphere[2]}, kSphereRadius, 0.9));
+              Pose{{kRelief[0], kRelief[1], kRelief[2]}, {1, 0, 0, 0, 1, 0, 0, 0, 1}}, 160, 220,
+              Relief::face_bumps(), 0.8),
+          "relief");
+    s.add(std::make_unique<Sphere>(Vec3{kSphere[0], kSphere[1], kSphere[2]}, kSphereRadius, 0.9),
+          "sphere");
+    return s;
+}
+
+// The HDR scene, shared with board/sim/scenes/hdr-parts.yaml. Radiometry on
+// the paper rig (white level 240 DN) at its nominal exposure: the white
+// sphere peaks near 216 DN, the dark dome near 7 DN, the metal cylinder's
+// diffuse part near 45 DN and its highlight (where its normal meets the half
+// vector, about y = 50 mm) near 1600 DN, i.e. it clips an 8-bit camera over
+// a band along the cylinder and stays below full scale at 1/8 of the exposure.
+constexpr double kHdrWhiteCentre[3] = {-70, -42, 480};
+constexpr double kHdrWhiteRadius = 36;
+constexpr double kHdrWhiteAlbedo = 0.9;
+constexpr double kHdrDarkCentre[3] = {-62, 55, 505};
+constexpr double kHdrDarkSize[2] = {124, 84};
+constexpr ReliefBump kHdrDarkDome{0, 0, 24, 60, 40};
+constexpr double kHdrDarkAlbedo = 0.03;
+constexpr double kHdrMetalCentre[3] = {72, 5, 470};
+constexpr double kHdrMetalRadius = 28;
+constexpr double kHdrMetalLength = 170;
+constexpr double kHdrMetalAlbedo = 0.2;
+constexpr SpecularLobe kHdrMetalLobe{0.5, 100};
+
+Scene hdr_parts_scene() {
+    const Mat3 I{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    Scene s;
+    s.add(std::make_unique<Plane>(Pose{{0, 0, 540}, I}, 420, 330, 0.85), "background");
+    s.add(std::make_unique<Sphere>(Vec3{kHdrWhiteCentre[0], kHdrWhiteCentre[1], kHdrWhiteCentre[2]},
+                                   kHdrWhiteRadius, kHdrWhiteAlbedo),
+          "white");
+    s.add(std::make_unique<Relief>(
+              Pose{{kHdrDarkCentre[0], kHdrDarkCentre[1], kHdrDarkCentre[2]}, I}, kHdrDarkSize[0],
+              kHdrDarkSize[1], std::vector<ReliefBump>{kHdrDarkDome}, kHdrDarkAlbedo),
+          "dark");
+    s.add(std::make_unique<Cylinder>(
+              Vec3{kHdrMetalCentre[0], kHdrMetalCentre[1], kHdrMetalCentre[2]}, Vec3{0, 1, 0},
+              kHdrMetalRadius, kHdrMetalLength, kHdrMetalAlbedo),
+          "metal", kHdrMetalLobe);
     return s;
 }
 
@@ -73,6 +114,97 @@ Vec3 read_direction(const Reader& in, const YAML::Node& node, const std::string&
     return vec::normalised(a);
 }
 
+// What every shape may carry besides its geometry: `name`, and its albedo
+// and specular lobe from either `albedo` or `material`.
+struct Surface {
+    std::string name;
+    double albedo = 0;
+    SpecularLobe specular;
+};
+
+std::string read_name(const Reader& in, const YAML::Node& node, const std::string& field) {
+    const YAML::Node value = node["name"];
+    if (!value.IsDefined())
+        return {};
+    const std::string name = in.string_value(value, child(field, "name"));
+    if (name.empty() || name.size() > 64)
+        in.fail(value, child(field, "name"), "must be 1 to 64 characters");
+    for (const char c : name)
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+            in.fail(value, child(field, "name"), "must not hold control characters");
+    return name;
+}
+
+// `material: {albedo, specular, shininess | roughness}` (albedo only for
+// shapes that have one); the energy bound albedo + specular <= 1 is checked
+// by check_energy once the albedo is known.
+SpecularLobe read_lobe(const Reader& in, const YAML::Node& material, const std::string& mfield) {
+    SpecularLobe lobe;
+    const YAML::Node ks = material["specular"], shininess = material["shininess"],
+                     roughness = material["roughness"];
+    if (ks.IsDefined()) {
+        lobe.specular = in.real_value(ks, child(mfield, "specular"));
+        if (!(lobe.specular >= 0 && lobe.specular <= 1))
+            in.fail(ks, child(mfield, "specular"), "must be in [0, 1]");
+    }
+    if (shininess.IsDefined() && roughness.IsDefined())
+        in.fail(roughness, child(mfield, "roughness"), "give `shininess` or `roughness`, not both");
+    const YAML::Node width = shininess.IsDefined() ? shininess : roughness;
+    const char* width_key = shininess.IsDefined() ? "shininess" : "roughness";
+    if (width.IsDefined() && !ks.IsDefined())
+        in.fail(width, child(mfield, width_key), "needs `specular` (the lobe's strength)");
+    if (shininess.IsDefined()) {
+        lobe.shininess = in.real_value(shininess, child(mfield, "shininess"));
+        if (!(lobe.shininess >= 1 && lobe.shininess <= 1e5))
+            in.fail(shininess, child(mfield, "shininess"), "must be in [1, 100000]");
+    } else if (roughness.IsDefined()) {
+        const double alpha = in.real_value(roughness, child(mfield, "roughness"));
+        if (!(alpha >= 0.005 && alpha <= 0.8))
+            in.fail(roughness, child(mfield, "roughness"), "must be in [0.005, 0.8]");
+        lobe.shininess = SpecularLobe::shininess_from_roughness(alpha);
+    } else if (lobe.specular > 0) {
+        in.fail(material, mfield, "a specular lobe needs `shininess` or `roughness`");
+    }
+    return lobe;
+}
+
+void check_energy(const Reader& in, const YAML::Node& node, const std::string& field, double albedo,
+                  const SpecularLobe& lobe) {
+    if (albedo + lobe.specular > 1 + 1e-12)
+        in.fail(node["material"]["specular"], child(child(field, "material"), "specular"),
+                "albedo + specular must not exceed 1 (no more light out than in)");
+}
+
+// `has_albedo`: the shape has one uniform albedo (all but the checkerboard,
+// whose albedos are its own fields).
+Surface read_surface(const Reader& in, const YAML::Node& node, const std::string& field,
+                     bool has_albedo) {
+    Surface s;
+    s.name = read_name(in, node, field);
+    const YAML::Node material = node["material"];
+    if (!material.IsDefined()) {
+        if (has_albedo && !node["albedo"].IsDefined())
+            in.fail(node, child(field, "albedo"), "missing field (or material: {albedo: ...})");
+        if (has_albedo)
+            s.albedo = read_albedo(in, node, field, "albedo");
+        return s;
+    }
+    const std::string mfield = child(field, "material");
+    if (has_albedo)
+        in.expect_map(material, mfield, {"albedo", "specular", "shininess", "roughness"});
+    else
+        in.expect_map(material, mfield, {"specular", "shininess", "roughness"});
+    s.specular = read_lobe(in, material, mfield);
+    if (has_albedo) {
+        const YAML::Node plain = node["albedo"];
+        if (plain.IsDefined())
+            in.fail(plain, child(field, "albedo"), "given twice: here and as material.albedo");
+        s.albedo = read_albedo(in, material, mfield, "albedo");
+        check_energy(in, node, field, s.albedo, s.specular);
+    }
+    return s;
+}
+
 std::array<double, 2> read_size(const Reader& in, const YAML::Node& node,
                                 const std::string& field) {
     const YAML::Node value = in.require(node, field, "size");
@@ -88,14 +220,17 @@ void read_shape(const Reader& in, const YAML::Node& node, const std::string& fie
     const YAML::Node type_node = in.require(node, field, "type");
     const std::string type = in.string_value(type_node, child(field, "type"));
     if (type == "plane") {
-        in.expect_map(node, field, {"type", "centre", "euler_deg", "size", "albedo"});
+        in.expect_map(node, field,
+                      {"type", "name", "centre", "euler_deg", "size", "albedo", "material"});
         const auto size = read_size(in, node, field);
-        scene.add(std::make_unique<Plane>(read_pose(in, node, field), size[0], size[1],
-                                          read_albedo(in, node, field, "albedo")));
+        const Surface surface = read_surface(in, node, field, true);
+        scene.add(
+            std::make_unique<Plane>(read_pose(in, node, field), size[0], size[1], surface.albedo),
+            surface.name, surface.specular);
     } else if (type == "checkerboard") {
         in.expect_map(node, field,
-                      {"type", "centre", "euler_deg", "inner_corners", "square_size", "margin",
-                       "black_albedo", "white_albedo"});
+                      {"type", "name", "centre", "euler_deg", "inner_corners", "square_size",
+                       "margin", "black_albedo", "white_albedo", "material"});
         CheckerboardSpec spec;
         const std::string cfield = child(field, "inner_corners");
         const YAML::Node corners = in.require(node, field, "inner_corners");
@@ -112,30 +247,48 @@ void read_shape(const Reader& in, const YAML::Node& node, const std::string& fie
             in.fail(node["margin"], child(field, "margin"), "must be >= 0");
         spec.black_albedo = read_albedo(in, node, field, "black_albedo");
         spec.white_albedo = read_albedo(in, node, field, "white_albedo");
-        scene.add(std::make_unique<Checkerboard>(read_pose(in, node, field), spec));
+        const Surface surface = read_surface(in, node, field, false);
+        check_energy(in, node, field, std::max(spec.black_albedo, spec.white_albedo),
+                     surface.specular);
+        scene.add(std::make_unique<Checkerboard>(read_pose(in, node, field), spec), surface.name,
+                  surface.specular);
     } else if (type == "sphere") {
-        in.expect_map(node, field, {"type", "centre", "radius", "albedo"});
-        scene.add(std::make_unique<Sphere>(
-            in.real_array<3>(in.require(node, field, "centre"), child(field, "centre")),
-            read_positive(in, node, field, "radius"), read_albedo(in, node, field, "albedo")));
+        in.expect_map(node, field, {"type", "name", "centre", "radius", "albedo", "material"});
+        const Vec3 centre =
+            in.real_array<3>(in.require(node, field, "centre"), child(field, "centre"));
+        const double radius = read_positive(in, node, field, "radius");
+        const Surface surface = read_surface(in, node, field, true);
+        scene.add(std::make_unique<Sphere>(centre, radius, surface.albedo), surface.name,
+                  surface.specular);
     } else if (type == "cylinder") {
-        in.expect_map(node, field, {"type", "centre", "axis", "radius", "length", "albedo"});
-        scene.add(std::make_unique<Cylinder>(
-            in.real_array<3>(in.require(node, field, "centre"), child(field, "centre")),
-            read_direction(in, node, field, "axis"), read_positive(in, node, field, "radius"),
-            read_positive(in, node, field, "length"), read_albedo(in, node, field, "albedo")));
+        in.expect_map(node, field,
+                      {"type", "name", "centre", "axis", "radius", "length", "albedo", "material"});
+        const Vec3 centre =
+            in.real_array<3>(in.require(node, field, "centre"), child(field, "centre"));
+        const Vec3 axis = read_direction(in, node, field, "axis");
+        const double radius = read_positive(in, node, field, "radius");
+        const double length = read_positive(in, node, field, "length");
+        const Surface surface = read_surface(in, node, field, true);
+        scene.add(std::make_unique<Cylinder>(centre, axis, radius, length, surface.albedo),
+                  surface.name, surface.specular);
     } else if (type == "ball_bar") {
-        in.expect_map(node, field, {"type", "centre", "axis", "distance", "radius", "albedo"});
+        in.expect_map(
+            node, field,
+            {"type", "name", "centre", "axis", "distance", "radius", "albedo", "material"});
         const double distance = read_positive(in, node, field, "distance");
         const double radius = read_positive(in, node, field, "radius");
         if (!(distance > 2 * radius))
             in.fail(node["distance"], child(field, "distance"), "must exceed the sphere diameter");
-        add_ball_bar(scene,
-                     in.real_array<3>(in.require(node, field, "centre"), child(field, "centre")),
-                     read_direction(in, node, field, "axis"), distance, radius,
-                     read_albedo(in, node, field, "albedo"));
+        const Vec3 centre =
+            in.real_array<3>(in.require(node, field, "centre"), child(field, "centre"));
+        const Vec3 axis = read_direction(in, node, field, "axis");
+        const Surface surface = read_surface(in, node, field, true);
+        add_ball_bar(scene, centre, axis, distance, radius, surface.albedo, surface.name,
+                     surface.specular);
     } else if (type == "relief") {
-        in.expect_map(node, field, {"type", "centre", "euler_deg", "size", "albedo", "bumps"});
+        in.expect_map(
+            node, field,
+            {"type", "name", "centre", "euler_deg", "size", "albedo", "material", "bumps"});
         const auto size = read_size(in, node, field);
         std::vector<ReliefBump> bumps = Relief::face_bumps();
         const YAML::Node b = node["bumps"];
@@ -152,9 +305,10 @@ void read_shape(const Reader& in, const YAML::Node& node, const std::string& fie
                 bumps.push_back({v[0], v[1], v[2], v[3], v[4]});
             }
         }
+        const Surface surface = read_surface(in, node, field, true);
         scene.add(std::make_unique<Relief>(read_pose(in, node, field), size[0], size[1],
-                                           std::move(bumps),
-                                           read_albedo(in, node, field, "albedo")));
+                                           std::move(bumps), surface.albedo),
+                  surface.name, surface.specular);
     } else {
         in.fail(type_node, child(field, "type"),
                 "unknown shape type '" + type +
@@ -166,13 +320,13 @@ void read_shape(const Reader& in, const YAML::Node& node, const std::string& fie
 
 Scene checkerboard_scene(const Pose& pose, const CheckerboardSpec& spec) {
     Scene s;
-    s.add(std::make_unique<Checkerboard>(pose, spec));
+    s.add(std::make_unique<Checkerboard>(pose, spec), "checkerboard");
     return s;
 }
 
 std::vector<std::string> named_scene_names() {
-    return {"plane",  "inclined-plane", "checkerboard", "cylinder",
-            "sphere", "ball-bar",       "relief",       "composite"};
+    return {"plane",    "inclined-plane", "checkerboard", "cylinder", "sphere",
+            "ball-bar", "relief",         "composite",    "hdr-parts"};
 }
 
 Scene named_scene(const std::string& name) {
@@ -180,22 +334,27 @@ Scene named_scene(const std::string& name) {
     Scene s;
     if (name == "plane") {
         // Fills the camera field (about 284 x 213 mm at 480 mm).
-        s.add(std::make_unique<Plane>(Pose{{0, 0, 480}, I}, 400, 320, 0.9));
+        s.add(std::make_unique<Plane>(Pose{{0, 0, 480}, I}, 400, 320, 0.9), "plane");
     } else if (name == "inclined-plane") {
         // Depth across the field from about 415 to 555 mm.
-        s.add(std::make_unique<Plane>(Pose::from_euler_deg({0, 0, 480}, 8, -20, 0), 420, 340, 0.9));
+        s.add(std::make_unique<Plane>(Pose::from_euler_deg({0, 0, 480}, 8, -20, 0), 420, 340, 0.9),
+              "plane");
     } else if (name == "checkerboard") {
         return checkerboard_scene(Pose::from_euler_deg({0, 0, 480}, 12, -18, 3));
     } else if (name == "cylinder") {
-        s.add(std::make_unique<Cylinder>(Vec3{0, 0, 500}, Vec3{0, 1, 0}, 60, 240, 0.85));
+        s.add(std::make_unique<Cylinder>(Vec3{0, 0, 500}, Vec3{0, 1, 0}, 60, 240, 0.85),
+              "cylinder");
     } else if (name == "sphere") {
-        s.add(std::make_unique<Sphere>(Vec3{0, 0, 480}, 60, 0.9));
+        s.add(std::make_unique<Sphere>(Vec3{0, 0, 480}, 60, 0.9), "sphere");
     } else if (name == "ball-bar") {
-        add_ball_bar(s, {0, 0, 480}, {1, 0.2, 0.3}, 150, 15, 0.85);
+        add_ball_bar(s, {0, 0, 480}, {1, 0.2, 0.3}, 150, 15, 0.85, "ball");
     } else if (name == "relief") {
-        s.add(std::make_unique<Relief>(Pose{{0, 0, 500}, I}, 160, 220, Relief::face_bumps(), 0.85));
+        s.add(std::make_unique<Relief>(Pose{{0, 0, 500}, I}, 160, 220, Relief::face_bumps(), 0.85),
+              "relief");
     } else if (name == "composite") {
         return composite_scene();
+    } else if (name == "hdr-parts") {
+        return hdr_parts_scene();
     } else {
         throw std::invalid_argument("unknown scene '" + name + "'");
     }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace fpp::sim {
 
@@ -27,6 +28,28 @@ void require_albedo(double albedo, const char* what) {
 }
 
 } // namespace
+
+// ---- SpecularLobe ----------------------------------------------------------
+
+double SpecularLobe::relative_reflectance(double cos_h) const {
+    if (!(specular > 0) || !(cos_h > 0))
+        return 0;
+    return specular * (shininess + 8) / 8 * std::pow(std::min(cos_h, 1.0), shininess);
+}
+
+double SpecularLobe::shininess_from_roughness(double roughness) {
+    return 2 / (roughness * roughness) - 2;
+}
+
+void SpecularLobe::validate(double albedo) const {
+    if (!(specular >= 0 && specular <= 1))
+        throw std::invalid_argument("specular must be in [0, 1]");
+    if (specular > 0 && !(shininess >= 1 && shininess <= 1e5))
+        throw std::invalid_argument("shininess must be in [1, 1e5]");
+    // Reflected energy cannot exceed the incident one.
+    if (!(albedo + specular <= 1 + 1e-12))
+        throw std::invalid_argument("albedo + specular must not exceed 1");
+}
 
 // ---- Pose ----------------------------------------------------------------
 
@@ -623,10 +646,20 @@ bool Relief::intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, H
 
 // ---- Scene ---------------------------------------------------------------
 
-void Scene::add(std::unique_ptr<Shape> shape) {
+void Scene::add(std::unique_ptr<Shape> shape, std::string name, const SpecularLobe& specular) {
     if (!shape)
         throw std::invalid_argument("Scene::add: null shape");
+    // The lobe's energy bound is checked against the shape's largest albedo
+    // by the scene readers; here only its own ranges.
+    specular.validate(0);
+    if (name.empty())
+        name = "object" + std::to_string(shapes_.size());
+    shapes_.reserve(shapes_.size() + 1);
+    names_.reserve(shapes_.size() + 1);
+    specular_.reserve(shapes_.size() + 1);
     shapes_.push_back(std::move(shape));
+    names_.push_back(std::move(name));
+    specular_.push_back(specular);
 }
 
 bool Scene::intersect(const Vec3& o, const Vec3& d, Hit& hit) const {
@@ -653,12 +686,16 @@ bool Scene::occluded(const Vec3& o, const Vec3& d, double tmax) const {
 }
 
 void add_ball_bar(Scene& scene, const Vec3& centre, const Vec3& axis, double distance,
-                  double radius, double albedo) {
+                  double radius, double albedo, const std::string& name,
+                  const SpecularLobe& specular) {
     if (!(distance > 2 * radius))
         throw std::invalid_argument("ball bar: distance must exceed the sphere diameter");
+    specular.validate(albedo);
     const Vec3 a = normalised(axis);
-    scene.add(std::make_unique<Sphere>(sub(centre, scale(a, distance / 2)), radius, albedo));
-    scene.add(std::make_unique<Sphere>(add(centre, scale(a, distance / 2)), radius, albedo));
+    scene.add(std::make_unique<Sphere>(sub(centre, scale(a, distance / 2)), radius, albedo), name,
+              specular);
+    scene.add(std::make_unique<Sphere>(add(centre, scale(a, distance / 2)), radius, albedo), name,
+              specular);
 }
 
 } // namespace fpp::sim

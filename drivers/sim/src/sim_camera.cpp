@@ -3,14 +3,24 @@
 #include "fpp/drivers/device_error.hpp"
 #include "fpp/error.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace fpp::sim {
 
 namespace {
 const char* const kDevice = "sim camera";
+
+// Microseconds as people write them: "10", "1000000", "2.5".
+std::string format_us(double us) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.10g", us);
+    return text;
 }
+} // namespace
 
 SimCamera::SimCamera(const Renderer& renderer, const Screen& display, drivers::Clock& clock,
                      const drivers::CameraSettings& settings, std::uint64_t noise_seed)
@@ -58,10 +68,19 @@ void SimCamera::inject_fault(CameraFault fault, int at_trigger) {
     fault_at_ = at_trigger;
 }
 
+void SimCamera::set_exposure_range_us(drivers::ExposureRange range) {
+    if (!(range.min_us > 0) || !(range.min_us <= range.max_us) || !std::isfinite(range.max_us))
+        throw std::invalid_argument("SimCamera::set_exposure_range_us: need 0 < min_us <= max_us");
+    exposure_range_ = range;
+}
+
 void SimCamera::set_exposure_us(double exposure_us) {
     check_present();
-    if (!(exposure_us > 0.0) || exposure_us > 1e7)
-        throw InputError("sim camera settings", "exposure_us", "must lie in (0, 1e7] microseconds");
+    if (!exposure_range_.contains(exposure_us))
+        throw InputError("sim camera settings", "exposure_us",
+                         format_us(exposure_us) + " us is outside the camera's exposure range " +
+                             format_us(exposure_range_.min_us) + ".." +
+                             format_us(exposure_range_.max_us) + " us");
     if (streaming_)
         throw drivers::DeviceError(kDevice, "exposure changed while streaming");
     settings_.exposure_us = exposure_us;

@@ -3,10 +3,13 @@
 #include "decode_engine.hpp"
 #include "decode_plan.hpp"
 #include "fpp/decoder.hpp"
+#include "fpp/parallel.hpp"
 
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace fpp {
 
@@ -24,22 +27,58 @@ void DecodeOptions::validate() const {
         reject("max_unwrap_disagreement", "in (0, 0.5]", max_unwrap_disagreement);
     if (threads < 0 || threads > 1024)
         reject("threads", "in [0, 1024]", threads);
+    phase_error.validate();
 }
 
-struct StreamingDecoder::Impl {
-    detail::DecodeEngine engine;
-    Impl(const Sequence& sequence, Size camera, Size projector, const DecodeOptions& options,
-         DecodeResult* recycled)
-        : engine(detail::make_plan(sequence, camera, projector), options,
-                 detail::DecodeEngine::Mode::streaming, recycled) {}
-};
-
 namespace {
+
 const DecodeOptions& validated(const DecodeOptions& options) {
     options.validate();
     return options;
 }
+
+// What the phase-error correction needs of a plan: each coded axis's finest
+// phase block (the one its fine coordinate comes from).
+struct FinestBlocks {
+    std::optional<PhaseBlock> axis[2];
+    explicit FinestBlocks(const detail::Plan& plan) {
+        for (int a = 0; a < 2; ++a)
+            if (plan.axes[a].coded)
+                axis[a] = plan.phases[static_cast<std::size_t>(plan.axes[a].report_phase)].block;
+    }
+};
+
+// The pass over a finished result: corrects each coded axis when asked
+// (after unwrapping and validity, which it leaves alone).
+void correct_phase_errors(DecodeResult& result, const FinestBlocks& finest,
+                          const DecodeOptions& options) {
+    result.phase_correction_x = {};
+    result.phase_correction_y = {};
+    if (!options.correct_phase_error)
+        return;
+    ThreadPool& pool = ThreadPool::shared(options.threads);
+    const PhaseErrorOptions& o = options.phase_error;
+    if (finest.axis[0] && !result.proj_x.empty())
+        result.phase_correction_x =
+            correct_phase_error(result.proj_x, result.mask, *finest.axis[0], o, &pool);
+    if (finest.axis[1] && !result.proj_y.empty())
+        result.phase_correction_y =
+            correct_phase_error(result.proj_y, result.mask, *finest.axis[1], o, &pool);
+}
+
 } // namespace
+
+struct StreamingDecoder::Impl {
+    DecodeOptions options;
+    FinestBlocks finest;
+    detail::DecodeEngine engine;
+    Impl(detail::Plan plan, const DecodeOptions& o, DecodeResult* recycled)
+        : options(o), finest(plan),
+          engine(std::move(plan), o, detail::DecodeEngine::Mode::streaming, recycled) {}
+    Impl(const Sequence& sequence, Size camera, Size projector, const DecodeOptions& o,
+         DecodeResult* recycled)
+        : Impl(detail::make_plan(sequence, camera, projector), o, recycled) {}
+};
 
 StreamingDecoder::StreamingDecoder(const Sequence& sequence, Size camera, Size projector,
                                    const DecodeOptions& options)
@@ -76,25 +115,31 @@ int StreamingDecoder::frames_expected() const {
 DecodeResult StreamingDecoder::finish() {
     if (!impl_)
         throw std::logic_error("StreamingDecoder: use after move");
-    return impl_->engine.finish();
+    DecodeResult result = impl_->engine.finish();
+    correct_phase_errors(result, impl_->finest, impl_->options);
+    return result;
 }
 
 DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options) {
     options.validate();
-    detail::DecodeEngine engine(detail::make_plan(capture.manifest.sequence,
-                                                  capture.manifest.camera,
-                                                  capture.manifest.projector),
-                                options, detail::DecodeEngine::Mode::batch);
-    return engine.run_batch(capture.frames);
+    detail::Plan plan = detail::make_plan(capture.manifest.sequence, capture.manifest.camera,
+                                          capture.manifest.projector);
+    const FinestBlocks finest(plan);
+    detail::DecodeEngine engine(std::move(plan), options, detail::DecodeEngine::Mode::batch);
+    DecodeResult result = engine.run_batch(capture.frames);
+    correct_phase_errors(result, finest, options);
+    return result;
 }
 
 void decode(const CaptureSet& capture, DecodeResult& result, const DecodeOptions& options) {
     options.validate();
-    detail::DecodeEngine engine(detail::make_plan(capture.manifest.sequence,
-                                                  capture.manifest.camera,
-                                                  capture.manifest.projector),
-                                options, detail::DecodeEngine::Mode::batch, &result);
+    detail::Plan plan = detail::make_plan(capture.manifest.sequence, capture.manifest.camera,
+                                          capture.manifest.projector);
+    const FinestBlocks finest(plan);
+    detail::DecodeEngine engine(std::move(plan), options, detail::DecodeEngine::Mode::batch,
+                                &result);
     result = engine.run_batch(capture.frames);
+    correct_phase_errors(result, finest, options);
 }
 
 } // namespace fpp

@@ -1,5 +1,7 @@
 #include "fpp/patterns.hpp"
 
+#include "fpp/projector_response.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -145,6 +147,38 @@ GammaLut GammaLut::precompensate(double projector_gamma) {
         lut.level[std::size_t(v)] = static_cast<std::uint8_t>(best);
     }
     return lut;
+}
+
+GammaLut GammaLut::from_response(const ProjectorResponse& response, double emitted_gamma) {
+    if (!(emitted_gamma >= 1.0 && emitted_gamma <= 4.0)) {
+        throw std::invalid_argument("GammaLut::from_response: emitted_gamma must be in [1, 4], "
+                                    "got " +
+                                    std::to_string(emitted_gamma));
+    }
+    response.validate();
+    std::array<double, 256> emitted{}; // non-decreasing in the level
+    for (std::size_t c = 0; c < emitted.size(); ++c) emitted[c] = response.at(double(c));
+    GammaLut lut;
+    for (std::size_t v = 0; v < lut.level.size(); ++v) {
+        const double target = std::pow(static_cast<double>(v) / 255.0, emitted_gamma);
+        // The nearest emitted light is at the first level reaching the
+        // target or at the one before it.
+        const auto above = std::lower_bound(emitted.begin(), emitted.end(), target);
+        std::size_t best = above == emitted.end() ? emitted.size() - 1
+                                                  : std::size_t(above - emitted.begin());
+        if (best > 0 && std::abs(emitted[best - 1] - target) <= std::abs(emitted[best] - target)) {
+            best -= 1;
+        }
+        lut.level[v] = static_cast<std::uint8_t>(best);
+    }
+    return lut;
+}
+
+double compensation_emitted_gamma(const Sequence& sequence) {
+    for (const PatternBlock& block : sequence) {
+        if (const auto* p = std::get_if<PhaseBlock>(&block); p && p->steps < 4) return 1.0;
+    }
+    return 2.0;
 }
 
 Image<std::uint8_t> render_pattern(const PatternBlock& block, int frame, Size projector,

@@ -21,7 +21,10 @@ namespace fpp {
 
 namespace {
 
-constexpr std::size_t kRecordBytes = 6 * 4; // x y z quality intensity (float), pixel (uint)
+// x y z quality intensity [sigma_z] (float), pixel (uint).
+std::size_t record_bytes(const PointCloud& cloud) {
+    return cloud.sigma_z.empty() ? 6 * 4 : 7 * 4;
+}
 
 bool has_point(const float* p) {
     return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
@@ -58,11 +61,11 @@ std::string one_line(const std::string& s) {
 void check_cloud(const PointCloud& cloud) {
     if (cloud.xyz.channels() != 3 && !cloud.xyz.empty())
         throw std::invalid_argument("point cloud: xyz must have 3 channels");
-    for (const Image<float>* extra : {&cloud.quality, &cloud.intensity})
+    for (const Image<float>* extra : {&cloud.quality, &cloud.intensity, &cloud.sigma_z})
         if (!extra->empty() && (extra->channels() != 1 || extra->size() != cloud.xyz.size()))
             throw std::invalid_argument(
-                "point cloud: quality and intensity must be empty or 1-channel images of the "
-                "cloud's size");
+                "point cloud: quality, intensity and sigma_z must be empty or 1-channel images "
+                "of the cloud's size");
     if (cloud.xyz.pixel_count() > std::size_t{std::numeric_limits<std::uint32_t>::max()})
         throw std::invalid_argument("point cloud: more pixels than a 32-bit index can number");
 }
@@ -91,8 +94,9 @@ std::string ply_header(const PointCloud& cloud, const std::vector<std::string>& 
            << "obj_info organised_height " << cloud.xyz.height() << "\n"
            << "element vertex " << points << "\n"
            << "property float x\nproperty float y\nproperty float z\n"
-           << "property float quality\nproperty float intensity\nproperty uint pixel\n"
-           << "end_header\n";
+           << "property float quality\nproperty float intensity\n"
+           << (cloud.sigma_z.empty() ? "" : "property float sigma_z\n")
+           << "property uint pixel\nend_header\n";
     return header.str();
 }
 
@@ -105,6 +109,8 @@ std::size_t encode_records(const PointCloud& cloud, std::size_t& pixel, char* ou
     const float* xyz = cloud.xyz.data();
     const float* quality = cloud.quality.empty() ? nullptr : cloud.quality.data();
     const float* intensity = cloud.intensity.empty() ? nullptr : cloud.intensity.data();
+    const float* sigma_z = cloud.sigma_z.empty() ? nullptr : cloud.sigma_z.data();
+    const std::size_t record = record_bytes(cloud);
     std::size_t done = 0;
     std::size_t i = pixel;
     for (const std::size_t count = cloud.xyz.pixel_count(); i < count && done < max_points; ++i) {
@@ -116,16 +122,19 @@ std::size_t encode_records(const PointCloud& cloud, std::size_t& pixel, char* ou
         put_f32(out + 8, p[2]);
         put_f32(out + 12, quality ? quality[i] : nan);
         put_f32(out + 16, intensity ? intensity[i] : nan);
-        put_u32(out + 20, static_cast<std::uint32_t>(i));
-        out += kRecordBytes;
+        if (sigma_z)
+            put_f32(out + 20, sigma_z[i]);
+        put_u32(out + record - 4, static_cast<std::uint32_t>(i));
+        out += record;
         ++done;
     }
     pixel = i;
     return done;
 }
 
-// Records encoded at a time by write_ply_synced: 1.5 MiB pieces, so that
-// its buffers stay small and reused while the file is written.
+// Records encoded at a time by write_ply_synced: 1.5 MiB pieces (1.75 MiB
+// with sigma_z), so that its buffers stay small and reused while the file is
+// written.
 constexpr std::size_t kChunkPoints = 65536;
 
 // Writes pieces to a file, in order, on a thread of its own, from a ring of
@@ -220,7 +229,7 @@ std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& 
     const std::size_t points = cloud.count_points();
     std::string bytes = ply_header(cloud, comments, points);
     const std::size_t body = bytes.size();
-    bytes.resize(body + points * kRecordBytes);
+    bytes.resize(body + points * record_bytes(cloud));
     std::size_t pixel = 0;
     encode_records(cloud, pixel, bytes.data() + body, points);
     return bytes;
@@ -233,11 +242,12 @@ void write_ply_synced(const std::filesystem::path& path, const PointCloud& cloud
     SyncedFileWriter out(path);
     out.write(ply_header(cloud, comments, points));
     {
-        BackgroundWriter writer(out, kChunkPoints * kRecordBytes);
+        const std::size_t record = record_bytes(cloud);
+        BackgroundWriter writer(out, kChunkPoints * record);
         std::size_t pixel = 0;
         for (std::size_t left = points; left > 0;) {
             const std::size_t n = encode_records(cloud, pixel, writer.next_buffer(), kChunkPoints);
-            writer.submit(n * kRecordBytes);
+            writer.submit(n * record);
             left -= n;
         }
         writer.drain();
@@ -425,6 +435,7 @@ PlyPoints read_ply(const std::filesystem::path& path) {
     const Property* pz = nullptr;
     const Property* pq = nullptr;
     const Property* pi = nullptr;
+    const Property* ps = nullptr;
     const Property* pp = nullptr;
     for (const auto& p : props) {
         if (p.name == "x")
@@ -437,6 +448,8 @@ PlyPoints read_ply(const std::filesystem::path& path) {
             pq = &p;
         if (p.name == "intensity")
             pi = &p;
+        if (p.name == "sigma_z")
+            ps = &p;
         if (p.name == "pixel")
             pp = &p;
     }
@@ -454,6 +467,8 @@ PlyPoints read_ply(const std::filesystem::path& path) {
         points.quality.resize(vertex_count);
     if (pi)
         points.intensity.resize(vertex_count);
+    if (ps)
+        points.sigma_z.resize(vertex_count);
     if (pp)
         points.pixel.resize(vertex_count);
     const char* base = bytes.data() + pos;
@@ -465,6 +480,8 @@ PlyPoints read_ply(const std::filesystem::path& path) {
             points.quality[i] = static_cast<float>(load_value(base + pq->offset, pq->type));
         if (pi)
             points.intensity[i] = static_cast<float>(load_value(base + pi->offset, pi->type));
+        if (ps)
+            points.sigma_z[i] = static_cast<float>(load_value(base + ps->offset, ps->type));
         if (pp) {
             const double v = load_value(base + pp->offset, pp->type);
             if (!(v >= 0 && v <= double(std::numeric_limits<std::uint32_t>::max())))
@@ -474,6 +491,28 @@ PlyPoints read_ply(const std::filesystem::path& path) {
         }
     }
     return points;
+}
+
+std::size_t drop_points_above_sigma(PointCloud& cloud, float max_sigma_z_mm) {
+    if (!(max_sigma_z_mm > 0))
+        throw std::invalid_argument("drop_points_above_sigma: the limit must be > 0 mm");
+    if (cloud.xyz.channels() != 3 || cloud.sigma_z.channels() != 1 ||
+        cloud.sigma_z.size() != cloud.xyz.size() || cloud.sigma_z.empty())
+        throw std::invalid_argument(
+            "drop_points_above_sigma: the cloud has no sigma_z of its size");
+    constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+    float* xyz = cloud.xyz.data();
+    float* sigma = cloud.sigma_z.data();
+    std::size_t dropped = 0;
+    for (std::size_t i = 0, count = cloud.xyz.pixel_count(); i < count; ++i) {
+        float* p = xyz + 3 * i;
+        if (!(sigma[i] > max_sigma_z_mm) || !has_point(p))
+            continue;
+        p[0] = p[1] = p[2] = nan;
+        sigma[i] = nan;
+        ++dropped;
+    }
+    return dropped;
 }
 
 } // namespace fpp

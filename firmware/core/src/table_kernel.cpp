@@ -1,4 +1,5 @@
-// The reconstruction kernel: phase + coefficient table -> X, Y, Z.
+// The reconstruction kernel: phase + coefficient table -> X, Y, Z (and,
+// when asked, the predicted sigma of Z from the phase's).
 //
 // Work is done tile by tile in three plain loops (gather, evaluate, scatter)
 // over per-worker scratch buffers. The evaluation loop, where the arithmetic
@@ -55,13 +56,16 @@ struct alignas(64) Counts {
     std::size_t points = 0;
 };
 
-// One tile's scratch: phase in, X, Y, Z out (tile_pixels floats each).
+// One tile's scratch: phase in, X, Y, Z out, and the coordinate sigma in
+// and sigma_z out in place (tile_pixels floats each).
 struct Scratch {
     float* phase;
     float* x;
     float* y;
     float* z;
+    float* sigma;
 };
+constexpr std::size_t kScratchPlanes = 5;
 
 // Tile counters: 32-bit, the width of a float lane, so the counting
 // vectorises alongside the arithmetic.
@@ -136,6 +140,11 @@ inline float cubic(const float* c, int stride, int i, float t) {
     return ((c[3 * stride + i] * t + c[2 * stride + i]) * t + c[stride + i]) * t + c[i];
 }
 
+// Its derivative in t, c1 + 2 c2 t + 3 c3 t^2, by Horner's rule.
+inline float cubic_slope(const float* c, int stride, int i, float t) {
+    return (3.0f * c[3 * stride + i] * t + 2.0f * c[2 * stride + i]) * t + c[stride + i];
+}
+
 // The evaluators below are not inlined: GCC honours __restrict on a
 // function's own parameters, and without it would need more run-time
 // overlap checks than it is willing to emit. `ahead` is the next tile (or
@@ -147,12 +156,17 @@ inline float cubic(const float* c, int stride, int i, float t) {
 //   rational    Z = cubic / (1 + d t) (the fit and the loader keep |d| < 1,
 //               so the denominator stays positive for |t| <= 1), X = xn Z,
 //               Y = yn Z
-// The model is a template argument so that each loop is compiled without a
-// per-pixel branch on it.
-template <TableModel M>
+// With Sigma, `sigma` holds the tile's coordinate sigma (projector px) and
+// gets sigma_z = |dZ/dt| * inv_half_range * sigma (mm) in its place:
+//   polynomial, ray  dZ/dt = Z cubic's slope
+//   rational         dZ/dt = (numerator's slope - Z d) / (1 + d t)
+// The model and Sigma are template arguments so that each loop is compiled
+// without a per-pixel branch on them.
+template <TableModel M, bool Sigma>
 [[gnu::noinline]] TileCounts
 evaluate(const float* __restrict tile, int tp, const float* __restrict phase, float* __restrict xs,
-         float* __restrict ys, float* __restrict zs, const char* ahead, std::size_t ahead_part) {
+         float* __restrict ys, float* __restrict zs, float* __restrict sigma, const char* ahead,
+         std::size_t ahead_part) {
     namespace tpl = table_plane;
     constexpr bool poly = M == TableModel::polynomial;
     const float* centre = tile + tpl::centre * tp;
@@ -172,6 +186,12 @@ evaluate(const float* __restrict tile, int tp, const float* __restrict phase, fl
             float z = cubic(cz, tp, i, v.t);
             if constexpr (M == TableModel::rational)
                 z /= 1.0f + d[i] * v.t;
+            if constexpr (Sigma) {
+                float dz_dt = cubic_slope(cz, tp, i, v.t);
+                if constexpr (M == TableModel::rational)
+                    dz_dt = (dz_dt - z * d[i]) / (1.0f + d[i] * v.t);
+                sigma[i] = std::fabs(dz_dt * ihr[i]) * sigma[i] + v.nan_if_invalid;
+            }
             z += v.nan_if_invalid;
             if constexpr (poly) {
                 xs[i] = cubic(cx, tp, i, v.t) + v.nan_if_invalid;
@@ -208,51 +228,88 @@ void scatter(const Scratch& s, int x0, int y0, int tw, int th, Image<float>& xyz
     }
 }
 
-// Writes NaN (no point) over the cloud rows of the tile at (x0, y0).
-void scatter_nothing(int x0, int y0, int tw, int th, Image<float>& xyz) {
-    const int w = std::min(tw, xyz.width() - x0);
-    const int h = std::min(th, xyz.height() - y0);
+// Copies a tile-sized plane into the rows of a 1-channel image it covers.
+void scatter_plane(const float* tile, int x0, int y0, int tw, int th, Image<float>& image) {
+    const int w = std::min(tw, image.width() - x0);
+    const int h = std::min(th, image.height() - y0);
+    for (int r = 0; r < h; ++r)
+        std::memcpy(image.row(y0 + r) + x0,
+                    tile + static_cast<std::size_t>(r) * static_cast<std::size_t>(tw),
+                    static_cast<std::size_t>(w) * sizeof(float));
+}
+
+// Writes NaN over the rows of the tile at (x0, y0) of an image, every
+// channel (the cloud: no point; sigma_z: none).
+void scatter_nothing(int x0, int y0, int tw, int th, Image<float>& image) {
+    const int w = std::min(tw, image.width() - x0);
+    const int h = std::min(th, image.height() - y0);
+    const auto c = static_cast<std::size_t>(image.channels());
     for (int r = 0; r < h; ++r) {
-        float* row = xyz.row(y0 + r) + static_cast<std::size_t>(x0) * 3;
-        std::fill(row, row + 3 * static_cast<std::size_t>(w), kNaN);
+        float* row = image.row(y0 + r) + static_cast<std::size_t>(x0) * c;
+        std::fill(row, row + c * static_cast<std::size_t>(w), kNaN);
     }
 }
 
-// Prefetches the phase rows (for reading, into every cache level: the gather
-// comes next) and cloud rows (for writing) of the tile at (x0, y0), if any.
-[[gnu::always_inline]] inline void prefetch_rows(const Image<float>& phase, Image<float>& xyz,
-                                                 int x0, int y0, int tw, int th) {
-    if (y0 >= phase.height())
+// Prefetches the rows of the tile at (x0, y0), if any, of a 1-channel input
+// (for reading, into every cache level: the gather comes next) and of an
+// output of `out_channels` channels (for writing).
+[[gnu::always_inline]] inline void prefetch_rows(const Image<float>& in_image,
+                                                 Image<float>& out_image, int out_channels, int x0,
+                                                 int y0, int tw, int th) {
+    if (y0 >= in_image.height())
         return;
-    const int w = std::min(tw, phase.width() - x0);
-    const int h = std::min(th, phase.height() - y0);
-    const auto phase_bytes = static_cast<std::size_t>(w) * sizeof(float);
+    const int w = std::min(tw, in_image.width() - x0);
+    const int h = std::min(th, in_image.height() - y0);
+    const auto in_bytes = static_cast<std::size_t>(w) * sizeof(float);
+    const auto c = static_cast<std::size_t>(out_channels);
     for (int r = 0; r < h; ++r) {
-        const auto* in = static_cast<const char*>(static_cast<const void*>(phase.row(y0 + r) + x0));
-        for (std::size_t o = 0; o < phase_bytes; o += kCacheLine)
+        const auto* in =
+            static_cast<const char*>(static_cast<const void*>(in_image.row(y0 + r) + x0));
+        for (std::size_t o = 0; o < in_bytes; o += kCacheLine)
             __builtin_prefetch(in + o, 0, kNearest);
         auto* out = static_cast<char*>(
-            static_cast<void*>(xyz.row(y0 + r) + static_cast<std::size_t>(x0) * 3));
-        for (std::size_t o = 0; o < 3 * phase_bytes; o += kCacheLine)
+            static_cast<void*>(out_image.row(y0 + r) + static_cast<std::size_t>(x0) * c));
+        for (std::size_t o = 0; o < c * in_bytes; o += kCacheLine)
             __builtin_prefetch(out + o, 1, kOuter);
     }
+}
+
+using Evaluator = TileCounts (*)(const float*, int, const float*, float*, float*, float*, float*,
+                                 const char*, std::size_t);
+
+template <bool Sigma> Evaluator evaluator(TableModel model) {
+    return model == TableModel::ray        ? evaluate<TableModel::ray, Sigma>
+           : model == TableModel::rational ? evaluate<TableModel::rational, Sigma>
+                                           : evaluate<TableModel::polynomial, Sigma>;
+}
+
+std::string size_text(const Image<float>& image) {
+    return std::to_string(image.width()) + "x" + std::to_string(image.height()) + "x" +
+           std::to_string(image.channels());
 }
 
 } // namespace
 
 TableApplyStats apply_table(const CoefficientTable& table, const Image<float>& phase,
-                            PointCloud& cloud, ThreadPool* pool) {
+                            PointCloud& cloud, ThreadPool* pool,
+                            const Image<float>* coordinate_sigma) {
     if (table.empty())
         throw std::invalid_argument("apply_table: empty coefficient table");
     const TableInfo& info = table.info();
-    if (phase.size() != info.camera || phase.channels() != 1)
-        throw std::invalid_argument(
-            "apply_table: the phase image is " + std::to_string(phase.width()) + "x" +
-            std::to_string(phase.height()) + "x" + std::to_string(phase.channels()) +
-            ", the table wants " + std::to_string(info.camera.width) + "x" +
-            std::to_string(info.camera.height) + "x1");
+    for (const Image<float>* in : {&phase, coordinate_sigma})
+        if (in != nullptr && (in->size() != info.camera || in->channels() != 1))
+            throw std::invalid_argument(std::string("apply_table: the ") +
+                                        (in == &phase ? "phase" : "sigma") + " image is " +
+                                        size_text(*in) + ", the table wants " +
+                                        std::to_string(info.camera.width) + "x" +
+                                        std::to_string(info.camera.height) + "x1");
     if (cloud.xyz.size() != info.camera || cloud.xyz.channels() != 3)
         cloud.xyz = Image<float>(info.camera, 3);
+    const bool with_sigma = coordinate_sigma != nullptr;
+    if (!with_sigma)
+        cloud.sigma_z = Image<float>();
+    else if (cloud.sigma_z.size() != info.camera || cloud.sigma_z.channels() != 1)
+        cloud.sigma_z = Image<float>(info.camera, 1);
 
     ThreadPool& workers = pool ? *pool : ThreadPool::shared();
     const int tw = info.tile_width;
@@ -260,10 +317,8 @@ TableApplyStats apply_table(const CoefficientTable& table, const Image<float>& p
     const int tp = info.tile_pixels();
     const int tiles_x = info.tiles_x();
     const int tiles_y = info.tiles_y();
-    const auto evaluate_tile = info.model == TableModel::ray ? evaluate<TableModel::ray>
-                               : info.model == TableModel::rational
-                                   ? evaluate<TableModel::rational>
-                                   : evaluate<TableModel::polynomial>;
+    const Evaluator evaluate_tile =
+        with_sigma ? evaluator<true>(info.model) : evaluator<false>(info.model);
     const auto tile_floats = static_cast<std::size_t>(tp);
     const std::size_t tile_bytes =
         static_cast<std::size_t>(table.planes()) * tile_floats * sizeof(float);
@@ -271,14 +326,16 @@ TableApplyStats apply_table(const CoefficientTable& table, const Image<float>& p
     const auto worker_count = static_cast<std::size_t>(workers.size());
 
     // One scratch and one set of counters per worker, for the whole call.
-    std::vector<float> scratch(worker_count * 4 * tile_floats);
+    std::vector<float> scratch(worker_count * kScratchPlanes * tile_floats);
     std::vector<Counts> counts(worker_count);
 
     // Rows of tiles, a few chunks per worker so uneven cores balance out.
     const int grain = std::max(1, tiles_y / (4 * workers.size()));
     workers.parallel_for(tiles_y, grain, [&](int ty_begin, int ty_end, int worker) {
-        float* base = scratch.data() + static_cast<std::size_t>(worker) * 4 * tile_floats;
-        const Scratch s{base, base + tile_floats, base + 2 * tile_floats, base + 3 * tile_floats};
+        float* base =
+            scratch.data() + static_cast<std::size_t>(worker) * kScratchPlanes * tile_floats;
+        const Scratch s{base, base + tile_floats, base + 2 * tile_floats, base + 3 * tile_floats,
+                        base + 4 * tile_floats};
         Counts& c = counts[static_cast<std::size_t>(worker)];
         for (int ty = ty_begin; ty < ty_end; ++ty) {
             for (int tx = 0; tx < tiles_x; ++tx) {
@@ -287,21 +344,30 @@ TableApplyStats apply_table(const CoefficientTable& table, const Image<float>& p
                 // The next tile in memory and in this loop's order.
                 const bool last_in_row = tx + 1 == tiles_x;
                 const bool last = last_in_row && ty + 1 == tiles_y;
-                prefetch_rows(phase, cloud.xyz, last_in_row ? 0 : x0 + tw,
-                              last_in_row ? y0 + th : y0, tw, th);
+                const int next_x = last_in_row ? 0 : x0 + tw;
+                const int next_y = last_in_row ? y0 + th : y0;
+                prefetch_rows(phase, cloud.xyz, 3, next_x, next_y, tw, th);
+                if (with_sigma)
+                    prefetch_rows(*coordinate_sigma, cloud.sigma_z, 1, next_x, next_y, tw, th);
                 gather(phase, x0, y0, tw, th, s.phase);
                 // Background (no phase decoded anywhere in the tile): its
                 // coefficients, most of the bytes read, are not needed.
                 if (finite_count(s.phase, tp) == 0) {
                     scatter_nothing(x0, y0, tw, th, cloud.xyz);
+                    if (with_sigma)
+                        scatter_nothing(x0, y0, tw, th, cloud.sigma_z);
                     continue;
                 }
+                if (with_sigma)
+                    gather(*coordinate_sigma, x0, y0, tw, th, s.sigma);
                 const float* tile = table.tile(tx, ty);
                 const char* ahead = static_cast<const char*>(static_cast<const void*>(tile)) +
                                     (last ? 0 : tile_bytes);
                 const TileCounts n =
-                    evaluate_tile(tile, tp, s.phase, s.x, s.y, s.z, ahead, ahead_part);
+                    evaluate_tile(tile, tp, s.phase, s.x, s.y, s.z, s.sigma, ahead, ahead_part);
                 scatter(s, x0, y0, tw, th, cloud.xyz);
+                if (with_sigma)
+                    scatter_plane(s.sigma, x0, y0, tw, th, cloud.sigma_z);
                 c.phase_valid += n.phase_valid;
                 c.modelled += n.modelled;
                 c.points += n.points;

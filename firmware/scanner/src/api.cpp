@@ -438,6 +438,11 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
         r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + name + ".tar\"");
         return r;
     }
+    if (parts[4] == "response" && parts.size() == 5) {
+        if (m != "POST")
+            return method_not_allowed("POST");
+        return HttpResponse::json(201, service_.record_response(name).dump());
+    }
     if (parts[4] != "poses")
         return HttpResponse::error(404, "no such path");
     if (parts.size() == 5) {

@@ -66,8 +66,9 @@ public:
     BoardConfig parse(const std::string& yaml_text) const {
         const YAML::Node root = r_.load(yaml_text);
         r_.expect_map(root, "",
-                      {"format", "name", "display", "gpio", "camera", "sequence", "table", "store",
-                       "timing", "sim", "http", "settings"});
+                      {"format", "name", "display", "gpio", "camera", "sequence", "table",
+                       "projector_response", "hdr", "points", "store", "timing", "sim", "http",
+                       "settings"});
         BoardConfig c;
         c.file = r_.origin();
         if (text(root, "", "format") != kBoardConfigFormat)
@@ -79,6 +80,12 @@ public:
         parse_sequence_field(r_.require(root, "", "sequence"), c);
         if (root["table"] && !root["table"].IsNull())
             c.table = path(root, "", "table");
+        if (root["projector_response"] && !root["projector_response"].IsNull())
+            c.projector_response = path(root, "", "projector_response");
+        if (root["hdr"] && !root["hdr"].IsNull())
+            c.hdr = parse_hdr(root["hdr"]);
+        if (root["points"] && !root["points"].IsNull())
+            parse_points(root["points"], c);
         parse_store(r_.require(root, "", "store"), c.store);
         parse_timing(r_.require(root, "", "timing"), c.timing);
         if (root["http"] && !root["http"].IsNull())
@@ -93,6 +100,10 @@ public:
                 check_gige_link(root, c);
             if (c.sim->camera_only)
                 check_camera_only(root, c);
+            // A session scene moves its board at every camera start with
+            // frames: HDR's passes would each see another pose.
+            if (c.hdr && c.sim->scene.starts_with("session:"))
+                r_.fail(root["hdr"], "hdr", "not with a session scene (sim.scene session:...)");
         }
         return c;
     }
@@ -125,7 +136,8 @@ private:
     void parse_camera(const YAML::Node& n, CameraConfig& c) const {
         r_.expect_map(n, "camera",
                       {"driver", "device", "pixel_format", "exposure_us", "trigger",
-                       "trigger_source", "packet_size", "buffer_count", "frame_timeout_ms"});
+                       "trigger_source", "packet_size", "buffer_count", "frame_timeout_ms",
+                       "noise"});
         const std::string driver = text(n, "camera", "driver");
         if (driver == "sim")
             c.driver = CameraDriver::sim;
@@ -155,6 +167,63 @@ private:
         s.buffer_count = int_in(n, "camera", "buffer_count", 2, 64);
         s.frame_timeout =
             std::chrono::milliseconds(int_in(n, "camera", "frame_timeout_ms", 1, 60000));
+        if (n["noise"] && !n["noise"].IsNull())
+            c.noise = parse_noise(n["noise"]);
+    }
+    double real_in(const YAML::Node& map, const std::string& parent, std::string_view key,
+                   double lo, double hi, const std::string& range) const {
+        const std::string field = child(parent, key);
+        const double v = r_.real_value(r_.require(map, parent, key), field);
+        if (!(v >= lo && v <= hi))
+            r_.fail(map[std::string(key)], field, "must be in " + range);
+        return v;
+    }
+    CameraNoise parse_noise(const YAML::Node& n) const {
+        const std::string parent = "camera.noise";
+        r_.expect_map(n, parent, {"read_noise_dn", "gain_e_per_dn", "sensor_bit_depth"});
+        CameraNoise noise;
+        noise.read_noise_dn = real_in(n, parent, "read_noise_dn", 0, 1e4, "0..10000");
+        noise.gain_e_per_dn = real_in(n, parent, "gain_e_per_dn", 0, 1e6, "0..1000000");
+        noise.sensor_bit_depth = int_in(n, parent, "sensor_bit_depth", 8, 16);
+        return noise;
+    }
+    HdrConfig parse_hdr(const YAML::Node& n) const {
+        r_.expect_map(n, "hdr", {"exposures_us", "auto"});
+        HdrConfig h;
+        if (static_cast<bool>(n["exposures_us"]) == static_cast<bool>(n["auto"]))
+            r_.fail(n, "hdr", "give exactly one of exposures_us and auto");
+        if (n["exposures_us"]) {
+            const YAML::Node list = n["exposures_us"];
+            r_.expect_list(list, "hdr.exposures_us");
+            if (list.size() < 1 || list.size() > 8)
+                r_.fail(list, "hdr.exposures_us", "must list 1 to 8 exposures");
+            for (std::size_t i = 0; i < list.size(); ++i) {
+                const std::string field = "hdr.exposures_us[" + std::to_string(i) + "]";
+                const double e = r_.real_value(list[i], field);
+                if (!(e >= 1.0 && e <= 1e7))
+                    r_.fail(list[i], field, "must be in 1..10000000");
+                h.exposures_us.push_back(e);
+            }
+            return h;
+        }
+        const YAML::Node a = n["auto"];
+        r_.expect_map(a, "hdr.auto", {"max_saturated", "passes", "ratio", "longest_us"});
+        h.automatic = true;
+        h.max_saturated = real_in(a, "hdr.auto", "max_saturated", 0, 0.99, "0..0.99");
+        h.passes = int_in(a, "hdr.auto", "passes", 1, 8);
+        h.ratio = real_in(a, "hdr.auto", "ratio", 1.5, 64, "1.5..64");
+        if (a["longest_us"])
+            h.longest_us = real_in(a, "hdr.auto", "longest_us", 1, 1e7, "1..10000000");
+        return h;
+    }
+    void parse_points(const YAML::Node& n, BoardConfig& c) const {
+        r_.expect_map(n, "points", {"max_sigma_z_mm"});
+        if (n["max_sigma_z_mm"]) {
+            c.points.max_sigma_z_mm = real_in(n, "points", "max_sigma_z_mm", 1e-6, 1e3, "(0, 1000]");
+            if (!c.camera.noise)
+                r_.fail(n["max_sigma_z_mm"], "points.max_sigma_z_mm",
+                        "needs camera.noise (the prediction of sigma_z comes from it)");
+        }
     }
     void parse_sequence_field(const YAML::Node& n, BoardConfig& c) const {
         if (n.IsScalar()) {

@@ -66,12 +66,27 @@ std::string scan_json(const ScanMetadata& m) {
                       {"model", to_string(m.table->model)},
                       {"file_fnv1a64", hex64(m.table->file_hash)},
                       {"calibration_fnv1a64", hex64(m.table->calibration_hash)}};
+    if (m.board.projector_response)
+        j["projector_response"] = m.board.projector_response->string();
     j["decode"] = {{"method_x", m.method_x}, {"method_y", m.method_y}};
+    j["exposures_us"] = m.outcome.exposures_us;
+    if (m.outcome.fusion) {
+        const FusionStats& f = *m.outcome.fusion;
+        j["fusion"] = {{"reference_pixels", f.reference_pixels},
+                       {"averaged", f.averaged},
+                       {"disagreeing", f.disagreeing},
+                       {"undecoded", f.undecoded}};
+    }
     j["points"] = m.outcome.points;
+    j["sigma_z"] = m.outcome.has_sigma;
+    if (m.board.points.max_sigma_z_mm)
+        j["dropped_by_sigma"] = {{"max_sigma_z_mm", *m.board.points.max_sigma_z_mm},
+                                 {"points", m.outcome.dropped_by_sigma}};
     j["timings_ms"] = {{"capture", t.capture_ms},
                        {"push_mean", t.push_mean_ms},
                        {"push_max", t.push_max_ms},
                        {"finish", t.finish_ms},
+                       {"fuse", t.fuse_ms},
                        {"apply", t.apply_ms}};
     j["flips"] = std::move(flips);
     return j.dump(2) + "\n";

@@ -6,13 +6,16 @@
 #include "fpp/error.hpp"
 #include "fpp/patterns.hpp"
 #include "fpp/point_cloud.hpp"
+#include "fpp/projector_response.hpp"
 #include "fpp/scanner/scan_store.hpp"
-#include "scan_metadata.hpp"
 #include "fpp/table_kernel.hpp"
 #include "fpp/yaml_fields.hpp"
+#include "exposure_plan.hpp"
+#include "scan_metadata.hpp"
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <memory>
@@ -45,7 +48,7 @@ std::uint64_t hash_file(const fs::path& path) {
 
 struct Scanner::Captured {
     std::vector<FrameRecord> records;
-    std::vector<Frame> frames; // capture mode only
+    std::vector<std::vector<Frame>> frames; // per pass, capture mode only
     std::string started_utc;
 };
 
@@ -55,16 +58,78 @@ Scanner::Scanner(const BoardConfig& board, Devices devices, const Logger& log)
     sequence_ = board_.sequence(projector);
     if (board_.table)
         reload_table(*board_.table);
-    auto patterns = render_sequence(sequence_, projector);
-    patterns_ = patterns.size();
-    patterns.emplace_back(projector, 1, std::uint8_t{255}); // white, for previews
+    check_hdr_exposures(board_, dev_.camera.exposure_range_us());
+    if (board_.projector_response) {
+        // Fringes emitted as v^2 rather than v where the sequence allows it
+        // (every phase block of 4 steps or more): the same amplitude in less
+        // light, so less shot noise (fpp/patterns.hpp).
+        response_lut_ = GammaLut::from_response(load_projector_response(*board_.projector_response),
+                                                compensation_emitted_gamma(sequence_));
+        log_.info("patterns rendered through the inverse of the projector response " +
+                  board_.projector_response->string());
+    }
+    prepare_patterns();
     // Made now, so that a scan never starts on a sequence the decoder rejects.
     decoder_.emplace(sequence_, dev_.camera.size(), projector);
-    dev_.display.prepare(patterns);
     log_.info("board " + board_.name + ": " + std::to_string(patterns_) + " patterns at " +
               std::to_string(projector.width) + "x" + std::to_string(projector.height) +
               ", camera " + std::to_string(dev_.camera.size().width) + "x" +
               std::to_string(dev_.camera.size().height));
+}
+
+void Scanner::prepare_patterns() {
+    const Size projector = dev_.display.size();
+    auto patterns = render_sequence(sequence_, projector, response_lut_ ? &*response_lut_ : nullptr);
+    patterns_ = patterns.size();
+    patterns.emplace_back(projector, 1, std::uint8_t{255}); // white, for previews
+    dev_.display.prepare(patterns);
+}
+
+std::vector<Frame> Scanner::grab_prepared(std::size_t count) {
+    const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
+    std::vector<Frame> frames;
+    dev_.camera.start();
+    try {
+        for (std::size_t i = 0; i < count; ++i) {
+            dev_.display.show(i);
+            const drivers::FlipEvent flip = dev_.display.wait_flip(board_.timing.flip_timeout);
+            dev_.clock.sleep_until_ns(
+                flip.timestamp_ns +
+                std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle)
+                    .count());
+            if (software)
+                dev_.camera.software_trigger();
+            else
+                dev_.trigger.pulse(board_.timing.trigger_pulse);
+            frames.push_back(dev_.camera.next_frame(board_.camera.settings.frame_timeout).frame);
+        }
+        dev_.camera.stop();
+        return frames;
+    } catch (...) {
+        dev_.camera.stop();
+        throw;
+    }
+}
+
+ResponseRamp Scanner::capture_ramp() {
+    const Size projector = dev_.display.size();
+    ResponseRamp ramp;
+    ramp.levels = standard_ramp_levels();
+    std::vector<Image<std::uint8_t>> patterns;
+    for (int level : ramp.levels)
+        patterns.push_back(ramp_pattern(level, projector));
+    dev_.display.prepare(patterns);
+    patterns.clear();
+    try {
+        ramp.frames = grab_prepared(ramp.levels.size());
+    } catch (...) {
+        prepare_patterns();
+        throw;
+    }
+    prepare_patterns();
+    log_.info("projector response ramp captured: " + std::to_string(ramp.levels.size()) +
+              " grey levels");
+    return ramp;
 }
 
 CoefficientTable Scanner::load_checked_table(const fs::path& path) const {
@@ -89,6 +154,19 @@ void Scanner::reload_table(const fs::path& path) {
     table_path_ = path;
     log_.info("table " + path.string() + " loaded (" + to_string(table_.info().model) + ", hash " +
               hex64(table_file_hash_) + ")");
+}
+
+Frame Scanner::preview_at(double exposure_us) {
+    const double own = board_.camera.settings.exposure_us;
+    dev_.camera.set_exposure_us(exposure_us);
+    try {
+        Frame frame = preview();
+        dev_.camera.set_exposure_us(own);
+        return frame;
+    } catch (...) {
+        dev_.camera.set_exposure_us(own);
+        throw;
+    }
 }
 
 Frame Scanner::preview() {
@@ -134,7 +212,7 @@ ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop, fs::path
         throw;
     }
     if (observer_)
-        observer_->scan_started(folder.filename().string(), mode, static_cast<int>(patterns_));
+        observer_->scan_started(folder.filename().string(), mode, planned_frames());
     for (int attempt_no = 1;; ++attempt_no) {
         try {
             ScanOutcome outcome = attempt(mode, stop, folder);
@@ -165,27 +243,132 @@ ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop, fs::path
     }
 }
 
+std::vector<double> Scanner::scan_exposures() {
+    if (!board_.hdr)
+        return {board_.camera.settings.exposure_us};
+    if (!board_.hdr->automatic)
+        return board_.hdr->exposures_us;
+    const HdrConfig& hdr = *board_.hdr;
+    const double longest = hdr.longest_us.value_or(board_.camera.settings.exposure_us *
+                                                   std::pow(hdr.ratio, hdr.passes - 1));
+    const std::vector<double> chosen =
+        automatic_exposures(hdr, longest, dev_.camera.exposure_range_us(),
+                            [this](double exposure_us) { return preview_at(exposure_us); });
+    std::string text;
+    for (double e : chosen)
+        text += (text.empty() ? "" : ", ") + yaml_fields::format_real(e);
+    log_.info("hdr exposures chosen from previews: " + text + " us");
+    return chosen;
+}
+
+namespace {
+
+// Restores the camera's own exposure when an HDR scan ends, however it ends.
+class ExposureRestorer {
+public:
+    ExposureRestorer(drivers::Camera& camera, double own) : camera_(camera), own_(own) {}
+    ~ExposureRestorer() {
+        if (changed_) {
+            try {
+                camera_.set_exposure_us(own_);
+            } catch (...) {
+                // The camera is gone: the next scan's start reports it.
+            }
+        }
+    }
+    ExposureRestorer(const ExposureRestorer&) = delete;
+    ExposureRestorer& operator=(const ExposureRestorer&) = delete;
+    void set(double exposure_us) {
+        if (exposure_us == own_ && !changed_)
+            return;
+        camera_.set_exposure_us(exposure_us);
+        changed_ = true;
+    }
+
+private:
+    drivers::Camera& camera_;
+    double own_;
+    bool changed_ = false;
+};
+
+} // namespace
+
 ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop,
                              const fs::path& folder) {
     if (mode == ScanMode::scan && table_.empty())
         throw InputError(board_.file, "table", "scan mode needs a table (or use capture mode)");
     prepare_store(folder.parent_path());
 
+    ScanOutcome outcome;
+    Captured captured;
+    captured.started_utc = utc_text(std::time(nullptr));
+    outcome.exposures_us = scan_exposures();
+    const int passes = static_cast<int>(outcome.exposures_us.size());
+    if (passes_.size() != static_cast<std::size_t>(passes))
+        passes_.resize(static_cast<std::size_t>(passes));
+    ExposureRestorer exposure(dev_.camera, board_.camera.settings.exposure_us);
+    double push_total = 0;
+    double finish_ms = 0;
+    auto& clock = dev_.clock;
+    const std::int64_t capture_start = clock.now_ns();
+    double last_frame = 0;
+    for (int p = 0; p < passes; ++p) {
+        ExposurePass& pass = passes_[static_cast<std::size_t>(p)];
+        pass.exposure_us = outcome.exposures_us[static_cast<std::size_t>(p)];
+        exposure.set(pass.exposure_us);
+        decoder_->restart(std::move(pass.decoded));
+        capture_pass(p, passes, mode, stop, captured, outcome, push_total);
+        last_frame = wall_ms();
+        pass.decoded = decoder_->finish();
+        finish_ms += wall_ms() - last_frame;
+    }
+    const int frames = static_cast<int>(patterns_) * passes;
+    outcome.timings.capture_ms = static_cast<double>(clock.now_ns() - capture_start) / 1e6;
+    outcome.timings.push_mean_ms = push_total / static_cast<double>(frames);
+    outcome.timings.finish_ms = finish_ms;
+    outcome.frames = frames;
+    DecodeResult& decoded = combine_passes(outcome);
+    if (observer_)
+        observer_->decoded();
+
+    double t = wall_ms();
+    write_folder_atomically(folder, [&](const fs::path& temp) {
+        write_outputs(temp, mode, captured, decoded, outcome);
+    });
+    const double written = wall_ms();
+    outcome.timings.write_ms = written - t - outcome.timings.apply_ms;
+    outcome.timings.last_frame_to_written_ms = written - last_frame;
+    outcome.folder = folder;
+
+    if (folder.parent_path() == board_.store.directory) {
+        const auto removed = prune_store(board_.store.directory, board_.store.max_bytes, folder);
+        for (const auto& r : removed)
+            log_.info("store full: removed " + r.filename().string());
+    }
+    char line[240];
+    std::snprintf(line, sizeof line,
+                  "scan written: %zu points, %d frames in %d pass%s, streaming %.2f ms/frame "
+                  "(max %.2f), last frame to disk %.1f ms",
+                  outcome.points, outcome.frames, passes, passes == 1 ? "" : "es",
+                  outcome.timings.push_mean_ms, outcome.timings.push_max_ms,
+                  outcome.timings.last_frame_to_written_ms);
+    log_.info(std::string(line) + " -> " + folder.string());
+    return outcome;
+}
+
+void Scanner::capture_pass(int pass, int passes, ScanMode mode, const std::atomic<bool>* stop,
+                           Captured& captured, ScanOutcome& outcome, double& push_total) {
     auto& clock = dev_.clock;
     const Size camera = dev_.camera.size();
     const std::int64_t settle_ns =
         std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count();
     const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
-
-    ScanOutcome outcome;
-    Captured captured;
-    captured.started_utc = utc_text(std::time(nullptr));
+    const int total = static_cast<int>(patterns_) * passes;
     StreamingDecoder& decoder = *decoder_;
-    decoder.restart(std::move(recycled_));
-    double push_total = 0;
+    if (mode == ScanMode::capture)
+        captured.frames.emplace_back();
 
     dev_.camera.start();
-    const std::int64_t capture_start = clock.now_ns();
     dev_.display.show(0);
     std::uint64_t previous_id = 0;
     for (std::size_t i = 0; i < patterns_; ++i) {
@@ -217,52 +400,46 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop,
         if (i + 1 < patterns_)
             dev_.display.show(i + 1);
         if (observer_)
-            observer_->frame_captured(static_cast<int>(i + 1), static_cast<int>(patterns_));
+            observer_->frame_captured(pass * static_cast<int>(patterns_) + static_cast<int>(i) + 1,
+                                      total);
         const double t0 = wall_ms();
         decoder.push(frame.frame);
         const double dt = wall_ms() - t0;
         push_total += dt;
         outcome.timings.push_max_ms = std::max(outcome.timings.push_max_ms, dt);
         if (mode == ScanMode::capture)
-            captured.frames.push_back(std::move(frame.frame));
+            captured.frames.back().push_back(std::move(frame.frame));
         if (stop && stop->load())
             throw ScanAborted();
     }
     dev_.camera.stop();
-    const double last_frame = wall_ms();
-    outcome.timings.capture_ms = static_cast<double>(clock.now_ns() - capture_start) / 1e6;
-    outcome.timings.push_mean_ms = push_total / static_cast<double>(patterns_);
-    outcome.frames = static_cast<int>(patterns_);
+}
 
-    double t = wall_ms();
-    DecodeResult decoded = decoder.finish();
-    outcome.timings.finish_ms = wall_ms() - t;
-    if (observer_)
-        observer_->decoded();
+PhaseNoiseModel Scanner::noise_model() const {
+    // Without a measured noise the passes are still ranked by their
+    // modulation: a nominal 1 DN of read noise orders them as their phase
+    // noise would (the sigma is then not written).
+    const CameraNoise camera = board_.camera.noise.value_or(CameraNoise{1.0, 0.0, 8});
+    const Axis axis = table_.empty() ? Axis::x : table_.info().phase_axis;
+    return phase_noise_model(sequence_, axis, camera, dev_.camera.bit_depth());
+}
 
-    t = wall_ms();
-    write_folder_atomically(folder, [&](const fs::path& temp) {
-        write_outputs(temp, mode, captured, decoded, outcome);
-    });
-    const double written = wall_ms();
-    outcome.timings.write_ms = written - t - outcome.timings.apply_ms;
-    outcome.timings.last_frame_to_written_ms = written - last_frame;
-    outcome.folder = folder;
-    recycled_ = std::move(decoded);
-
-    if (folder.parent_path() == board_.store.directory) {
-        const auto removed = prune_store(board_.store.directory, board_.store.max_bytes, folder);
-        for (const auto& r : removed)
-            log_.info("store full: removed " + r.filename().string());
+DecodeResult& Scanner::combine_passes(ScanOutcome& outcome) {
+    const PhaseNoiseModel model = noise_model();
+    if (passes_.size() == 1) {
+        DecodeResult& decoded = passes_[0].decoded;
+        if (board_.camera.noise)
+            coordinate_sigma(decoded.modulation, decoded.mean, model, sigma_);
+        outcome.has_sigma = board_.camera.noise.has_value();
+        return decoded;
     }
-    char line[200];
-    std::snprintf(line, sizeof line,
-                  "scan written: %zu points, %d frames, streaming %.2f ms/frame (max %.2f), "
-                  "last frame to disk %.1f ms",
-                  outcome.points, outcome.frames, outcome.timings.push_mean_ms,
-                  outcome.timings.push_max_ms, outcome.timings.last_frame_to_written_ms);
-    log_.info(std::string(line) + " -> " + folder.string());
-    return outcome;
+    const double t = wall_ms();
+    for (ExposurePass& pass : passes_)
+        coordinate_sigma(pass.decoded.modulation, pass.decoded.mean, model, pass.sigma);
+    outcome.fusion = fuse_exposures(passes_, fused_, sigma_);
+    outcome.timings.fuse_ms = wall_ms() - t;
+    outcome.has_sigma = board_.camera.noise.has_value();
+    return fused_;
 }
 
 void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captured,
@@ -279,8 +456,14 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
                                  to_string(table_.info().phase_axis) + " phase");
         // cloud_ keeps its memory from the previous scan: a fresh 23 MB
         // cloud costs the kernel's page faults on every scan.
-        const TableApplyStats stats = apply_table(table_, phase, cloud_);
+        const TableApplyStats stats =
+            apply_table(table_, phase, cloud_, nullptr, outcome.has_sigma ? &sigma_ : nullptr);
         outcome.points = stats.points;
+        if (outcome.has_sigma && board_.points.max_sigma_z_mm) {
+            outcome.dropped_by_sigma =
+                drop_points_above_sigma(cloud_, static_cast<float>(*board_.points.max_sigma_z_mm));
+            outcome.points -= outcome.dropped_by_sigma;
+        }
         outcome.timings.apply_ms = wall_ms() - t;
         // The cloud borrows the decoder's B and A images for the PLY rather
         // than copying 15 MB (at 1600x1200); they go back to be recycled,
@@ -300,19 +483,23 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
         }
         give_back();
     }
-    if (mode == ScanMode::capture) {
+    // Capture mode: the raw frames as capture sets, capture/ for the first
+    // pass, capture-2/, capture-3/, ... for the other exposures of HDR.
+    for (std::size_t p = 0; mode == ScanMode::capture && p < captured.frames.size(); ++p) {
         CaptureManifest manifest;
         manifest.camera = camera;
         manifest.projector = projector;
-        for (std::size_t i = 0; i < captured.frames.size(); ++i) {
+        for (std::size_t i = 0; i < captured.frames[p].size(); ++i) {
             char name[32];
             std::snprintf(name, sizeof name, "%03zu.png", i);
             manifest.frames.emplace_back(name);
         }
         manifest.sequence = sequence_;
         manifest.metadata_yaml = "board: " + yaml_fields::format_string(board_.name) +
-                                 "\nscanned_utc: " + captured.started_utc;
-        write_capture_set(temp / "capture", manifest, captured.frames);
+                                 "\nscanned_utc: " + captured.started_utc + "\nexposure_us: " +
+                                 yaml_fields::format_real(outcome.exposures_us[p]);
+        const std::string name = p == 0 ? "capture" : "capture-" + std::to_string(p + 1);
+        write_capture_set(temp / name, manifest, captured.frames[p]);
     }
 
     std::optional<TableSummary> table;

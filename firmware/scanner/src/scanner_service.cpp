@@ -339,6 +339,28 @@ Preview ScannerService::preview() {
     return p;
 }
 
+nlohmann::json ScannerService::record_response(const std::string& session) {
+    const std::filesystem::path folder = sessions_dir() / session / "response";
+    json result;
+    run_on_scanner_thread([&] {
+        ResponseRamp ramp;
+        try {
+            ramp = scanner_.capture_ramp();
+        } catch (const std::exception& e) {
+            throw ApiError(503, std::string("response ramp failed: ") + e.what());
+        }
+        try {
+            std::filesystem::remove_all(folder);
+            write_response_ramp(folder, ramp);
+        } catch (const std::exception& e) {
+            throw ApiError(507, std::string("response ramp not written: ") + e.what());
+        }
+        result = json{{"levels", ramp.levels}, {"frames", ramp.frames.size()}};
+    });
+    log_.info("http: projector response ramp recorded into session " + session);
+    return result;
+}
+
 double ScannerService::exposure_us() const {
     const std::lock_guard lock(mutex_);
     return exposure_us_;

@@ -1,6 +1,10 @@
 #include "sim_gige_camera.hpp"
 
 #include "fpp/drivers/device_error.hpp"
+#include "fpp/error.hpp"
+
+#include <algorithm>
+#include <cstdio>
 
 #if FPP_HAVE_ARAVIS
 #include <fpp/drivers/aravis_camera.hpp>
@@ -29,7 +33,23 @@ public:
         driver_.stop();
         sensor_.stop();
     }
+    // Both ends must accept an exposure: the simulated sensor and the
+    // GigE camera that carries its frames.
+    drivers::ExposureRange exposure_range_us() const override {
+        const drivers::ExposureRange sensor = sensor_.exposure_range_us();
+        const drivers::ExposureRange link = driver_.exposure_range_us();
+        return {std::max(sensor.min_us, link.min_us), std::min(sensor.max_us, link.max_us)};
+    }
     void set_exposure_us(double exposure_us) override {
+        // Checked against both before either changes.
+        const drivers::ExposureRange range = exposure_range_us();
+        if (!range.contains(exposure_us)) {
+            char text[160];
+            std::snprintf(text, sizeof text,
+                          "%.10g us is outside the camera's exposure range %.10g..%.10g us",
+                          exposure_us, range.min_us, range.max_us);
+            throw InputError("camera settings", "exposure_us", text);
+        }
         sensor_.set_exposure_us(exposure_us);
         driver_.set_exposure_us(exposure_us);
     }

@@ -27,6 +27,15 @@ struct CameraSettings {
     std::chrono::milliseconds frame_timeout{1000}; // default wait in next_frame()
 };
 
+// Exposure times a camera accepts, microseconds, both bounds included.
+struct ExposureRange {
+    double min_us = 0;
+    double max_us = 0;
+    bool contains(double exposure_us) const {
+        return exposure_us >= min_us && exposure_us <= max_us;
+    }
+};
+
 struct CapturedFrame {
     Frame frame;
     std::uint64_t frame_id = 0;      // camera's frame counter (consecutive while streaming)
@@ -49,9 +58,14 @@ public:
     virtual void start() = 0;
     virtual void stop() = 0;
 
-    // Exposure time of the frames from the next start() on (the value is
-    // checked: InputError outside (0, 1e7] us; DeviceError when the camera
-    // refuses it). Only while stopped.
+    // The exposure times set_exposure_us() accepts (the camera's own bounds,
+    // fixed while the camera is open).
+    virtual ExposureRange exposure_range_us() const = 0;
+
+    // Exposure time of the frames from the next start() on. Checked:
+    // InputError(settings origin, "exposure_us", ...) naming the range for a
+    // value outside exposure_range_us(); DeviceError when the camera cannot be
+    // reached or refuses it, or while streaming. Only while stopped.
     virtual void set_exposure_us(double exposure_us) = 0;
 
     // Fire one exposure from software. Only valid with TriggerMode::software;

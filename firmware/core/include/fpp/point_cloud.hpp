@@ -4,7 +4,8 @@
 // Conventions: camera frame, mm; pixel (column, row) of the camera image.
 // A slot without a point holds NaN in X, Y and Z.
 //
-// PLY layout written by write_ply (binary little-endian, 24 bytes a point):
+// PLY layout written by write_ply (binary little-endian, 24 bytes a point,
+// 28 with sigma_z):
 //
 //   ply
 //   format binary_little_endian 1.0
@@ -17,6 +18,9 @@
 //   property float z
 //   property float quality      fringe modulation B, DN (NaN if unknown)
 //   property float intensity    mean intensity A, DN (NaN if unknown)
+//   property float sigma_z      only when the cloud has it: predicted 1-sigma
+//                               of z, mm (camera noise -> phase noise, times
+//                               the table's |dz/dphase|; fpp/phase_noise.hpp)
 //   property uint pixel         row * organised_width + column
 //   end_header
 //
@@ -44,6 +48,10 @@ struct PointCloud {
     Image<float> xyz;       // 3 channels per camera pixel: X, Y, Z (mm), NaN = no point
     Image<float> quality;   // 1 channel, same size, or empty: modulation B (DN)
     Image<float> intensity; // 1 channel, same size, or empty: mean intensity A (DN)
+    // 1 channel, same size, or empty (unknown): predicted standard deviation
+    // of Z (camera frame, mm) from the camera's noise (fpp/table_kernel.hpp
+    // apply_table), NaN where there is no point.
+    Image<float> sigma_z;
 
     Size size() const { return xyz.size(); }
     // Slots whose X, Y and Z are all finite.
@@ -52,9 +60,9 @@ struct PointCloud {
 
 // The PLY file as bytes (header and body), as write_ply writes it. `comments`
 // become `comment` lines (line breaks are replaced by spaces). Throws
-// std::invalid_argument if xyz is not 3-channel, quality or intensity is
-// neither empty nor a 1-channel image of xyz's size, or the image has more
-// than 2^32 pixels.
+// std::invalid_argument if xyz is not 3-channel, quality, intensity or
+// sigma_z is neither empty nor a 1-channel image of xyz's size, or the image
+// has more than 2^32 pixels.
 std::string encode_ply(const PointCloud& cloud, const std::vector<std::string>& comments = {});
 
 // Writes the bytes of encode_ply(...) atomically (temporary file, fsync,
@@ -72,13 +80,14 @@ void write_ply_synced(const std::filesystem::path& path, const PointCloud& cloud
                       const std::vector<std::string>& comments = {});
 
 // A PLY point set read back: the vertex element's x, y, z and, when present,
-// quality, intensity and pixel (empty vectors when absent).
+// quality, intensity, sigma_z and pixel (empty vectors when absent).
 struct PlyPoints {
     Size organised;                    // from obj_info organised_width/height, {0, 0} if absent
     std::vector<std::string> comments; // `comment` lines, without the keyword
     std::vector<float> x, y, z;
     std::vector<float> quality;
     std::vector<float> intensity;
+    std::vector<float> sigma_z; // mm
     std::vector<std::uint32_t> pixel;
     std::size_t size() const { return x.size(); }
 };
@@ -88,5 +97,11 @@ struct PlyPoints {
 // are ignored. Throws InputError naming the file for anything else (not PLY,
 // other encodings, list properties in `vertex`, no x/y/z, truncated body).
 PlyPoints read_ply(const std::filesystem::path& path);
+
+// Drops the points whose predicted sigma_z exceeds `max_sigma_z_mm` (their X,
+// Y, Z and sigma_z become NaN) and returns how many were dropped. Points
+// whose sigma_z is NaN (unknown) are kept. Throws std::invalid_argument if the
+// cloud has no sigma_z (or one of another size) or the limit is not > 0.
+std::size_t drop_points_above_sigma(PointCloud& cloud, float max_sigma_z_mm);
 
 } // namespace fpp

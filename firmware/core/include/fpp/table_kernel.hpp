@@ -11,8 +11,9 @@
 // tile (one scratch buffer per worker, allocated once per call at most).
 //
 // A tile without any finite phase (background) is written as NaN without
-// reading its coefficients. A pixel gets NaN (no point) when its phase is NaN, it has no model, or
-// |t| > 1 (phase outside the range it was calibrated for).
+// reading its coefficients (also its sigma_z when asked for). A pixel gets
+// NaN (no point) when its phase is NaN, it has no model, or |t| > 1 (phase
+// outside the range it was calibrated for).
 
 #include "fpp/coefficient_table.hpp"
 #include "fpp/image.hpp"
@@ -34,9 +35,20 @@ struct TableApplyStats {
 // Applies `table` to `phase` (1 channel, the table's camera size, projector px
 // along the table's phase axis, NaN = not decoded) into cloud.xyz (resized to
 // 3 channels of the camera size if needed; quality and intensity untouched).
-// `pool` null: the process-wide pool. Throws std::invalid_argument if the
-// phase image's size differs from the table's camera size.
+// `pool` null: the process-wide pool.
+//
+// With `coordinate_sigma` (1 channel, camera size: the predicted standard
+// deviation of the phase, projector px, e.g. from fpp/phase_noise.hpp), also
+// fills cloud.sigma_z (resized if needed) with the predicted standard
+// deviation of Z, mm: |dZ/dp| * coordinate_sigma, dZ/dp from the pixel's own
+// cubic (its derivative in t by Horner's rule, times inv_half_range; for the
+// rational model the quotient rule), NaN where there is no point. Without
+// it, cloud.sigma_z is left empty.
+//
+// Throws std::invalid_argument if the phase image's (or the sigma image's)
+// size differs from the table's camera size.
 TableApplyStats apply_table(const CoefficientTable& table, const Image<float>& phase,
-                            PointCloud& cloud, ThreadPool* pool = nullptr);
+                            PointCloud& cloud, ThreadPool* pool = nullptr,
+                            const Image<float>* coordinate_sigma = nullptr);
 
 } // namespace fpp

@@ -34,7 +34,8 @@ public:
     // "Aravis-Fake-GV01") or the camera's IPv4 address ("192.168.1.20"). Opening
     // by address reaches a GigE camera without discovery. Throws DeviceError if
     // the camera cannot be reached or lacks a feature the settings need, and
-    // fpp::InputError("camera settings", field, ...) for a value out of range.
+    // fpp::InputError("camera settings", field, ...) for a value out of range
+    // (exposure_us: outside the camera's ExposureTime bounds, named).
     AravisCamera(const std::string& device, const CameraSettings& settings);
     ~AravisCamera() override;
 
@@ -42,6 +43,8 @@ public:
     int bit_depth() const override;
     void start() override;
     void stop() override;
+    // The camera's ExposureTime (or ExposureTimeAbs) bounds, read when opened.
+    ExposureRange exposure_range_us() const override;
     void set_exposure_us(double exposure_us) override;
     void software_trigger() override;
     CapturedFrame next_frame(std::chrono::milliseconds timeout) override;

@@ -5,8 +5,11 @@
 // per pose and reused for every frame.
 //
 // Radiometry of a camera pixel seeing surface point P (DN at the sensor's bit depth):
-//   white_level * albedo * cos(incidence from the projector) * falloff
-//     * (projector light at P) + ambient * albedo,
+//   white_level * (albedo + s) * cos(incidence from the projector) * falloff
+//     * (projector light at P) + ambient * (albedo + ks),
+// s = SpecularLobe::relative_reflectance(n.h) of the object's lobe (0 without
+// one; point-sampled at the pixel centre: the footprint is not averaged),
+// ks its strength (uniform ambient light reflected by the lobe),
 // projector light = bilinear sample, at P's projector coordinate, of the
 // projector image mapped through (level/255)^gamma + black_level and blurred
 // by the projector defocus. Points in projector shadow, facing away from the
@@ -24,6 +27,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace fpp::sim {
@@ -40,6 +44,15 @@ class Renderer {
     // 2 channels: projector (x, y) lighting the point seen by each pixel centre,
     // NaN where no surface, in projector shadow or outside the projector image.
     const Image<float>& truth_projector() const { return truth_projector_; }
+    // 1 channel: the scene object (Scene index, Hit::object) seen by each
+    // pixel centre, lit or not; kNoObject where no surface.
+    const Image<std::int32_t>& truth_object() const { return truth_object_; }
+    static constexpr std::int32_t kNoObject = -1;
+    // Scene::object_name of `object`, "none" for kNoObject. Throws
+    // std::out_of_range for any other index outside the scene.
+    const std::string& object_name(std::int32_t object) const;
+    // Number of scene objects (indices 0 .. object_count() - 1).
+    std::size_t object_count() const { return object_names_.size(); }
 
     // One camera frame of the scene lit by `projector_image` (8-bit drive
     // levels at projector resolution). Noise is seeded by `noise_seed` so
@@ -73,8 +86,10 @@ class Renderer {
     std::shared_ptr<ThreadPool> pool_;
     Image<float> truth_xyz_;
     Image<float> truth_projector_;
+    Image<std::int32_t> truth_object_;
+    std::vector<std::string> object_names_;
     Image<float>
-        radiance_gain_;    // DN per unit projector light (albedo, shading, falloff); 0 if unlit
+        radiance_gain_;    // DN per unit projector light (reflectance, shading, falloff); 0 if unlit
     Image<float> ambient_; // DN of ambient light
     Image<float> albedo_;
     // Bilinear sample of the projector light per camera pixel: top-left

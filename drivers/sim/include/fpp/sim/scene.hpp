@@ -1,9 +1,11 @@
 #pragma once
 // Scenes for the virtual scanner, in the camera frame (mm).
 //
-// Every shape is an opaque diffuse (Lambertian) surface. Poses map a shape's
-// local frame to the camera frame: p_camera = centre + R p_local, with R from
-// Euler angles in degrees as R = Rz(c) Ry(b) Rx(a) (fpp/lens_model.hpp).
+// Every shape is an opaque surface: a diffuse (Lambertian) term of the
+// shape's albedo plus, optionally, a specular lobe (SpecularLobe) held by the
+// scene per object. Poses map a shape's local frame to the camera frame:
+// p_camera = centre + R p_local, with R from Euler angles in degrees as
+// R = Rz(c) Ry(b) Rx(a) (fpp/lens_model.hpp).
 
 #include "fpp/lens_model.hpp"
 
@@ -20,6 +22,31 @@ struct Hit {
     Vec3 normal{};     // unit, facing the ray origin
     double albedo = 1; // diffuse reflectance in [0, 1]
     int object = -1;
+};
+
+// Specular reflection added to a shape's diffuse term: a normalised
+// Blinn-Phong lobe. With l and v the unit directions from the surface point
+// to the projector centre and to the camera centre, h = (l + v) / |l + v| and
+// n the unit normal, the BRDF is
+//   f = albedo / pi + specular (shininess + 8) / (8 pi) max(0, n.h)^shininess
+// (sr^-1; the (n + 8) / (8 pi) factor keeps the lobe's reflected energy near
+// `specular` whatever its width). The renderer multiplies pi f by the same
+// projector light, incidence cosine and falloff as the diffuse term, so the
+// fringe phase stays that of the projector pixel lighting the point; only the
+// brightness changes (a highlight where n = h, many times the white level).
+struct SpecularLobe {
+    double specular = 0;  // ks in [0, 1]; albedo + ks <= 1; 0 = no lobe
+    double shininess = 0; // Blinn-Phong exponent in [1, 1e5] when specular > 0
+
+    bool active() const { return specular > 0; }
+    // pi f_specular for cos_h = n.h: specular (shininess + 8) / 8 cos_h^shininess,
+    // 0 for cos_h <= 0 or no lobe. Relative to a white Lambertian surface (pi f = 1).
+    double relative_reflectance(double cos_h) const;
+    // The exponent of a microfacet RMS slope (Beckmann roughness alpha):
+    // 2 / alpha^2 - 2 (Walter et al. 2007), e.g. alpha 0.14 -> ~100.
+    static double shininess_from_roughness(double roughness);
+    // Throws std::invalid_argument for values out of the ranges above.
+    void validate(double albedo) const;
 };
 
 class Shape {
@@ -181,38 +208,58 @@ class Relief : public Shape {
     double slope_bound_ = 0;       // upper bound of |grad h| over the rectangle
 };
 
+// Objects of a scene: shapes, numbered in the order added (Hit::object),
+// each with a name (labels for per-part figures: Renderer::truth_object) and a
+// specular lobe. Several objects may share a name (a part made of shapes).
 class Scene {
   public:
-    void add(std::unique_ptr<Shape> shape);
+    // Adds `shape` as object size(). An empty `name` becomes "object<i>".
+    // Throws std::invalid_argument for a null shape or an invalid lobe.
+    void add(std::unique_ptr<Shape> shape, std::string name = {},
+             const SpecularLobe& specular = {});
     bool intersect(const Vec3& o, const Vec3& d, Hit& hit) const;   // nearest
     bool occluded(const Vec3& o, const Vec3& d, double tmax) const; // any hit in (eps, tmax)
     std::size_t size() const { return shapes_.size(); }
     const Shape& shape(std::size_t i) const { return *shapes_[i]; }
+    const std::string& object_name(std::size_t i) const { return names_.at(i); }
+    const SpecularLobe& specular(std::size_t i) const { return specular_.at(i); }
 
     // Smallest ray parameter that counts as a hit (mm): rays start on surfaces.
     static constexpr double kEpsilon = 1e-7;
 
   private:
     std::vector<std::unique_ptr<Shape>> shapes_;
+    std::vector<std::string> names_;
+    std::vector<SpecularLobe> specular_;
 };
 
 // Two spheres of `radius` whose centres are `distance` mm apart, symmetric
-// about `centre` along unit `axis` (a ball bar without its rod).
+// about `centre` along unit `axis` (a ball bar without its rod), both named
+// `name` (see Scene::add) with lobe `specular`.
 void add_ball_bar(Scene& scene, const Vec3& centre, const Vec3& axis, double distance,
-                  double radius, double albedo);
+                  double radius, double albedo, const std::string& name = {},
+                  const SpecularLobe& specular = {});
 
 // A scene holding a single checkerboard at `pose` (calibration poses).
 Scene checkerboard_scene(const Pose& pose, const CheckerboardSpec& spec = {});
 
 // Built-in scenes: "plane", "inclined-plane", "checkerboard", "cylinder",
 // "sphere", "ball-bar", "relief", "composite" (default: relief and a sphere
-// over a background plane, with occlusions and projector shadows). All lie in
-// the paper's calibration volume (Z from 400 to 560 mm; planes at ~480 mm).
-// Throws std::invalid_argument for an unknown name.
+// over a background plane, with occlusions and projector shadows), and
+// "hdr-parts" (the same as board/sim/scenes/hdr-parts.yaml: objects
+// "background", a matte white plate at 540 mm; "white", a matte white sphere;
+// "dark", a rubber-like dome of albedo 0.03; "metal", a polished cylinder of
+// albedo 0.2 with a specular lobe whose highlight clips an 8-bit camera at
+// the exposure that puts the white part near 200 DN, and does not at 1/8 of
+// it). All lie in the paper's calibration volume (Z from 400 to 560 mm;
+// planes at ~480 mm). Throws std::invalid_argument for an unknown name.
 Scene named_scene(const std::string& name);
 std::vector<std::string> named_scene_names();
 // A scene from a YAML file (list of shapes); throws InputError. Schema: see
-// board/sim/scenes/composite.yaml.
+// board/sim/scenes/composite.yaml. Per shape, optional `name` (default
+// "object<i>") and either `albedo` or `material: {albedo, specular,
+// shininess | roughness}` (SpecularLobe; roughness alpha in [0.005, 0.8]
+// gives shininess 2 / alpha^2 - 2).
 Scene load_scene(const std::filesystem::path& path);
 // A name from named_scene_names() or a path to a YAML file.
 Scene scene_from_argument(const std::string& name_or_path);

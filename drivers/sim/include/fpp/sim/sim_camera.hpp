@@ -39,8 +39,8 @@ class SimCamera final : public drivers::Camera {
 public:
     // The renderer must outlive the camera. Settings: trigger mode, exposure
     // (time spent before the frame is read out; the rig's brightness is that
-    // of this first exposure, and scales with later ones) and frame timeout
-    // are used.
+    // of this first exposure, and scales with later ones; not checked against
+    // the range) and frame timeout are used.
     SimCamera(const Renderer& renderer, const Screen& screen, drivers::Clock& clock,
               const drivers::CameraSettings& settings, std::uint64_t noise_seed = 1);
 
@@ -48,11 +48,19 @@ public:
     int bit_depth() const override;
     void start() override;
     void stop() override;
+    // kDefaultExposureRange unless set_exposure_range_us() changed it.
+    drivers::ExposureRange exposure_range_us() const override { return exposure_range_; }
+    // InputError("sim camera settings", "exposure_us", ...) naming the range
+    // outside exposure_range_us(); DeviceError while streaming.
     void set_exposure_us(double exposure_us) override;
     void software_trigger() override;
     drivers::CapturedFrame next_frame(std::chrono::milliseconds timeout) override;
 
     // --- simulation side ---
+    // The exposure times of a typical machine-vision sensor, microseconds.
+    static constexpr drivers::ExposureRange kDefaultExposureRange{10.0, 1'000'000.0};
+    // Another sensor's range (0 < min_us <= max_us, finite; std::invalid_argument otherwise).
+    void set_exposure_range_us(drivers::ExposureRange range);
     // The trigger input (wired to SimTrigger); ignored while stopped or in
     // software trigger mode, as on a real camera.
     void line_trigger(std::int64_t t_ns);
@@ -76,6 +84,7 @@ private:
     const Screen& display_;
     drivers::Clock& clock_;
     drivers::CameraSettings settings_;
+    drivers::ExposureRange exposure_range_ = kDefaultExposureRange;
     double nominal_exposure_us_;
     std::uint64_t seed_;
     bool streaming_ = false;

@@ -13,9 +13,28 @@
 //   camera: {driver: sim | aravis, device: <id or address, "" = first>,
 //            pixel_format: Mono8 | Mono12 | Mono16, exposure_us: R,
 //            trigger: line | software, trigger_source: Line0,
-//            packet_size: N (0 = driver default), buffer_count: N, frame_timeout_ms: N}
+//            packet_size: N (0 = driver default), buffer_count: N, frame_timeout_ms: N,
+//            noise: {read_noise_dn: R, gain_e_per_dn: R, sensor_bit_depth: N}}
+//                                      noise optional: the camera's measured read noise
+//                                      and gain (photon transfer), DN at the sensor's
+//                                      depth; with it every point gets sigma_z
 //   sequence: <standard sequence name> | [capture-set spec blocks]
 //   table: <path.fpt>                  optional: without it only capture mode works
+//   projector_response: <path>         optional: the measured projector response
+//                                      (fpp-projector-response/1); the patterns are
+//                                      rendered through its inverse
+//   hdr: {exposures_us: [R, ...]}      optional: one pass of the sequence per exposure,
+//                                      fused per pixel; or
+//   hdr: {auto: {max_saturated: F, passes: N, ratio: R, longest_us: R (optional)}}
+//                                      exposures chosen from white previews before
+//                                      each scan: the longest exposure (from longest_us,
+//                                      default camera.exposure_us * R^(N-1), down by
+//                                      factors of R) saturating at most F of the lit
+//                                      pixels, then shorter ones (each R times less)
+//                                      while the previous one saturates any, at most
+//                                      N passes
+//   points: {max_sigma_z_mm: R}        optional: points whose predicted depth sigma
+//                                      exceeds R are dropped (needs camera.noise)
 //   store: {directory: <path>, max_mb: N}   oldest scans pruned beyond N MiB
 //   timing: {settle_us: N, trigger_pulse_us: N, flip_timeout_ms: N}
 //   http: {listen: ADDRESS:PORT, token_file: <path>, max_connections: N (default 64),
@@ -44,9 +63,11 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <fpp/drivers/camera.hpp>
 #include <fpp/pattern_block.hpp>
+#include <fpp/phase_noise.hpp>
 
 namespace fpp::scanner {
 
@@ -75,6 +96,22 @@ struct CameraConfig {
     CameraDriver driver = CameraDriver::sim;
     std::string device; // Aravis id or IP address; "" = first found
     drivers::CameraSettings settings;
+    std::optional<CameraNoise> noise; // measured; without it points get no sigma_z
+};
+
+// High dynamic range: the sequence captured once per exposure and fused per
+// pixel (fpp/exposure_fusion.hpp).
+struct HdrConfig {
+    std::vector<double> exposures_us; // fixed passes, in capture order; empty with automatic
+    bool automatic = false;
+    double max_saturated = 0.01; // automatic: fraction of lit pixels the longest may saturate
+    int passes = 3;              // automatic: at most this many
+    double ratio = 4;            // automatic: each shorter exposure is this many times less
+    std::optional<double> longest_us; // automatic: where the search starts
+};
+
+struct PointFilterConfig {
+    std::optional<double> max_sigma_z_mm; // points with a larger predicted sigma_z are dropped
 };
 
 struct StoreConfig {
@@ -124,6 +161,9 @@ struct BoardConfig {
     std::string sequence_name; // standard sequence, or "" when blocks are given
     Sequence sequence_blocks;  // when given as blocks
     std::optional<std::filesystem::path> table;
+    std::optional<std::filesystem::path> projector_response;
+    std::optional<HdrConfig> hdr;
+    PointFilterConfig points;
     StoreConfig store;
     TimingConfig timing;
     std::optional<SimConfig> sim; // a simulated board (always with camera.driver sim)

@@ -20,7 +20,11 @@
 #include <fpp/drivers/clock.hpp>
 #include <fpp/drivers/display.hpp>
 #include <fpp/drivers/gpio.hpp>
+#include <fpp/exposure_fusion.hpp>
+#include <fpp/patterns.hpp>
+#include <fpp/phase_noise.hpp>
 #include <fpp/point_cloud.hpp>
+#include <fpp/projector_response.hpp>
 #include <fpp/scanner/board_config.hpp>
 #include <fpp/scanner/log.hpp>
 
@@ -53,7 +57,8 @@ struct ScanTimings {
     double capture_ms = 0;   // first show() to last frame received (scan clock)
     double push_mean_ms = 0; // streaming decoder work per frame (wall clock)
     double push_max_ms = 0;
-    double finish_ms = 0; // last decode step
+    double finish_ms = 0; // last decode step (every pass's, HDR)
+    double fuse_ms = 0;   // HDR: exposure fusion
     double apply_ms = 0;  // table kernel
     double write_ms = 0;  // outputs on disk (fsynced)
     double last_frame_to_written_ms = 0;
@@ -64,6 +69,10 @@ struct ScanOutcome {
     std::size_t points = 0;
     int frames = 0;
     int attempts = 1;
+    std::vector<double> exposures_us; // one pass of the sequence per exposure, in capture order
+    std::optional<FusionStats> fusion; // HDR scans
+    bool has_sigma = false;            // points carry sigma_z (the board gives camera.noise)
+    std::size_t dropped_by_sigma = 0;  // points over points.max_sigma_z_mm
     ScanTimings timings;
 };
 
@@ -82,11 +91,15 @@ public:
 class Scanner {
 public:
     // Loads and checks the table (InputError naming the file: missing,
-    // corrupt, or for another camera or projector), renders the patterns and
-    // gives them to the display. The devices must outlive the scanner.
+    // corrupt, or for another camera or projector) and the projector
+    // response, checks the HDR exposures against the camera's range
+    // (InputError naming hdr.exposures_us[i] and the range), renders the
+    // patterns (through the response's inverse when there is one) and gives
+    // them to the display. The devices must outlive the scanner.
     Scanner(const BoardConfig& board, Devices devices, const Logger& log);
 
-    // One scan. `stop`, when given and set, aborts between frames
+    // One scan: the sequence once, or once per exposure with hdr (fused per
+    // pixel). `stop`, when given and set, aborts between frames
     // (ScanAborted). A camera fault (DeviceError from the camera) fails the
     // attempt and the scan is tried once more. On failure the LED shows
     // error, nothing is left in the store, and the exception propagates.
@@ -98,6 +111,15 @@ public:
     // One frame with the projector all white (placing a board, setting the
     // exposure). Throws DeviceError.
     Frame preview();
+    // The same at another exposure (the camera's own is restored after).
+    Frame preview_at(double exposure_us);
+
+    // The projector's response measured as calibration needs it: one frame
+    // per uniform grey level of standard_ramp_levels() (fpp/projector_response.hpp),
+    // drive levels as they are, not through the response's inverse. The
+    // display holds the ramp's patterns meanwhile and the scan's again after.
+    // Throws DeviceError.
+    ResponseRamp capture_ramp();
 
     // Replaces the table used from the next scan on (loaded and checked as
     // in the constructor: InputError naming the file for a bad one, and the
@@ -107,7 +129,16 @@ public:
     void set_observer(ScanObserver* observer) { observer_ = observer; }
 
 
+    // Frames of one pass of the sequence (an HDR scan takes one pass per exposure).
     int frames_per_scan() const { return static_cast<int>(patterns_); }
+    // Frames a scan takes: one pass per fixed HDR exposure, at most hdr.passes
+    // with automatic exposures (the previews not counted).
+    int planned_frames() const {
+        const int passes = !board_.hdr                ? 1
+                           : board_.hdr->automatic ? board_.hdr->passes
+                                                   : static_cast<int>(board_.hdr->exposures_us.size());
+        return static_cast<int>(patterns_) * passes;
+    }
     const Sequence& sequence() const { return sequence_; }
     bool has_table() const { return !table_.empty(); }
     const CoefficientTable& table() const { return table_; }
@@ -119,6 +150,19 @@ private:
     struct Captured;
     ScanOutcome attempt(ScanMode mode, const std::atomic<bool>* stop,
                         const std::filesystem::path& folder);
+    // The pass exposures of the next scan ({} without hdr: the camera's own).
+    std::vector<double> scan_exposures();
+    void capture_pass(int pass, int passes, ScanMode mode, const std::atomic<bool>* stop,
+                      Captured& captured, ScanOutcome& outcome, double& push_total);
+    // The decoded coordinate and its predicted sigma for the table: the one
+    // pass, or the passes fused.
+    DecodeResult& combine_passes(ScanOutcome& outcome);
+    PhaseNoiseModel noise_model() const;
+    // The sequence's patterns (through the response's inverse when the board
+    // has one) and a white one after them, onto the display.
+    void prepare_patterns();
+    // Flip to each prepared pattern in turn and take a frame of it.
+    std::vector<Frame> grab_prepared(std::size_t count);
     CoefficientTable load_checked_table(const std::filesystem::path& path) const;
     void write_outputs(const std::filesystem::path& temp, ScanMode mode, Captured& captured,
                        DecodeResult& decoded, ScanOutcome& outcome);
@@ -127,6 +171,7 @@ private:
     Devices dev_;
     const Logger& log_;
     Sequence sequence_;
+    std::optional<GammaLut> response_lut_;
     std::size_t patterns_ = 0; // the sequence's; the display also holds a white one after them
     ScanObserver* observer_ = nullptr;
     CoefficientTable table_;
@@ -135,7 +180,9 @@ private:
     // Memory reused scan after scan: a fresh decoder, result or cloud costs
     // page faults on every scan (tens of ms at 1600x1200).
     std::optional<StreamingDecoder> decoder_;
-    DecodeResult recycled_;
+    std::vector<ExposurePass> passes_; // one per exposure of the last scan
+    DecodeResult fused_;               // HDR
+    Image<float> sigma_;               // predicted coordinate sigma (projector px)
     PointCloud cloud_;
     std::atomic<int> scans_completed_{0};
 };

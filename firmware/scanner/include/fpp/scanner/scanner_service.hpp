@@ -52,6 +52,9 @@ public:
     // Starts a scan (into `session`'s folder when not empty): its id.
     std::string start_scan(ScanMode mode, const std::string& session = {});
     Preview preview();
+    // Captures the projector response ramp into `session`'s folder as
+    // response/ (replacing an earlier one): {"levels": [...], "frames": N}.
+    nlohmann::json record_response(const std::string& session);
     double exposure_us() const;
     double set_exposure_us(double exposure_us);
     // Checks the uploaded file, installs it at the table path (the previous

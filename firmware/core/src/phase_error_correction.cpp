@@ -1,0 +1,665 @@
+// Data-only phase-error correction: histograms of the folded phase (decoded
+// and smooth stand-in), their Fourier moments, checks, and a lookup-table pass
+// over the coordinates.
+
+#include "fpp/phase_error_correction.hpp"
+
+#include "fpp/decoder.hpp"
+#include "fpp/parallel.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+namespace fpp {
+
+namespace {
+
+// Histogram bins over a sub-period. A pixel's moment is taken at its bin's
+// centre: relative error below (pi k / kBins)^2 / 6, 1e-5 for k = 16.
+constexpr int kBins = 4096;
+// Points of the correction's lookup table over a sub-period (linear
+// interpolation error about c'' / (8 kTable^2): below 1e-5 sub-periods).
+constexpr int kTable = 1024;
+// A sub-period counts as covered with this many pixels.
+constexpr std::uint64_t kPixelsPerSubPeriod = 4;
+// Sub-period index range the estimate tracks (a decode spans a few hundred).
+constexpr double kMaxSubPeriodRange = 1 << 20;
+constexpr int kMaxHarmonics = 32;
+// The stand-in's box: half-width about one sub-period in camera pixels
+// (width about two sub-periods), within these bounds.
+constexpr int kMinBoxRadius = 1;
+constexpr int kMaxBoxRadius = 32;
+// A pixel whose stand-in differs from its once-corrected coordinate by more
+// than this (sub-periods) sits at a depth edge or a crease: left out.
+constexpr double kMaxStandInGap = 0.25;
+// Leakage beyond which a harmonic's sampling bias counts as unseen (its
+// inverse amplifies the stand-in's sampling noise).
+constexpr double kMaxLeakage = 0.75;
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+void check_block(const PhaseBlock& finest) {
+    if (finest.steps < 3)
+        throw std::invalid_argument("phase error correction: the finest phase block has " +
+                                    std::to_string(finest.steps) + " steps (needs >= 3)");
+    if (!(std::isfinite(finest.period) && finest.period > 0))
+        throw std::invalid_argument("phase error correction: the finest phase block's period "
+                                    "must be positive and finite");
+}
+
+// Fold of p in sub-periods (not reduced): N (p / period + offset / (2 pi)).
+struct Fold {
+    double scale = 0; // N / period
+    double shift = 0; // N offset / (2 pi)
+    explicit Fold(const PhaseBlock& b)
+        : scale(b.steps / b.period), shift(b.steps * b.phase_offset / kTwoPi) {}
+    double operator()(double p) const { return scale * p + shift; }
+};
+
+int bin_of(double t) {
+    return std::min(kBins - 1, static_cast<int>((t - std::floor(t)) * kBins));
+}
+
+// c(u) in sub-periods from its sine and (unless null) cosine coefficients.
+double series_at(const std::vector<double>& sine, const std::vector<double>* cosine, double u) {
+    double c = 0;
+    for (std::size_t k = 1; k <= sine.size(); ++k) {
+        const double angle = kTwoPi * static_cast<double>(k) * u;
+        c += sine[k - 1] * std::sin(angle);
+        if (cosine != nullptr)
+            c += (*cosine)[k - 1] * std::cos(angle);
+    }
+    return c;
+}
+
+// The correction (period / N) c(u) in projector pixels by table lookup; the
+// last entry repeats the first (c is periodic: no seam at u = 0 / 1).
+class CorrectionTable {
+public:
+    CorrectionTable(const std::vector<double>& sine, const std::vector<double>* cosine, double unit)
+        : table_(kTable + 1) {
+        for (int i = 0; i < kTable; ++i)
+            table_[static_cast<std::size_t>(i)] =
+                unit * series_at(sine, cosine, static_cast<double>(i) / kTable);
+        table_[kTable] = table_[0];
+    }
+    // At fold t (sub-periods, any real).
+    double operator()(double t) const {
+        const double at = (t - std::floor(t)) * kTable;
+        const int i = std::min(kTable - 1, static_cast<int>(at));
+        const auto k = static_cast<std::size_t>(i);
+        return table_[k] + (at - i) * (table_[k + 1] - table_[k]);
+    }
+
+private:
+    std::vector<double> table_;
+};
+
+template <class F> void for_rows(ThreadPool* pool, int rows, int grain, F&& fn) {
+    if (pool != nullptr)
+        pool->parallel_for(rows, grain, fn);
+    else
+        fn(0, rows, 0);
+}
+
+int workers_of(const ThreadPool* pool) {
+    return pool != nullptr ? pool->size() : 1;
+}
+
+int row_grain(int rows, const ThreadPool* pool) {
+    return std::max(1, rows / (8 * workers_of(pool)));
+}
+
+bool usable(float p, std::uint8_t m) {
+    return (m & kDecodeValid) != 0 && std::isfinite(p);
+}
+
+// Per-worker integer histograms, summed in a fixed order (the result does
+// not depend on how rows were shared out).
+struct Histograms {
+    std::vector<std::vector<std::uint32_t>> per_worker;
+    Histograms(int workers, std::size_t bins)
+        : per_worker(static_cast<std::size_t>(workers), std::vector<std::uint32_t>(bins, 0)) {}
+    std::uint32_t* of(int worker) { return per_worker[static_cast<std::size_t>(worker)].data(); }
+    std::vector<std::uint64_t> total() const {
+        std::vector<std::uint64_t> sum(per_worker.front().size(), 0);
+        for (const auto& h : per_worker)
+            for (std::size_t i = 0; i < sum.size(); ++i)
+                sum[i] += h[i];
+        return sum;
+    }
+};
+
+// E[cos 2 pi k u] and -E[sin 2 pi k u], each over pi k: the sine and cosine
+// coefficients of F - u for the folds in `counts`.
+void moments(const std::vector<std::uint64_t>& counts, std::size_t harmonics,
+             std::vector<double>& sine, std::vector<double>& cosine) {
+    sine.assign(harmonics, 0.0);
+    cosine.assign(harmonics, 0.0);
+    std::uint64_t total = 0;
+    for (const std::uint64_t c : counts)
+        total += c;
+    if (total == 0)
+        return;
+    for (int j = 0; j < kBins; ++j) {
+        const std::uint64_t c = counts[static_cast<std::size_t>(j)];
+        if (c == 0)
+            continue;
+        const double w = static_cast<double>(c) / static_cast<double>(total);
+        const double u = (j + 0.5) / kBins;
+        for (std::size_t k = 1; k <= harmonics; ++k) {
+            const double angle = kTwoPi * static_cast<double>(k) * u;
+            sine[k - 1] += w * std::cos(angle);
+            cosine[k - 1] -= w * std::sin(angle);
+        }
+    }
+    for (std::size_t k = 1; k <= harmonics; ++k) {
+        sine[k - 1] /= std::numbers::pi * static_cast<double>(k);
+        cosine[k - 1] /= std::numbers::pi * static_cast<double>(k);
+    }
+}
+
+// Smallest and largest fold over the usable pixels (NaN if none).
+std::pair<double, double> fold_range(const Image<float>& proj, const Image<std::uint8_t>& mask,
+                                     const Fold& fold, ThreadPool* pool) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    std::vector<std::pair<double, double>> range(static_cast<std::size_t>(workers_of(pool)),
+                                                 {inf, -inf});
+    for_rows(pool, proj.height(), row_grain(proj.height(), pool), [&](int y0, int y1, int w) {
+        auto& r = range[static_cast<std::size_t>(w)];
+        for (int y = y0; y < y1; ++y) {
+            const float* p = proj.row(y);
+            const std::uint8_t* m = mask.row(y);
+            for (int x = 0; x < proj.width(); ++x) {
+                if (!usable(p[x], m[x]))
+                    continue;
+                const double t = fold(p[x]);
+                r.first = std::min(r.first, t);
+                r.second = std::max(r.second, t);
+            }
+        }
+    });
+    std::pair<double, double> all{inf, -inf};
+    for (const auto& r : range) {
+        all.first = std::min(all.first, r.first);
+        all.second = std::max(all.second, r.second);
+    }
+    if (all.first > all.second)
+        return {std::nan(""), std::nan("")};
+    return all;
+}
+
+// Pass 1: histogram of the decoded fold over every usable pixel, and the
+// pixel count of each sub-period (index floor(t) - first).
+struct FirstPass {
+    std::vector<std::uint64_t> fold_counts;
+    std::size_t pixels = 0;
+    int sub_periods = 0;
+};
+
+FirstPass first_pass(const Image<float>& proj, const Image<std::uint8_t>& mask, const Fold& fold,
+                     double first, std::size_t range, ThreadPool* pool) {
+    const int workers = workers_of(pool);
+    Histograms hist(workers, kBins);
+    Histograms per_sub(workers, range);
+    for_rows(pool, proj.height(), row_grain(proj.height(), pool), [&](int y0, int y1, int w) {
+        std::uint32_t* h = hist.of(w);
+        std::uint32_t* sub = per_sub.of(w);
+        for (int y = y0; y < y1; ++y) {
+            const float* p = proj.row(y);
+            const std::uint8_t* m = mask.row(y);
+            for (int x = 0; x < proj.width(); ++x) {
+                if (!usable(p[x], m[x]))
+                    continue;
+                const double t = fold(p[x]);
+                ++h[bin_of(t)];
+                ++sub[static_cast<std::size_t>(std::floor(t) - first)];
+            }
+        }
+    });
+    FirstPass r;
+    r.fold_counts = hist.total();
+    for (const std::uint64_t n : per_sub.total()) {
+        r.pixels += n;
+        r.sub_periods += n >= kPixelsPerSubPeriod ? 1 : 0;
+    }
+    return r;
+}
+
+// Half-width of the stand-in's box: about one sub-period in camera pixels,
+// from the median gradient of p (projector pixels per camera pixel) on a
+// sparse grid of pixels whose four neighbours are usable.
+int box_radius(const Image<float>& proj, const Image<std::uint8_t>& mask, double sub_period) {
+    std::vector<double> gradients;
+    const int w = proj.width(), h = proj.height();
+    gradients.reserve(static_cast<std::size_t>((w / 4 + 1) * (h / 4 + 1)));
+    for (int y = 1; y + 1 < h; y += 4)
+        for (int x = 1; x + 1 < w; x += 4) {
+            const bool all = usable(proj.at(x, y), mask.at(x, y)) &&
+                             usable(proj.at(x - 1, y), mask.at(x - 1, y)) &&
+                             usable(proj.at(x + 1, y), mask.at(x + 1, y)) &&
+                             usable(proj.at(x, y - 1), mask.at(x, y - 1)) &&
+                             usable(proj.at(x, y + 1), mask.at(x, y + 1));
+            if (!all)
+                continue;
+            const double gx = 0.5 * (double(proj.at(x + 1, y)) - double(proj.at(x - 1, y)));
+            const double gy = 0.5 * (double(proj.at(x, y + 1)) - double(proj.at(x, y - 1)));
+            gradients.push_back(std::hypot(gx, gy));
+        }
+    if (gradients.empty())
+        return kMinBoxRadius;
+    const auto mid = gradients.begin() + static_cast<std::ptrdiff_t>(gradients.size() / 2);
+    std::nth_element(gradients.begin(), mid, gradients.end());
+    if (!(*mid > 0))
+        return kMaxBoxRadius;
+    const double radius = std::round(sub_period / *mid);
+    return static_cast<int>(std::clamp(radius, double(kMinBoxRadius), double(kMaxBoxRadius)));
+}
+
+// Leakage of a periodic component into the box mean: the mean of
+// exp(2 pi i f d) over d = -R..R (f in cycles per pixel) is the real
+// D(f) = sin(pi S f) / (S sin(pi f)), S = 2 R + 1, by table over f mod 1.
+class BoxLeakage {
+public:
+    explicit BoxLeakage(int radius) : table_(kEntries + 1) {
+        const double side = 2 * radius + 1;
+        for (int i = 0; i <= kEntries; ++i) {
+            const double f = static_cast<double>(i) / kEntries;
+            const double den = side * std::sin(std::numbers::pi * f);
+            table_[static_cast<std::size_t>(i)] =
+                std::abs(den) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * side * f) / den;
+        }
+    }
+    double operator()(double f) const {
+        const double at = (f - std::floor(f)) * kEntries;
+        const int i = std::min(kEntries - 1, static_cast<int>(at));
+        const auto k = static_cast<std::size_t>(i);
+        return table_[k] + (at - i) * (table_[k + 1] - table_[k]);
+    }
+
+private:
+    static constexpr int kEntries = 8192; // >= 64 points per lobe for S <= 65
+    std::vector<double> table_;
+};
+
+// Pass 2: at every usable pixel whose (2 radius + 1)^2 box is at least half
+// usable, the stand-in is the value at the pixel of the least-squares plane
+// through the box's once-corrected coordinates (exact for a linear p however
+// the box is cut; for a whole box, its mean). Over the pixels whose stand-in
+// agrees with their own once-corrected coordinate: histograms of the
+// decoded fold and of the stand-in's fold, and the mean leakage, per
+// harmonic, of a periodic error into the stand-in (from the plane's slope:
+// the fold's step per pixel along x and y). The box sums slide down each
+// band of rows (per column: count, sum y, y^2, p, y p) and along each row.
+struct SecondPass {
+    std::vector<std::uint64_t> decoded_counts;
+    std::vector<std::uint64_t> stand_in_counts;
+    std::vector<double> leakage; // per harmonic, mean over the pixels used
+    std::size_t pixels = 0;
+};
+
+// Column sums of one column over the rows of the box.
+struct ColumnSums {
+    double n = 0, y = 0, yy = 0, p = 0, yp = 0;
+};
+
+SecondPass second_pass(const Image<float>& proj, const Image<std::uint8_t>& mask, const Fold& fold,
+                       const CorrectionTable& first_correction, int radius, double sub_period,
+                       std::size_t harmonics, ThreadPool* pool) {
+    const int w = proj.width(), h = proj.height();
+    const int workers = workers_of(pool);
+    Histograms decoded(workers, kBins);
+    Histograms stand_in(workers, kBins);
+    const int side = 2 * radius + 1;
+    const double min_count = 0.5 * side * side;
+    const double max_gap = kMaxStandInGap * sub_period;
+    const BoxLeakage leak(radius);
+    // Fixed bands (not one per worker), each with its own leakage sums added
+    // in band order: the result does not depend on the number of workers.
+    const int band = std::max(64, 4 * side);
+    const int bands = (h + band - 1) / band;
+    std::vector<double> leak_sums(static_cast<std::size_t>(bands) * harmonics, 0.0);
+    std::vector<std::size_t> used(static_cast<std::size_t>(bands), 0);
+    std::vector<std::size_t> sampled(static_cast<std::size_t>(bands), 0);
+    // The once-corrected coordinates (NaN where unusable), looked up once.
+    Image<float> corrected(w, h);
+    for_rows(pool, h, row_grain(h, pool), [&](int r0, int r1, int) {
+        for (int y = r0; y < r1; ++y) {
+            const float* p = proj.row(y);
+            const std::uint8_t* m = mask.row(y);
+            float* out = corrected.row(y);
+            for (int x = 0; x < w; ++x)
+                out[x] = usable(p[x], m[x])
+                             ? static_cast<float>(double(p[x]) + first_correction(fold(p[x])))
+                             : std::numeric_limits<float>::quiet_NaN();
+        }
+    });
+    for_rows(pool, bands, 1, [&](int b0, int b1, int worker) {
+        std::vector<ColumnSums> cols(static_cast<std::size_t>(w));
+        std::uint32_t* hd = decoded.of(worker);
+        std::uint32_t* hs = stand_in.of(worker);
+        auto add_row = [&](int y, double sign) {
+            if (y < 0 || y >= h)
+                return;
+            const float* row = corrected.row(y);
+            const double yd = y;
+            for (int x = 0; x < w; ++x) {
+                if (std::isnan(row[x]))
+                    continue;
+                const double p1 = row[x];
+                ColumnSums& c = cols[static_cast<std::size_t>(x)];
+                c.n += sign;
+                c.y += sign * yd;
+                c.yy += sign * yd * yd;
+                c.p += sign * p1;
+                c.yp += sign * yd * p1;
+            }
+        };
+        for (int b = b0; b < b1; ++b) {
+            const int y0 = b * band, y1 = std::min(h, y0 + band);
+            double* leak_sum = leak_sums.data() + static_cast<std::size_t>(b) * harmonics;
+            std::fill(cols.begin(), cols.end(), ColumnSums{});
+            for (int y = y0 - radius; y < y0 + radius; ++y)
+                add_row(y, 1);
+            for (int y = y0; y < y1; ++y) {
+                add_row(y + radius, 1);
+                const float* p = proj.row(y);
+                const std::uint8_t* m = mask.row(y);
+                // Box sums in absolute coordinates X, Y.
+                double n = 0, sx = 0, sxx = 0, sy = 0, syy = 0, sxy = 0, sp = 0, sxp = 0, syp = 0;
+                auto slide = [&](int x, double sign) {
+                    if (x < 0 || x >= w)
+                        return;
+                    const ColumnSums& c = cols[static_cast<std::size_t>(x)];
+                    const double xd = x;
+                    n += sign * c.n;
+                    sx += sign * xd * c.n;
+                    sxx += sign * xd * xd * c.n;
+                    sy += sign * c.y;
+                    syy += sign * c.yy;
+                    sxy += sign * xd * c.y;
+                    sp += sign * c.p;
+                    sxp += sign * xd * c.p;
+                    syp += sign * c.yp;
+                };
+                for (int x = -radius; x < radius; ++x)
+                    slide(x, 1);
+                for (int x = 0; x < w; ++x) {
+                    slide(x + radius, 1);
+                    if (n >= min_count && usable(p[x], m[x])) {
+                        // Centred on the pixel: p ~ a + gx dx + gy dy.
+                        const double xd = x, yd = y;
+                        const double cx = sx - n * xd, cy = sy - n * yd;
+                        const double cxx = sxx - 2 * xd * sx + n * xd * xd;
+                        const double cyy = syy - 2 * yd * sy + n * yd * yd;
+                        const double cxy = sxy - xd * sy - yd * sx + n * xd * yd;
+                        const double cxp = sxp - xd * sp, cyp = syp - yd * sp;
+                        // Cramer's rule on the 3 x 3 normal equations.
+                        const double m00 = cxx * cyy - cxy * cxy;
+                        const double det =
+                            n * m00 - cx * (cx * cyy - cxy * cy) + cy * (cx * cxy - cxx * cy);
+                        if (det > 1e-9 * n * m00 && m00 > 0) {
+                            const double a = (sp * m00 - cx * (cxp * cyy - cxy * cyp) +
+                                              cy * (cxp * cxy - cxx * cyp)) /
+                                             det;
+                            const double gx =
+                                (n * (cxp * cyy - cxy * cyp) - sp * (cx * cyy - cxy * cy) +
+                                 cy * (cx * cyp - cxp * cy)) /
+                                det;
+                            const double gy =
+                                (n * (cxx * cyp - cxp * cxy) - cx * (cx * cyp - cxp * cy) +
+                                 sp * (cx * cxy - cxx * cy)) /
+                                det;
+                            const double p1 = corrected.row(y)[x];
+                            if (std::abs(a - p1) <= max_gap) {
+                                ++hd[bin_of(fold(p[x]))];
+                                ++hs[bin_of(fold(a))];
+                                ++used[static_cast<std::size_t>(b)];
+                                // The leakage is smooth over the image: a
+                                // pixel in 16 is enough for its mean.
+                                if ((x & 3) == 0 && (y & 3) == 0) {
+                                    ++sampled[static_cast<std::size_t>(b)];
+                                    const double step_x = fold.scale * gx;
+                                    const double step_y = fold.scale * gy;
+                                    for (std::size_t k = 1; k <= harmonics; ++k) {
+                                        const auto kk = static_cast<double>(k);
+                                        leak_sum[k - 1] += leak(kk * step_x) * leak(kk * step_y);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    slide(x - radius, -1);
+                }
+                add_row(y - radius, -1);
+            }
+        }
+    });
+    SecondPass r;
+    r.decoded_counts = decoded.total();
+    r.stand_in_counts = stand_in.total();
+    r.leakage.assign(harmonics, 0.0);
+    std::size_t samples = 0;
+    for (int b = 0; b < bands; ++b) {
+        r.pixels += used[static_cast<std::size_t>(b)];
+        samples += sampled[static_cast<std::size_t>(b)];
+        for (std::size_t k = 0; k < harmonics; ++k)
+            r.leakage[k] += leak_sums[static_cast<std::size_t>(b) * harmonics + k];
+    }
+    for (double& l : r.leakage)
+        l = samples > 0 ? l / static_cast<double>(samples) : 0.0;
+    return r;
+}
+
+const std::vector<double>* applied_cosine(const PhaseErrorSummary& s) {
+    return s.odd_only ? nullptr : &s.cosine;
+}
+
+// RMS, peak and slope of the correction applied, and the RMS of the cosine part.
+void fill_statistics(PhaseErrorSummary& s) {
+    const double unit = s.period / s.steps; // projector pixels per sub-period
+    double applied2 = 0, cosine2 = 0;
+    for (const double b : s.sine)
+        applied2 += b * b;
+    for (const double a : s.cosine)
+        cosine2 += a * a;
+    if (!s.odd_only)
+        applied2 += cosine2;
+    s.rms_px = unit * std::sqrt(0.5 * applied2);
+    s.asymmetry_px = unit * std::sqrt(0.5 * cosine2);
+    const std::vector<double>* cosine = applied_cosine(s);
+    double peak = 0, slope = std::numeric_limits<double>::infinity();
+    constexpr double h = 1.0 / kTable;
+    double previous = series_at(s.sine, cosine, 0.0);
+    for (int i = 1; i <= kTable; ++i) {
+        const double c = series_at(s.sine, cosine, i * h);
+        peak = std::max(peak, std::abs(c));
+        slope = std::min(slope, 1.0 + (c - previous) / h);
+        previous = c;
+    }
+    s.peak_px = unit * peak;
+    s.min_slope = slope;
+}
+
+std::string fixed(double v, int digits) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+    return buf;
+}
+
+void judge(PhaseErrorSummary& s, const PhaseErrorOptions& o) {
+    const double unit = s.period / s.steps;
+    s.applied = false;
+    if (s.pixels < o.min_pixels) {
+        s.reason = "too few valid pixels" +
+                   std::string(s.box_radius > 0 ? " with a wholly valid neighbourhood" : "") +
+                   " (" + std::to_string(s.pixels) + " < " + std::to_string(o.min_pixels) + ")";
+    } else if (s.sub_periods < o.min_sub_periods) {
+        s.reason = "too few sub-periods covered (" + std::to_string(s.sub_periods) + " < " +
+                   std::to_string(o.min_sub_periods) + ")";
+    } else if (s.aliasing_px > std::max(o.max_bias_ratio * s.rms_px, o.bias_floor * unit)) {
+        s.reason = "the camera's pixel grid aliases the fringes: a sampling bias of about " +
+                   fixed(s.aliasing_px, 4) + " px RMS cannot be told from the error (" +
+                   fixed(s.rms_px, 4) + " px of correction)";
+    } else if (s.min_slope < o.min_slope) {
+        s.reason = "the fitted correction would fold the phase (min slope " +
+                   fixed(s.min_slope, 3) + " < " + fixed(o.min_slope, 3) +
+                   "): the scene does not sample the phase uniformly";
+    } else if (s.odd_only &&
+               s.asymmetry_px > std::max(o.max_bias_ratio * s.rms_px, o.bias_floor * unit)) {
+        s.reason = "the phase distribution is not symmetric (even part " +
+                   fixed(s.asymmetry_px, 4) + " px RMS against " + fixed(s.rms_px, 4) +
+                   " px of correction): the scene does not sample the phase uniformly";
+    } else {
+        s.applied = true;
+        s.reason.clear();
+    }
+}
+
+} // namespace
+
+void PhaseErrorOptions::validate() const {
+    auto reject = [](const char* field, const std::string& rule, double value) {
+        throw std::invalid_argument(std::string("PhaseErrorOptions::") + field + " must be " +
+                                    rule + ", got " + std::to_string(value));
+    };
+    if (harmonics < 1 || harmonics > kMaxHarmonics)
+        reject("harmonics", "in [1, " + std::to_string(kMaxHarmonics) + "]", harmonics);
+    if (min_pixels < 1)
+        reject("min_pixels", ">= 1", static_cast<double>(min_pixels));
+    if (min_sub_periods < 1)
+        reject("min_sub_periods", ">= 1", min_sub_periods);
+    if (!(std::isfinite(min_slope) && min_slope > 0 && min_slope < 1))
+        reject("min_slope", "in (0, 1)", min_slope);
+    if (!(std::isfinite(max_bias_ratio) && max_bias_ratio > 0))
+        reject("max_bias_ratio", "positive", max_bias_ratio);
+    if (!(std::isfinite(bias_floor) && bias_floor >= 0 && bias_floor < 0.5))
+        reject("bias_floor", "in [0, 0.5)", bias_floor);
+}
+
+double phase_error_fold(const PhaseBlock& finest, double p) {
+    const double t = Fold(finest)(p);
+    const double u = t - std::floor(t);
+    return u < 1.0 ? u : 0.0;
+}
+
+double phase_error_correction_at(const PhaseErrorSummary& summary, double u) {
+    return series_at(summary.sine, applied_cosine(summary), u);
+}
+
+PhaseErrorSummary estimate_phase_error(const Image<float>& proj, const Image<std::uint8_t>& mask,
+                                       const PhaseBlock& finest, const PhaseErrorOptions& options,
+                                       ThreadPool* pool) {
+    options.validate();
+    check_block(finest);
+    if (proj.size() != mask.size() || proj.channels() != 1 || mask.channels() != 1)
+        throw std::invalid_argument("phase error correction: coordinate and mask images must be "
+                                    "one-channel and of the same size");
+    PhaseErrorSummary s;
+    s.attempted = true;
+    s.steps = finest.steps;
+    s.period = finest.period;
+    s.odd_only = options.odd_only;
+    const double unit = finest.period / finest.steps;
+    const auto harmonics = static_cast<std::size_t>(options.harmonics);
+    const Fold fold(finest);
+    const auto [lo, hi] = fold_range(proj, mask, fold, pool);
+    if (std::isnan(lo)) {
+        s.reason = "no valid pixels";
+        return s;
+    }
+    if (hi - lo >= kMaxSubPeriodRange) {
+        s.reason = "the coordinates span too many sub-periods (" + fixed(hi - lo, 0) + ")";
+        return s;
+    }
+    const double first = std::floor(lo);
+    const auto range = static_cast<std::size_t>(std::floor(hi) - first) + 1;
+    const FirstPass one = first_pass(proj, mask, fold, first, range, pool);
+    moments(one.fold_counts, harmonics, s.sine, s.cosine);
+    s.pixels = one.pixels;
+    s.sub_periods = one.sub_periods;
+    if (options.debias_sampling && s.pixels >= options.min_pixels &&
+        s.sub_periods >= options.min_sub_periods) {
+        s.box_radius = box_radius(proj, mask, unit);
+        // The first estimate's sine part only: the stand-in then carries no
+        // cosine error, so the cosine part of the sampling bias is seen whole.
+        const SecondPass two = second_pass(proj, mask, fold, CorrectionTable(s.sine, nullptr, unit),
+                                           s.box_radius, unit, harmonics, pool);
+        std::vector<double> sine_d, cosine_d, sine_s, cosine_s;
+        moments(two.decoded_counts, harmonics, sine_d, cosine_d);
+        moments(two.stand_in_counts, harmonics, sine_s, cosine_s);
+        // The stand-in carries the first estimate's error (the sine part of
+        // the sampling bias) in proportion to the leakage r: it sees
+        // (1 - r) of that part, and all of the cosine part.
+        double bias2 = 0, hidden2 = 0;
+        for (std::size_t k = 0; k < harmonics; ++k) {
+            const double r = two.leakage[k];
+            // Beyond kMaxLeakage the grid aliases harmonic k: most of the
+            // sine part of its bias is not seen (and dividing by 1 - r would
+            // amplify noise); the cosine part, always seen, tells its likely size.
+            const bool aliased = r > kMaxLeakage;
+            const double sine_bias = aliased ? sine_s[k] : sine_s[k] / (1.0 - r);
+            s.sine[k] = sine_d[k] - sine_bias;
+            s.cosine[k] = cosine_d[k] - cosine_s[k];
+            bias2 += sine_bias * sine_bias + cosine_s[k] * cosine_s[k];
+            if (aliased)
+                hidden2 += cosine_s[k] * cosine_s[k];
+        }
+        s.leakage = two.leakage;
+        s.sampling_bias_px = unit * std::sqrt(0.5 * bias2);
+        s.aliasing_px = unit * std::sqrt(0.5 * hidden2);
+        s.pixels = two.pixels;
+    }
+    fill_statistics(s);
+    judge(s, options);
+    return s;
+}
+
+void apply_phase_error_correction(Image<float>& proj, const PhaseBlock& finest,
+                                  const PhaseErrorSummary& summary, ThreadPool* pool) {
+    if (!summary.applied || proj.empty())
+        return;
+    check_block(finest);
+    const CorrectionTable correction(summary.sine, applied_cosine(summary),
+                                     finest.period / finest.steps);
+    const Fold fold(finest);
+    for_rows(pool, proj.height(), row_grain(proj.height(), pool), [&](int y0, int y1, int) {
+        for (int y = y0; y < y1; ++y) {
+            float* p = proj.row(y);
+            for (int x = 0; x < proj.width(); ++x) {
+                if (!std::isfinite(p[x]))
+                    continue;
+                const double v = p[x];
+                p[x] = static_cast<float>(v + correction(fold(v)));
+            }
+        }
+    });
+}
+
+PhaseErrorSummary correct_phase_error(Image<float>& proj, const Image<std::uint8_t>& mask,
+                                      const PhaseBlock& finest, const PhaseErrorOptions& options,
+                                      ThreadPool* pool) {
+    PhaseErrorSummary s = estimate_phase_error(proj, mask, finest, options, pool);
+    apply_phase_error_correction(proj, finest, s, pool);
+    return s;
+}
+
+std::string describe(const PhaseErrorSummary& s) {
+    if (!s.attempted)
+        return "off";
+    std::string where = "N = " + std::to_string(s.steps) + ", period " + fixed(s.period, 2) +
+                        " px; " + std::to_string(s.pixels) + " pixels over " +
+                        std::to_string(s.sub_periods) + " sub-periods";
+    if (s.box_radius > 0)
+        where += ", stand-in box " + std::to_string(2 * s.box_radius + 1) + " px";
+    if (s.applied)
+        return "applied: " + fixed(s.rms_px, 4) + " px RMS, " + fixed(s.peak_px, 4) + " px peak (" +
+               where + ")";
+    return "not applied: " + s.reason + " (" + where + ")";
+}
+
+} // namespace fpp
