@@ -263,4 +263,3 @@ TEST(ScannerHdr, BadHdrAndPointsFieldsAreRefusedNamingThem) {
     refused("", ",\n         noise: {read_noise_dn: 1, gain_e_per_dn: 40, sensor_bit_depth: 20}",
             "camera.noise.sensor_bit_depth");
 }
-
