@@ -75,7 +75,7 @@ cleanup() {
 }
 trap cleanup EXIT
 trap 'exit 130' INT TERM
-rm -rf "$out/scans" "$out/fpp-scanner" "$out/stop" "$out/browser"
+rm -rf "$out/scans" "$out/fpp-scanner" "$out/stop" "$out/browser" "$out/console.log" "$out/forwards"
 mkdir -p "$out"
 
 # --- The table, calibrated here from a session the scanner records ---------
