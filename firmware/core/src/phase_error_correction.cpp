@@ -76,28 +76,33 @@ double series_at(const std::vector<double>& sine, const std::vector<double>* cos
     return c;
 }
 
-// The correction (period / N) c(u) in projector pixels by table lookup; the
-// last entry repeats the first (c is periodic: no seam at u = 0 / 1).
-class CorrectionTable {
+// A periodic function of period 1 sampled at `entries` points, read by
+// linear interpolation at any real argument; the last entry repeats the
+// first, so there is no seam at 0 / 1.
+class PeriodicTable {
 public:
-    CorrectionTable(const std::vector<double>& sine, const std::vector<double>* cosine, double unit)
-        : table_(kTable + 1) {
-        for (int i = 0; i < kTable; ++i)
-            table_[static_cast<std::size_t>(i)] =
-                unit * series_at(sine, cosine, static_cast<double>(i) / kTable);
-        table_[kTable] = table_[0];
+    template <class F> PeriodicTable(int entries, F&& f) : entries_(entries), table_(entries + 1) {
+        for (int i = 0; i < entries; ++i)
+            table_[static_cast<std::size_t>(i)] = f(static_cast<double>(i) / entries);
+        table_[static_cast<std::size_t>(entries)] = table_[0];
     }
-    // At fold t (sub-periods, any real).
     double operator()(double t) const {
-        const double at = (t - std::floor(t)) * kTable;
-        const int i = std::min(kTable - 1, static_cast<int>(at));
+        const double at = (t - std::floor(t)) * entries_;
+        const int i = std::min(entries_ - 1, static_cast<int>(at));
         const auto k = static_cast<std::size_t>(i);
         return table_[k] + (at - i) * (table_[k + 1] - table_[k]);
     }
 
 private:
+    int entries_;
     std::vector<double> table_;
 };
+
+// The correction (period / N) c(u) in projector pixels at fold u.
+PeriodicTable correction_table(const std::vector<double>& sine, const std::vector<double>* cosine,
+                               double unit) {
+    return PeriodicTable(kTable, [&](double u) { return unit * series_at(sine, cosine, u); });
+}
 
 template <class F> void for_rows(ThreadPool* pool, int rows, int grain, F&& fn) {
     if (pool != nullptr)
@@ -262,29 +267,15 @@ int box_radius(const Image<float>& proj, const Image<std::uint8_t>& mask, double
 
 // Leakage of a periodic component into the box mean: the mean of
 // exp(2 pi i f d) over d = -R..R (f in cycles per pixel) is the real
-// D(f) = sin(pi S f) / (S sin(pi f)), S = 2 R + 1, by table over f mod 1.
-class BoxLeakage {
-public:
-    explicit BoxLeakage(int radius) : table_(kEntries + 1) {
-        const double side = 2 * radius + 1;
-        for (int i = 0; i <= kEntries; ++i) {
-            const double f = static_cast<double>(i) / kEntries;
-            const double den = side * std::sin(std::numbers::pi * f);
-            table_[static_cast<std::size_t>(i)] =
-                std::abs(den) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * side * f) / den;
-        }
-    }
-    double operator()(double f) const {
-        const double at = (f - std::floor(f)) * kEntries;
-        const int i = std::min(kEntries - 1, static_cast<int>(at));
-        const auto k = static_cast<std::size_t>(i);
-        return table_[k] + (at - i) * (table_[k + 1] - table_[k]);
-    }
-
-private:
-    static constexpr int kEntries = 8192; // >= 64 points per lobe for S <= 65
-    std::vector<double> table_;
-};
+// D(f) = sin(pi S f) / (S sin(pi f)), S = 2 R + 1, by table over f mod 1
+// (8192 entries: >= 64 points per lobe for S <= 65).
+PeriodicTable box_leakage(int radius) {
+    const double side = 2 * radius + 1;
+    return PeriodicTable(8192, [side](double f) {
+        const double den = side * std::sin(std::numbers::pi * f);
+        return std::abs(den) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * side * f) / den;
+    });
+}
 
 // Pass 2: at every usable pixel whose (2 radius + 1)^2 box is at least half
 // usable, the stand-in is the value at the pixel of the least-squares plane
@@ -308,7 +299,7 @@ struct ColumnSums {
 };
 
 SecondPass second_pass(const Image<float>& proj, const Image<std::uint8_t>& mask, const Fold& fold,
-                       const CorrectionTable& first_correction, int radius, double sub_period,
+                       const PeriodicTable& first_correction, int radius, double sub_period,
                        std::size_t harmonics, ThreadPool* pool) {
     const int w = proj.width(), h = proj.height();
     const int workers = workers_of(pool);
@@ -317,7 +308,7 @@ SecondPass second_pass(const Image<float>& proj, const Image<std::uint8_t>& mask
     const int side = 2 * radius + 1;
     const double min_count = 0.5 * side * side;
     const double max_gap = kMaxStandInGap * sub_period;
-    const BoxLeakage leak(radius);
+    const PeriodicTable leak = box_leakage(radius);
     // Fixed bands (not one per worker), each with its own leakage sums added
     // in band order: the result does not depend on the number of workers.
     const int band = std::max(64, 4 * side);
@@ -587,7 +578,7 @@ PhaseErrorSummary estimate_phase_error(const Image<float>& proj, const Image<std
         s.box_radius = box_radius(proj, mask, unit);
         // The first estimate's sine part only: the stand-in then carries no
         // cosine error, so the cosine part of the sampling bias is seen whole.
-        const SecondPass two = second_pass(proj, mask, fold, CorrectionTable(s.sine, nullptr, unit),
+        const SecondPass two = second_pass(proj, mask, fold, correction_table(s.sine, nullptr, unit),
                                            s.box_radius, unit, harmonics, pool);
         std::vector<double> sine_d, cosine_d, sine_s, cosine_s;
         moments(two.decoded_counts, harmonics, sine_d, cosine_d);
@@ -624,8 +615,8 @@ void apply_phase_error_correction(Image<float>& proj, const PhaseBlock& finest,
     if (!summary.applied || proj.empty())
         return;
     check_block(finest);
-    const CorrectionTable correction(summary.sine, applied_cosine(summary),
-                                     finest.period / finest.steps);
+    const PeriodicTable correction =
+        correction_table(summary.sine, applied_cosine(summary), finest.period / finest.steps);
     const Fold fold(finest);
     for_rows(pool, proj.height(), row_grain(proj.height(), pool), [&](int y0, int y1, int) {
         for (int y = y0; y < y1; ++y) {

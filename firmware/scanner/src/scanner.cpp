@@ -85,12 +85,12 @@ void Scanner::prepare_patterns() {
     dev_.display.prepare(patterns);
 }
 
-std::vector<Frame> Scanner::grab_prepared(std::size_t count) {
+std::vector<Frame> Scanner::grab_prepared(std::size_t first, std::size_t count) {
     const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
     std::vector<Frame> frames;
     dev_.camera.start();
     try {
-        for (std::size_t i = 0; i < count; ++i) {
+        for (std::size_t i = first; i < first + count; ++i) {
             dev_.display.show(i);
             const drivers::FlipEvent flip = dev_.display.wait_flip(board_.timing.flip_timeout);
             dev_.clock.sleep_until_ns(
@@ -121,7 +121,7 @@ ResponseRamp Scanner::capture_ramp() {
     dev_.display.prepare(patterns);
     patterns.clear();
     try {
-        ramp.frames = grab_prepared(ramp.levels.size());
+        ramp.frames = grab_prepared(0, ramp.levels.size());
     } catch (...) {
         prepare_patterns();
         throw;
@@ -170,25 +170,7 @@ Frame Scanner::preview_at(double exposure_us) {
 }
 
 Frame Scanner::preview() {
-    const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
-    dev_.camera.start();
-    try {
-        dev_.display.show(patterns_); // the white pattern after the sequence's
-        const drivers::FlipEvent flip = dev_.display.wait_flip(board_.timing.flip_timeout);
-        dev_.clock.sleep_until_ns(
-            flip.timestamp_ns +
-            std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count());
-        if (software)
-            dev_.camera.software_trigger();
-        else
-            dev_.trigger.pulse(board_.timing.trigger_pulse);
-        Frame frame = dev_.camera.next_frame(board_.camera.settings.frame_timeout).frame;
-        dev_.camera.stop();
-        return frame;
-    } catch (...) {
-        dev_.camera.stop();
-        throw;
-    }
+    return std::move(grab_prepared(patterns_, 1).front()); // the white pattern after the sequence's
 }
 
 ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop, fs::path folder) {

@@ -161,8 +161,9 @@ private:
     // The sequence's patterns (through the response's inverse when the board
     // has one) and a white one after them, onto the display.
     void prepare_patterns();
-    // Flip to each prepared pattern in turn and take a frame of it.
-    std::vector<Frame> grab_prepared(std::size_t count);
+    // Flip to prepared patterns first .. first + count - 1 in turn and take
+    // a frame of each (the camera started and stopped around them).
+    std::vector<Frame> grab_prepared(std::size_t first, std::size_t count);
     CoefficientTable load_checked_table(const std::filesystem::path& path) const;
     void write_outputs(const std::filesystem::path& temp, ScanMode mode, Captured& captured,
                        DecodeResult& decoded, ScanOutcome& outcome);
