@@ -1,21 +1,38 @@
 #!/usr/bin/env bash
-# Installs every build and test dependency of fpp from Debian 12 packages:
-#   1. the native build: firmware, host tool, tests and benchmarks;
-#   2. the cross build for the scanner's target, AArch64 (Debian arm64):
-#      the cross compiler, qemu-user to run the arm64 tests, and the arm64
-#      packages of the firmware (preset aarch64). Skipped with --native-only.
+# Installs fpp's dependencies from Debian 12 packages, by profile: each of the
+# README's commands installs only what it runs.
+#   main   the main job: build the firmware, the virtual scanner and the host
+#          tool (preset release: no tests, no benchmarks)
+#   tests  main, plus what the tests and benchmarks need (presets ci, asan,
+#          fuzz): GoogleTest, Google Benchmark, OpenCV's contrib modules, a
+#          browser and WebDriver, the point-cloud viewers, Aravis's fake
+#          camera, clang 14 and its libFuzzer
+#   cross  the cross build for the scanner's target, AArch64 (Debian arm64):
+#          the cross compiler, qemu-user to run the arm64 tests, and the arm64
+#          packages of the firmware (preset aarch64)
+#   vm     the virtual ARM board (tests/vm): qemu-system-aarch64 and the
+#          guest's Debian packages, fetched into a cache now
+#   all    every profile (the default with no argument)
 # Non-interactive and idempotent: packages already present are left alone.
-# Usage: toolchain/install-deps.sh [--native-only]
+# Usage: toolchain/install-deps.sh [PROFILE...]   (--native-only = main tests)
 set -euo pipefail
 
-native_only=0
-case "${1:-}" in
-  "") ;;
-  --native-only) native_only=1 ;;
-  *) echo "usage: $0 [--native-only]" >&2; exit 2 ;;
-esac
+want_main=0 want_tests=0 want_cross=0 want_vm=0
+usage() { echo "usage: $0 [main|tests|cross|vm|all|--native-only]..." >&2; exit 2; }
+[ $# -eq 0 ] && set -- all
+for profile in "$@"; do
+  case "$profile" in
+    main) want_main=1 ;;
+    tests) want_main=1 want_tests=1 ;;
+    cross) want_cross=1 ;;
+    vm) want_vm=1 ;;
+    all) want_main=1 want_tests=1 want_cross=1 want_vm=1 ;;
+    --native-only) want_main=1 want_tests=1 ;;
+    *) usage ;;
+  esac
+done
 
-packages=(
+main_packages=(
   # build
   cmake g++ ninja-build pkg-config
   # core and virtual scanner
@@ -23,20 +40,29 @@ packages=(
   # host tool
   libopencv-dev libeigen3-dev libcli11-dev
   # device drivers: Aravis 0.8 (its pkg-config file requires libusb-1.0),
-  # libdrm (KMS display), libgpiod 1.6 (trigger, button, LED); aravis-tools and
-  # gpiod give the fake GigE camera and the command-line GPIO tools
-  libaravis-dev aravis-tools libusb-1.0-0-dev libdrm-dev libgpiod-dev gpiod
+  # libdrm (KMS display), libgpiod 1.6 (trigger, button, LED)
+  libaravis-dev libusb-1.0-0-dev libdrm-dev libgpiod-dev
   # the scanner's HTTP API and page: libmicrohttpd, nlohmann-json, libarchive
   # (tar downloads), three.js for the page's viewer; libcurl: fpp-calib's
   # client of that API
   libmicrohttpd-dev nlohmann-json3-dev libarchive-dev libjs-three libcurl4-openssl-dev
+)
+test_packages=(
   # tests and benchmarks (OpenCV's structured_light module is the speed baseline)
   libgtest-dev libgmock-dev libbenchmark-dev libopencv-contrib-dev
+  # Aravis's fake GigE camera and the command-line GPIO tools
+  aravis-tools gpiod
   # the scanner's page in a real browser, driven through WebDriver
   chromium chromium-driver python3-selenium
   # PLY interoperability tests: the viewers' own readers, headless
   # (MeshLab's meshlabserver needs an X server for its OpenGL context)
   python3-open3d cloudcompare meshlab xvfb xauth
+  # the fuzz preset (tests/fuzz): clang 14 with libFuzzer and the sanitizers'
+  # runtimes (Debian ships them in libclang-rt-14-dev, not with clang)
+  clang-14 libclang-rt-14-dev
+  # packet loss on the GigE link in a test's network namespace
+  # (iptables-legacy's statistic match)
+  iptables
 )
 
 # --- Cross build for AArch64 (toolchain/aarch64-linux-gnu.cmake) -------------
@@ -99,72 +125,88 @@ ensure_installed() {
   fi
 }
 
-ensure_installed packages "${packages[@]}"
-
-[ "$native_only" -eq 1 ] && exit 0
-
-# Cross packages (after the native ones: an arm64 package and its amd64
-# twin then come from the same index).
-if ! dpkg --print-foreign-architectures | grep -qx "$cross_arch"; then
-  echo "install-deps: adding the $cross_arch architecture"
-  as_root dpkg --add-architecture "$cross_arch"
-  updated=0 # the index must now be read for arm64 too
-fi
-ensure_installed "$cross_arch cross-build packages" "${cross_packages[@]}"
-
-# libyaml-cpp-dev:arm64 unpacked beside the system (see cross_extra_prefix),
-# the same version as the installed arm64 library; redone when that changes.
-yaml_version="$(dpkg-query -W -f='${Version}' libyaml-cpp0.7:arm64)"
-stamp="$cross_extra_prefix/libyaml-cpp-dev.version"
-if [ "$(cat "$stamp" 2>/dev/null)" = "$yaml_version" ]; then
-  echo "install-deps: libyaml-cpp-dev:$cross_arch $yaml_version unpacked in $cross_extra_prefix"
-else
-  echo "install-deps: unpacking libyaml-cpp-dev:$cross_arch $yaml_version into $cross_extra_prefix"
-  [ "$updated" -eq 1 ] || { as_root apt-get update -q; updated=1; }
-  download="$(mktemp -d)"
-  trap 'rm -rf "$download"' EXIT
-  chmod 755 "$download"
-  # apt downloads as its own user _apt when run as root
-  if [ "$(id -u)" -eq 0 ] && id -u _apt > /dev/null 2>&1; then chown _apt "$download"; fi
-  (cd "$download" && apt-get download -q "libyaml-cpp-dev:$cross_arch=$yaml_version")
-  as_root rm -rf "$cross_extra_prefix"
-  as_root mkdir -p "$cross_extra_prefix"
-  as_root dpkg-deb -x "$download"/libyaml-cpp-dev_*_"$cross_arch".deb "$cross_extra_prefix"
-  # The package's CMake file points at the shared library beside it, which
-  # the installed libyaml-cpp0.7:arm64 provides in the system folder.
-  libdir="$cross_extra_prefix/usr/lib/aarch64-linux-gnu"
-  shared="$(readlink -f /usr/lib/aarch64-linux-gnu/libyaml-cpp.so.0.7)"
-  as_root ln -sf "$shared" "$libdir/$(basename "$shared")"
-  as_root ln -sf "$(basename "$shared")" "$libdir/libyaml-cpp.so.0.7"
-  echo "$yaml_version" | as_root tee "$stamp" > /dev/null
-fi
-
-# The arm64 programs that tests start themselves (fpp-scanner through
-# /bin/sh, fork/exec) run on this machine only if the kernel hands arm64 ELF
-# files to qemu: register qemu-user-static's binfmt_misc entry, as
-# systemd-binfmt does at boot on a Debian system (not inside a container).
-# Its "F" flag opens qemu now, so that it also works in other mount namespaces.
-binfmt=/proc/sys/fs/binfmt_misc
-register_qemu_binfmt() {
-  mountpoint -q "$binfmt" || as_root mount -t binfmt_misc binfmt_misc "$binfmt" || return 1
-  if [ -e "$binfmt/qemu-aarch64" ]; then # registered but disabled
-    echo 1 | as_root tee "$binfmt/qemu-aarch64" > /dev/null
-  else
-    as_root tee "$binfmt/register" < /usr/lib/binfmt.d/qemu-aarch64.conf > /dev/null
+# The arm64 architecture, for the cross build's packages and the VM's guest
+# packages (after the native ones: an arm64 package and its amd64 twin then
+# come from the same index).
+arch_added=0
+add_cross_architecture() {
+  if ! dpkg --print-foreign-architectures | grep -qx "$cross_arch"; then
+    echo "install-deps: adding the $cross_arch architecture"
+    as_root dpkg --add-architecture "$cross_arch"
+    updated=0 # the index must now be read for arm64 too
+    arch_added=1
   fi
 }
-if [ "$(head -n 1 "$binfmt/qemu-aarch64" 2>/dev/null)" = enabled ]; then
-  echo "install-deps: qemu-aarch64 registered with binfmt_misc"
-elif register_qemu_binfmt; then
-  echo "install-deps: registered qemu-aarch64 with binfmt_misc"
-else
-  echo "install-deps: warning: cannot register qemu-aarch64 with binfmt_misc: the aarch64" \
-       "tests that start programs (fpp-scanner) will fail" >&2
-fi
+
+install_cross() {
+  add_cross_architecture
+  ensure_installed "$cross_arch cross-build packages" "${cross_packages[@]}"
+
+  # libyaml-cpp-dev:arm64 unpacked beside the system (see cross_extra_prefix),
+  # the same version as the installed arm64 library; redone when that changes.
+  yaml_version="$(dpkg-query -W -f='${Version}' libyaml-cpp0.7:arm64)"
+  stamp="$cross_extra_prefix/libyaml-cpp-dev.version"
+  if [ "$(cat "$stamp" 2>/dev/null)" = "$yaml_version" ]; then
+    echo "install-deps: libyaml-cpp-dev:$cross_arch $yaml_version unpacked in $cross_extra_prefix"
+  else
+    echo "install-deps: unpacking libyaml-cpp-dev:$cross_arch $yaml_version into $cross_extra_prefix"
+    [ "$updated" -eq 1 ] || { as_root apt-get update -q; updated=1; }
+    download="$(mktemp -d)"
+    trap 'rm -rf "$download"' EXIT
+    chmod 755 "$download"
+    # apt downloads as its own user _apt when run as root
+    if [ "$(id -u)" -eq 0 ] && id -u _apt > /dev/null 2>&1; then chown _apt "$download"; fi
+    (cd "$download" && apt-get download -q "libyaml-cpp-dev:$cross_arch=$yaml_version")
+    as_root rm -rf "$cross_extra_prefix"
+    as_root mkdir -p "$cross_extra_prefix"
+    as_root dpkg-deb -x "$download"/libyaml-cpp-dev_*_"$cross_arch".deb "$cross_extra_prefix"
+    # The package's CMake file points at the shared library beside it, which
+    # the installed libyaml-cpp0.7:arm64 provides in the system folder.
+    libdir="$cross_extra_prefix/usr/lib/aarch64-linux-gnu"
+    shared="$(readlink -f /usr/lib/aarch64-linux-gnu/libyaml-cpp.so.0.7)"
+    as_root ln -sf "$shared" "$libdir/$(basename "$shared")"
+    as_root ln -sf "$(basename "$shared")" "$libdir/libyaml-cpp.so.0.7"
+    echo "$yaml_version" | as_root tee "$stamp" > /dev/null
+  fi
+
+  # The arm64 programs that tests start themselves (fpp-scanner through
+  # /bin/sh, fork/exec) run on this machine only if the kernel hands arm64 ELF
+  # files to qemu: register qemu-user-static's binfmt_misc entry, as
+  # systemd-binfmt does at boot on a Debian system (not inside a container).
+  # Its "F" flag opens qemu now, so that it also works in other mount namespaces.
+  binfmt=/proc/sys/fs/binfmt_misc
+  register_qemu_binfmt() {
+    mountpoint -q "$binfmt" || as_root mount -t binfmt_misc binfmt_misc "$binfmt" || return 1
+    if [ -e "$binfmt/qemu-aarch64" ]; then # registered but disabled
+      echo 1 | as_root tee "$binfmt/qemu-aarch64" > /dev/null
+    else
+      as_root tee "$binfmt/register" < /usr/lib/binfmt.d/qemu-aarch64.conf > /dev/null
+    fi
+  }
+  if [ "$(head -n 1 "$binfmt/qemu-aarch64" 2>/dev/null)" = enabled ]; then
+    echo "install-deps: qemu-aarch64 registered with binfmt_misc"
+  elif register_qemu_binfmt; then
+    echo "install-deps: registered qemu-aarch64 with binfmt_misc"
+  else
+    echo "install-deps: warning: cannot register qemu-aarch64 with binfmt_misc: the aarch64" \
+         "tests that start programs (fpp-scanner) will fail" >&2
+  fi
+}
 
 # --- The virtual ARM board (toolchain/vm, tests/vm) --------------------------
 # qemu-system-aarch64 and cpio from packages; the arm64 kernel, busybox and
 # the guest's tools are downloaded as Debian packages into a cache now, by
 # toolchain/vm/fetch-deps.sh (idempotent), so that no test downloads.
-ensure_installed "virtual ARM board packages" qemu-system-arm cpio
-as_root "$(dirname "$0")/vm/fetch-deps.sh"
+install_vm() {
+  add_cross_architecture
+  ensure_installed "virtual ARM board packages" qemu-system-arm cpio
+  # fetch-deps.sh reads the arm64 package index
+  if [ "$arch_added" -eq 1 ] && [ "$updated" -eq 0 ]; then as_root apt-get update -q; updated=1; fi
+  as_root "$(dirname "$0")/vm/fetch-deps.sh"
+}
+
+[ "$want_main" -eq 1 ] && ensure_installed "main-job packages" "${main_packages[@]}"
+[ "$want_tests" -eq 1 ] && ensure_installed "test packages" "${test_packages[@]}"
+[ "$want_cross" -eq 1 ] && install_cross
+[ "$want_vm" -eq 1 ] && install_vm
+exit 0

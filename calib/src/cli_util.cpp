@@ -1,9 +1,13 @@
 #include "cli_util.hpp"
 
 #include "fpp/capture_set.hpp"
+#include "fpp/image_io.hpp"
 #include "fpp/sequences.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <sstream>
 
 namespace fpp::calib {
 
@@ -16,6 +20,36 @@ std::string seconds_text(double seconds) {
     char text[32];
     std::snprintf(text, sizeof text, "%.1f s", seconds);
     return text;
+}
+
+// RMS and maximum 3D error against a simulated capture's truth (pixels with
+// both a point and a true surface).
+std::string truth_comparison(const PointCloud& cloud, const CaptureSet& capture) {
+    if (!capture.manifest.truth || capture.manifest.truth->xyz.empty())
+        return {};
+    const Image<float> truth = read_tiff_float(capture.folder / capture.manifest.truth->xyz);
+    if (truth.size() != cloud.size() || truth.channels() != 3)
+        return {};
+    double sum = 0, worst = 0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < truth.pixel_count(); ++i) {
+        const float* a = cloud.xyz.data() + 3 * i;
+        const float* b = truth.data() + 3 * i;
+        if (!std::isfinite(a[2]) || !std::isfinite(b[2]))
+            continue;
+        const double d = std::sqrt(double(a[0] - b[0]) * double(a[0] - b[0]) +
+                                   double(a[1] - b[1]) * double(a[1] - b[1]) +
+                                   double(a[2] - b[2]) * double(a[2] - b[2]));
+        sum += d * d;
+        worst = std::max(worst, d);
+        ++n;
+    }
+    if (n == 0)
+        return {};
+    std::ostringstream s;
+    s << "error against ground truth: RMS " << std::sqrt(sum / double(n)) << " mm, max " << worst
+      << " mm over " << n << " points\n";
+    return s.str();
 }
 
 } // namespace fpp::calib

@@ -1,4 +1,9 @@
 // fpp-calib decode CAPTURE --out DIR [--correct-phase-error]
+//
+// Exit status: 0 decoded; 2 bad input (named file and field); 3 the decode
+// failed (nearly nothing decoded, or the capture's description is evidently
+// wrong: fpp/decode_diagnosis.hpp); the outputs and decode.md are written
+// all the same, so the user can look; 1 other errors.
 
 #include "cli_util.hpp"
 #include "commands.hpp"
@@ -6,10 +11,14 @@
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"
+#include "fpp/decode_diagnosis.hpp"
+#include "fpp/decode_report.hpp"
 #include "fpp/decoder.hpp"
+#include "fpp/error.hpp"
 
 #include <iostream>
 #include <memory>
+#include <stdexcept>
 
 namespace fpp::calib {
 
@@ -21,17 +30,31 @@ struct DecodeArgs {
 };
 
 int run_decode(const DecodeArgs& args) {
-    args.options.validate();
+    check_decode_options(args.options);
     std::cerr << "reading " << args.capture << "\n";
     const CaptureSet capture = read_capture_set(args.capture); // validates before anything is written
     Stopwatch watch;
-    const DecodeResult result = decode(capture, args.options);
+    DecodeResult result;
+    try {
+        result = decode(capture, args.options);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(capture.folder / "capture.yaml", "sequence", e.what());
+    }
     const double seconds = watch.seconds();
+    const DecodeStatistics stats = decode_statistics(result, frames_full_scale(capture));
+    const DecodeDiagnosis diagnosis = diagnose_decode(capture, result, stats, args.options);
     const std::filesystem::path out = args.out;
     write_decode_images(out, result, capture.manifest);
-    const std::string summary = decode_summary(result, capture, seconds);
+    const std::string summary = decode_summary(result, capture, stats, diagnosis, seconds);
     write_file_atomically(out / "decode.md", summary);
     std::cout << summary << "\noutputs in " << out.string() << "\n";
+    if (diagnosis.failed) {
+        std::cerr << "fpp-calib: error: " << capture.folder.string() << ": " << diagnosis.message
+                  << "\n(the outputs and decode.md are written for inspection)\n";
+        return kExitDecodeFailed;
+    }
+    if (!diagnosis.message.empty())
+        std::cerr << "fpp-calib: warning: " << diagnosis.message << "\n";
     return 0;
 }
 } // namespace
@@ -41,7 +64,10 @@ Action add_decode_command(CLI::App& app) {
     auto* cmd = app.add_subcommand(
         "decode", "Decode a capture set (ours, simulated or third-party) into projector "
                   "coordinate maps: proj_x.tiff, proj_y.tiff, modulation.tiff, mask.png, "
-                  "flags.png, false-colour PNGs and decode.md");
+                  "flags.png, false-colour PNGs and decode.md (coverage of the lit pixels, "
+                  "counts per reason a pixel was dropped). Exits 3, after writing them, when "
+                  "nearly nothing decoded or the capture's description is evidently wrong, "
+                  "with the likely cause");
     cmd->add_option("capture", args->capture, "capture set folder (holding capture.yaml)")
         ->required()
         ->check(CLI::ExistingDirectory);

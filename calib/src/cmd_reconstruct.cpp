@@ -8,12 +8,14 @@
 // vertical fringes: the projector column only); optionally with the decoded
 // projector coordinates smoothed first (edge-preserving,
 // fpp/coordinate_filter.hpp). Outputs (written only when everything
-// succeeded):
+// succeeded, never an empty cloud):
 //   cloud.ply  binary little-endian PLY of the valid points (fpp/point_cloud.hpp)
 //   xyz.tiff   optional: 3-channel float32 X, Y, Z per camera pixel, mm, NaN = none
 
 #include "cli_util.hpp"
+#include "cmd_reconstruct_pair.hpp"
 #include "commands.hpp"
+#include "decode_outputs.hpp"
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
@@ -21,6 +23,8 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/coordinate_filter.hpp"
+#include "fpp/decode_diagnosis.hpp"
+#include "fpp/decode_report.hpp"
 #include "fpp/decoder.hpp"
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"
@@ -54,6 +58,7 @@ struct ReconstructArgs {
     std::string projector_size; // "WxH"
     DecodeOptions decode;
     CoordinateFilterOptions smooth; // radius set to 0 (off) unless --smooth
+    std::string second_capture, pair_calibration; // two cameras: cmd_reconstruct_pair.cpp
 };
 
 // "1280x1024" -> Size; throws InputError naming the option.
@@ -159,38 +164,14 @@ CloudSummary summarise(const PointCloud& cloud) {
     return s;
 }
 
-// RMS and maximum 3D error against a simulated capture's truth (pixels with
-// both a point and a true surface).
-std::string truth_comparison(const PointCloud& cloud, const CaptureSet& capture) {
-    if (!capture.manifest.truth || capture.manifest.truth->xyz.empty())
-        return {};
-    const Image<float> truth = read_tiff_float(capture.folder / capture.manifest.truth->xyz);
-    if (truth.size() != cloud.size() || truth.channels() != 3)
-        return {};
-    double sum = 0, worst = 0;
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < truth.pixel_count(); ++i) {
-        const float* a = cloud.xyz.data() + 3 * i;
-        const float* b = truth.data() + 3 * i;
-        if (!std::isfinite(a[2]) || !std::isfinite(b[2]))
-            continue;
-        const double d = std::sqrt(double(a[0] - b[0]) * double(a[0] - b[0]) +
-                                   double(a[1] - b[1]) * double(a[1] - b[1]) +
-                                   double(a[2] - b[2]) * double(a[2] - b[2]));
-        sum += d * d;
-        worst = std::max(worst, d);
-        ++n;
-    }
-    if (n == 0)
-        return {};
-    std::ostringstream s;
-    s << "error against ground truth: RMS " << std::sqrt(sum / double(n)) << " mm, max " << worst
-      << " mm over " << n << " points\n";
-    return s.str();
-}
 
 int run_reconstruct(const ReconstructArgs& args) {
-    args.decode.validate();
+    check_decode_options(args.decode);
+    if (!args.second_capture.empty() || !args.pair_calibration.empty())
+        return run_reconstruct_pair(
+            {args.capture, args.second_capture,
+             args.pair_calibration.empty() ? args.calib : args.pair_calibration, args.table,
+             args.out, args.xyz, args.axes, args.decode});
     CoordinateFilterOptions smooth = args.smooth;
     smooth.threads = args.decode.threads;
     try {
@@ -259,6 +240,16 @@ int run_reconstruct(const ReconstructArgs& args) {
         throw InputError(manifest_path, "sequence", e.what());
     }
     const double decode_seconds = decode_watch.seconds();
+    // A failed decode gives no cloud: the likely cause instead (fpp/decode_diagnosis.hpp).
+    const DecodeStatistics decode_stats = decode_statistics(decoded, frames_full_scale(capture));
+    const DecodeDiagnosis diagnosis = diagnose_decode(capture, decoded, decode_stats, args.decode);
+    if (diagnosis.failed) {
+        std::cerr << "fpp-calib: error: " << capture.folder.string() << ": " << diagnosis.message
+                  << "\nno point cloud written\n";
+        return kExitDecodeFailed;
+    }
+    if (!diagnosis.message.empty())
+        std::cerr << "fpp-calib: warning: " << diagnosis.message << "\n";
     Stopwatch smooth_watch;
     Image<float> scratch;
     const CoordinateFilterReport smoothing = smooth_coordinates(decoded, smooth, scratch);
@@ -286,6 +277,22 @@ int run_reconstruct(const ReconstructArgs& args) {
         Stopwatch sv_watch;
         stats = reconstructor.reconstruct(decoded, requested, cloud);
         model_seconds = sv_watch.seconds();
+    }
+
+    if (stats.points == 0) {
+        std::cerr << "fpp-calib: error: " << capture.folder.string() << ": " << decode_stats.decoded
+                  << " pixels decoded but none gave a point ("
+                  << (use_table ? "no model " + std::to_string(table_stats.no_model) +
+                                      ", outside the calibrated phase range " +
+                                      std::to_string(table_stats.out_of_range) + " in " +
+                                      calib_path.string()
+                                : "outside the projector image " +
+                                      std::to_string(stats.outside_projector) +
+                                      ", other geometry " + std::to_string(stats.rejected) +
+                                      ", not converged " + std::to_string(stats.not_converged) +
+                                      " with " + calib_path.string())
+                  << "): is the calibration for this scanner? no point cloud written\n";
+        return kExitDecodeFailed;
     }
 
     std::vector<std::string> comments = {
@@ -333,6 +340,9 @@ int run_reconstruct(const ReconstructArgs& args) {
             report << "phase-error correction ("
                    << (c == &decoded.phase_correction_x ? "x" : "y") << "): " << describe(*c)
                    << "\n";
+    report << "decoded: " << decode_stats.decoded << " of " << decode_stats.lit
+           << " lit pixels (" << 100.0 * decode_stats.coverage_of_lit() << " %); "
+           << decode_stats.floor_rule() << "\n";
     report << "points: " << stats.points << " of " << pixels << " pixels ("
            << 100.0 * double(stats.points) / double(pixels) << " %); ";
     if (use_table)
@@ -384,6 +394,11 @@ Action add_reconstruct_command(CLI::App& app) {
                     "SLMaster's caliInfo.yml");
     cmd->add_option("--table", args->table,
                     "hybrid coefficient table (.fpt, from fpp-calib hybrid) instead of --calib");
+    cmd->add_option("--second-capture", args->second_capture,
+                    "the second camera's capture set of the same patterns: two-camera scanning "
+                    "with a camera-camera calibration (--pair-calibration or --calib)");
+    cmd->add_option("--pair-calibration", args->pair_calibration,
+                    "camera-camera calibration (OpenCV stereo YAML, Bouguet or MATLAB text)");
     cmd->add_option("--calib-format", args->calib_format,
                     "format of --calib: auto (by its keys), fpp, slstudio, slmaster")
         ->check(CLI::IsMember({"auto", "fpp", "slstudio", "slmaster"}))

@@ -21,6 +21,8 @@ Action add_calibrate_command(CLI::App& app);
 Action add_response_command(CLI::App& app);
 Action add_evaluate_command(CLI::App& app);
 Action add_paper_experiments_command(CLI::App& app);
+Action add_import_command(CLI::App& app);
+Action add_patterns_command(CLI::App& app);
 // Over a scanner's HTTP API (firmware/scanner/http-api.md).
 Action add_scanner_status_command(CLI::App& app);
 Action add_scanner_session_command(CLI::App& app);

@@ -1,6 +1,7 @@
 #include "decode_outputs.hpp"
 
 #include "fpp/decode_accuracy.hpp"
+#include "fpp/error.hpp"
 #include "fpp/false_colour.hpp"
 #include "fpp/image_io.hpp"
 
@@ -10,6 +11,8 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 namespace fpp::calib {
 
@@ -43,6 +46,18 @@ std::string fixed(double v, int digits) {
 
 } // namespace
 
+void check_decode_options(const DecodeOptions& options) {
+    try {
+        options.validate();
+    } catch (const std::invalid_argument& e) {
+        const std::string what = e.what();
+        const char* option = what.find("min_modulation") != std::string::npos ? "--min-modulation"
+                             : what.find("threads") != std::string::npos       ? "--threads"
+                                                                               : "decode options";
+        throw InputError("command line", option, what);
+    }
+}
+
 void write_decode_images(const std::filesystem::path& folder, const DecodeResult& result,
                          const CaptureManifest& manifest) {
     std::filesystem::create_directories(folder);
@@ -67,7 +82,33 @@ void write_decode_images(const std::filesystem::path& folder, const DecodeResult
     write_png(folder / "flags.png", result.mask);
 }
 
+std::string decode_statistics_text(const DecodeStatistics& s) {
+    const auto share = [&](std::size_t n, std::size_t of) {
+        return of == 0 ? std::string("-") : fixed(100.0 * double(n) / double(of), 2) + " %";
+    };
+    std::ostringstream md;
+    md << "## Pixels\n\n";
+    md << "- lit: " << s.lit << " of " << s.pixels << " (" << share(s.lit, s.pixels) << "); "
+       << s.floor_rule() << "\n";
+    md << "- decoded: " << s.decoded << " of " << s.lit << " lit pixels (coverage of lit "
+       << share(s.decoded, s.lit) << ")\n\n";
+    md << "Why the others were dropped (each pixel counted once, in this order):\n\n";
+    md << "| reason | pixels | of the image |\n|---|---|---|\n";
+    const std::pair<const char*, std::size_t> rows[] = {
+        {"dark (not lit)", s.dark},
+        {"saturated", s.saturated},
+        {"low modulation", s.low_modulation},
+        {"code and phase disagree", s.unwrap_inconsistent},
+        {"out of range (outside the projector)", s.out_of_range},
+        {"no cue", s.no_cue},
+        {"other (no flag)", s.other}};
+    for (const auto& [name, n] : rows)
+        md << "| " << name << " | " << n << " | " << share(n, s.pixels) << " |\n";
+    return md.str();
+}
+
 std::string decode_summary(const DecodeResult& result, const CaptureSet& capture,
+                           const DecodeStatistics& stats, const DecodeDiagnosis& diagnosis,
                            double decode_seconds) {
     const auto& m = capture.manifest;
     std::ostringstream md;
@@ -88,6 +129,18 @@ std::string decode_summary(const DecodeResult& result, const CaptureSet& capture
         if (c->attempted)
             md << "- phase-error correction (" << (c == &result.phase_correction_x ? "x" : "y")
                << "): " << describe(*c) << "\n";
+    md << "\n" << decode_statistics_text(stats);
+    if (!diagnosis.message.empty()) {
+        md << "\n## Diagnosis\n\n" << diagnosis.message << "\n";
+        if (!diagnosis.trials.empty()) {
+            md << "\nDecoded again on every 4th pixel in x and y with one change each "
+                  "(coverage of the pixels lit above):\n\n| change | coverage of lit |\n"
+                  "|---|---|\n";
+            for (const auto& t : diagnosis.trials)
+                md << "| " << t.change << " | " << fixed(100.0 * t.coverage_of_lit, 1)
+                   << " % |\n";
+        }
+    }
 
     if (!m.truth) {
         md << "\nNo ground truth in this capture set: no error figures.\n";
@@ -113,6 +166,13 @@ std::string decode_summary(const DecodeResult& result, const CaptureSet& capture
            << fixed(100.0 * a.unwrap_error_rate(), 4) << " %) | " << a.false_valid << " |\n";
     }
     return md.str();
+}
+
+std::string decode_summary(const DecodeResult& result, const CaptureSet& capture,
+                           double decode_seconds) {
+    const DecodeStatistics stats = decode_statistics(result, frames_full_scale(capture));
+    return decode_summary(result, capture, stats, diagnose_decode(capture, result, stats, {}),
+                          decode_seconds);
 }
 
 } // namespace fpp::calib

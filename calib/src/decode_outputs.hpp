@@ -5,9 +5,15 @@
 //   mask.png                  8-bit, 255 where decoded, 0 elsewhere
 //   flags.png                 8-bit, DecodeFlag bits per pixel (fpp/decoder.hpp)
 //   proj_x.png, proj_y.png, modulation.png   false-colour previews
-//   decode.md                 summary; with ground truth, the error against it
+//   decode.md                 summary: lit pixels and the floor, coverage of the lit
+//                             pixels, counts per reason a pixel was dropped
+//                             (fpp/decode_report.hpp), the diagnosis of a suspect
+//                             decode (fpp/decode_diagnosis.hpp); with ground truth,
+//                             the error against it
 
 #include "fpp/capture_set.hpp"
+#include "fpp/decode_diagnosis.hpp"
+#include "fpp/decode_report.hpp"
 #include "fpp/decoder.hpp"
 
 #include <filesystem>
@@ -15,13 +21,32 @@
 
 namespace fpp::calib {
 
+// Exit status of fpp-calib decode and reconstruct when the decode failed
+// (DecodeDiagnosis::failed): the capture was read, but nearly nothing decoded
+// or its description is evidently wrong. (2: bad input, 1: other errors.)
+inline constexpr int kExitDecodeFailed = 3;
+
+// DecodeOptions::validate(), its refusal as InputError("command line",
+// "--option", what was expected) naming the command's option.
+void check_decode_options(const DecodeOptions& options);
+
 // Writes the images above (each atomically) into `folder` (created if needed).
 void write_decode_images(const std::filesystem::path& folder, const DecodeResult& result,
                          const CaptureManifest& manifest);
 
-// Markdown summary of a decode; compares with the capture's truth when it has
-// one. `capture_folder` locates the truth files.
+// Markdown summary of a decode, with its statistics and diagnosis; compares
+// with the capture's truth when it has one (capture.folder locates the truth files).
+std::string decode_summary(const DecodeResult& result, const CaptureSet& capture,
+                           const DecodeStatistics& stats, const DecodeDiagnosis& diagnosis,
+                           double decode_seconds);
+
+// Same, computing the statistics and the diagnosis (with default
+// DecodeOptions) itself.
 std::string decode_summary(const DecodeResult& result, const CaptureSet& capture,
                            double decode_seconds);
+
+// The "## Pixels" section alone: lit pixels and the floor, coverage of the
+// lit pixels, and the count of each reason a pixel was dropped (Markdown).
+std::string decode_statistics_text(const DecodeStatistics& stats);
 
 } // namespace fpp::calib

@@ -1,6 +1,11 @@
-// fpp-calib: the host tool of the fpp scanner: simulation, decoding, stereo
-// and hybrid calibration, tables, reconstruction and evaluation, and a
-// scanner's sessions and tables over its HTTP API.
+// fpp-calib: the host tool of the fpp scanner. Subcommands (each in cmd_*.cpp):
+// simulate, simulate-session, demo (the virtual scanner); decode; stereo,
+// hybrid, calibrate (calibration and coefficient tables); reconstruct (one
+// camera with a table or calibration, or two cameras); evaluate;
+// paper-experiments; response (projector response); import (other tools'
+// captures); patterns (projector images for capture by hand); scanner-status,
+// scanner-session, scanner-pull, scanner-push-table (a scanner over its HTTP
+// API). Their use: README.md (and --help); file formats: firmware/core/formats/.
 
 #include "commands.hpp"
 
@@ -46,6 +51,8 @@ int main(int argc, char** argv) {
     add(fpp::calib::add_response_command);
     add(fpp::calib::add_evaluate_command);
     add(fpp::calib::add_paper_experiments_command);
+    add(fpp::calib::add_import_command);
+    add(fpp::calib::add_patterns_command);
     add(fpp::calib::add_scanner_status_command);
     add(fpp::calib::add_scanner_session_command);
     add(fpp::calib::add_scanner_pull_command);

@@ -2,12 +2,14 @@
 // an HTTP listener, for requests: firmware/scanner/http-api.md), scans,
 // writes the point cloud into the scan store; --once (or --scans N) scans
 // once (N times) and exits.
+#include "fpp/atomic_file.hpp"
 #include "fpp/drivers/device_error.hpp"
 #include "fpp/error.hpp"
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/hardware_board.hpp"
 #include "fpp/scanner/log.hpp"
 #include "fpp/scanner/network_face.hpp"
+#include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/scanner_service.hpp"
 #include "fpp/scanner/settings_file.hpp"
@@ -21,6 +23,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -82,6 +85,28 @@ void apply_settings_file(fpp::scanner::BoardConfig& board, fpp::drivers::Camera&
     }
 }
 
+// A power cut or SIGKILL in the middle of a scan or of a table or settings
+// install leaves hidden temporaries (the outputs themselves are renamed into
+// place whole, or not at all). Nothing writes yet: they go now.
+void remove_interrupted_writes_at_start(const fpp::scanner::BoardConfig& board,
+                                        const std::optional<std::filesystem::path>& table_path,
+                                        const fpp::scanner::Logger& log) {
+    std::vector<std::string> removed = fpp::scanner::remove_interrupted_scans(board.store.directory);
+    for (const auto& file : {table_path, board.settings_file})
+        if (file)
+            for (const auto& name : fpp::remove_interrupted_writes(
+                     file->parent_path().empty() ? "." : file->parent_path(),
+                     file->filename().string()))
+                removed.push_back(name);
+    if (removed.empty())
+        return;
+    std::string names;
+    for (const auto& name : removed)
+        names += (names.empty() ? "" : ", ") + name;
+    log.warning("removed " + std::to_string(removed.size()) +
+                " temporary file(s) left by writes cut short (power cut or kill): " + names);
+}
+
 int run(const Options& o, const fpp::scanner::Logger& log) {
     using namespace fpp::scanner;
     BoardConfig board = read_board_config(o.board);
@@ -96,6 +121,7 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
     // without one too, and takes one over the network.
     if (mode == ScanMode::capture && !serving)
         board.table.reset();
+    remove_interrupted_writes_at_start(board, table_path, log);
     if (serving && board.table && !std::filesystem::exists(*board.table)) {
         log.warning("no table at " + board.table->string() +
                     ": capture mode only until one is installed (PUT /api/v1/table)");
@@ -105,14 +131,15 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
     // the hardware. Devices that cannot be opened throw DeviceError.
     std::unique_ptr<SimBoard> sim;
     std::unique_ptr<HardwareBoard> hardware;
-    if (board.sim)
-        sim = std::make_unique<SimBoard>(board);
-    else {
+    if (board.sim) {
+        sim = std::make_unique<SimBoard>(board, log);
+        sim->limit_records(SimBoard::kDaemonRecordLimit);
+    } else {
         hardware = std::make_unique<HardwareBoard>(board);
         // As a service the scanner waits for a camera that does not answer
         // yet (LED in error); --once and --scans fail at once.
         if (scans > 0)
-            hardware->open_camera();
+            hardware->open_camera(log);
         else if (!hardware->wait_for_camera(log, g_stop)) {
             hardware->led().set(fpp::drivers::LedState::off);
             hardware->display().restore();

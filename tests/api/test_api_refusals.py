@@ -276,6 +276,23 @@ class BadRequests(DaemonCase):
         self.assert_served()
         self.assertEqual(self.daemon.status()["scans_completed"], 1)
 
+    def test_bodies_that_are_not_utf8_are_400_with_a_json_reason(self):
+        # Found by tests/fuzz/fuzz_http_api: the parse error quotes the bad
+        # bytes, and writing that reason as JSON failed: a 500.
+        for method, target, body in (
+                (b"POST", b"/api/v1/scans", b'{"mo\xff\xff\xff\xffd'),
+                (b"PUT", b"/api/v1/settings", b'{"\xc3\x28": 1}'),
+                (b"POST", b"/api/v1/sessions", b'{"name": "a\xfe"}')):
+            with self.subTest(target=target, body=body):
+                status, raw = s.raw_exchange(
+                    self.daemon.port, method + b" " + target + b" HTTP/1.1\r\nHost: x\r\n"
+                    + self.auth() + b"Content-Type: application/json\r\nContent-Length: "
+                    + str(len(body)).encode() + b"\r\nConnection: close\r\n\r\n" + body)
+                self.assertEqual(status, 400, raw[:300])
+                reason = json.loads(raw.split(b"\r\n\r\n", 1)[1])["error"]
+                self.assertTrue(reason, raw[:300])
+        self.assert_served()
+
     def test_header_block_over_32_kib(self):
         for headers in (b"X-Big: " + b"a" * (40 * 1024) + b"\r\n",
                         b"".join(b"X-H%d: %s\r\n" % (i, b"b" * 100) for i in range(400)),

@@ -50,10 +50,67 @@ fpp::Sequence three_step_sequence() {
     return {phase};
 }
 
+// The fpp-capture/2 families, x axis, each with the code that unwraps it in
+// practice (complementary Gray 6 + 1 bits at period 20 for the phase ones).
+fpp::GrayBlock complementary_gray_20() {
+    fpp::GrayBlock gray;
+    gray.axis = fpp::Axis::x;
+    gray.period = 20.0;
+    gray.bits = 6;
+    gray.complementary = true;
+    return gray;
+}
+
+fpp::Sequence family_sequence(const std::string& name) {
+    if (name == "gray_code_10bit_inverse") {
+        fpp::GrayBlock gray;
+        gray.axis = fpp::Axis::x;
+        gray.period = 1.25;
+        gray.bits = 10;
+        gray.inverse = true;
+        return {gray};
+    }
+    if (name == "natural_binary_10bit_wb") {
+        fpp::GrayBlock binary;
+        binary.axis = fpp::Axis::x;
+        binary.period = 1.25;
+        binary.bits = 10;
+        binary.code = fpp::CodeKind::binary;
+        return {fpp::WhiteBlock{}, fpp::BlackBlock{}, binary};
+    }
+    if (name == "micro_5_periods") {
+        fpp::MicroPhaseBlock micro;
+        micro.axis = fpp::Axis::x;
+        for (int j : {0, 1, 11, 16, 19}) micro.periods.push_back(1.0 / (1.0 / 16.0 - j / 1400.0));
+        return {micro};
+    }
+    fpp::PhaseBlock phase;
+    phase.axis = fpp::Axis::x;
+    phase.period = 20.0;
+    phase.steps = 3;
+    if (name == "two_plus_one_gray") {
+        phase.shifting = fpp::PhaseShifting::two_plus_one;
+    } else { // modulated_3x3_gray
+        phase.shifting = fpp::PhaseShifting::modulated;
+        phase.carrier_steps = 3;
+        phase.carrier_period = 8.0;
+    }
+    return {phase, complementary_gray_20()};
+}
+
+const std::vector<std::string>& family_names() {
+    static const std::vector<std::string> names = {"gray_code_10bit_inverse",
+                                                   "natural_binary_10bit_wb", "micro_5_periods",
+                                                   "two_plus_one_gray", "modulated_3x3_gray"};
+    return names;
+}
+
 struct Fixture {
     fpp::CaptureSet full;
     fpp::CaptureSet three;
     std::size_t full_bytes = 0;
+    std::map<std::string, fpp::CaptureSet> families;
+    std::map<std::string, std::size_t> family_bytes;
 
     static const Fixture& get() {
         static const Fixture f;
@@ -72,6 +129,10 @@ private:
     }
     Fixture() : full(make(full_sequence())), three(make(three_step_sequence())) {
         for (const auto& f : full.frames) full_bytes += f.u8.pixel_count();
+        for (const auto& name : family_names()) {
+            families[name] = make(family_sequence(name));
+            for (const auto& f : families[name].frames) family_bytes[name] += f.u8.pixel_count();
+        }
     }
 };
 
@@ -186,6 +247,34 @@ void BM_OpenCV3StepPSP(benchmark::State& state) {
     }
 }
 
+// Batch decode of one family's capture (the name after the slash).
+void BM_DecodeFamily(benchmark::State& state, const std::string& name) {
+    const auto& fx = Fixture::get();
+    const fpp::CaptureSet& set = fx.families.at(name);
+    fpp::DecodeResult result = fpp::decode(set);
+    for (auto _ : state) {
+        fpp::decode(set, result);
+        benchmark::DoNotOptimize(result.proj_x.data());
+    }
+    state.SetBytesProcessed(std::int64_t(state.iterations()) *
+                            std::int64_t(fx.family_bytes.at(name)));
+}
+
+BENCHMARK_CAPTURE(BM_DecodeFamily, gray_code_10bit_inverse, std::string("gray_code_10bit_inverse"))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_DecodeFamily, natural_binary_10bit_wb, std::string("natural_binary_10bit_wb"))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_DecodeFamily, micro_5_periods, std::string("micro_5_periods"))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_DecodeFamily, two_plus_one_gray, std::string("two_plus_one_gray"))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_DecodeFamily, modulated_3x3_gray, std::string("modulated_3x3_gray"))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_CopyInput)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DecodeBatch)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DecodeBatchOneThread)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -231,5 +320,17 @@ int main(int argc, char** argv) {
     if (fpp3 > 0 && cv3 > 0)
         std::printf("  OpenCV PSP / fpp, 3-step    : %.1fx (target >= 10)  [%.2f ms vs %.2f ms]\n",
                     cv3 / fpp3, cv3 * 1e3, fpp3 * 1e3);
+    // Each family against a copy of its own input bytes, scaled from the
+    // copy measured above (same run, same memory system).
+    const Fixture& fx = Fixture::get();
+    for (const auto& name : family_names()) {
+        const double t = reporter.seconds("BM_DecodeFamily/" + name + "/real_time");
+        const double bytes = double(fx.family_bytes.at(name));
+        const double family_copy = copy * bytes / double(fx.full_bytes);
+        if (t > 0 && family_copy > 0)
+            std::printf("  %-27s : %.2f x copy of its %zu frames  [%.2f ms vs %.2f ms]\n",
+                        name.c_str(), t / family_copy, fx.families.at(name).frames.size(),
+                        t * 1e3, family_copy * 1e3);
+    }
     return 0;
 }

@@ -4,6 +4,7 @@
 
 #include "test_support.hpp"
 
+#include "fpp/calib/camera_pair.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/error.hpp"
 #include "fpp/sim/rig.hpp"
@@ -260,7 +261,10 @@ TEST(CalibrationFile, SavingRefusesWhatTheFileCannotHold) {
 TEST(CalibrationFile, FormatNames) {
     EXPECT_EQ(fpp::calib::parse_calibration_format("auto"), CalibrationFormat::automatic);
     EXPECT_EQ(fpp::calib::parse_calibration_format("slmaster"), CalibrationFormat::slmaster);
-    EXPECT_THROW(fpp::calib::parse_calibration_format("matlab"), std::invalid_argument);
+    EXPECT_EQ(fpp::calib::parse_calibration_format("matlab"), CalibrationFormat::matlab);
+    EXPECT_EQ(fpp::calib::parse_calibration_format("opencv-stereo"),
+              CalibrationFormat::opencv_stereo);
+    EXPECT_THROW(fpp::calib::parse_calibration_format("excel"), std::invalid_argument);
     EXPECT_STREQ(fpp::calib::to_string(CalibrationFormat::slstudio), "slstudio");
 }
 
@@ -367,3 +371,72 @@ TEST(CalibrationFile, ForeignFilesWithMissingKeysNameTheKey) {
 }
 
 } // namespace
+
+// Found by tests/fuzz/fuzz_calibration: a FileStorage file whose top level is
+// a list (or a scalar) made the format detection look a key up in it, and
+// OpenCV's cv::Exception escaped instead of the reader's InputError.
+TEST(CalibrationFile, TopLevelListIsRefusedNamingTheFile) {
+    for (const CalibrationFormat format :
+         {CalibrationFormat::automatic, CalibrationFormat::fpp, CalibrationFormat::slstudio,
+          CalibrationFormat::slmaster}) {
+        try {
+            fpp::calib::parse_calibration("%YAML:1.0\n---\n- camera_matrix\n- 2\n", "list.yml",
+                                          format);
+            ADD_FAILURE() << "accepted a list as " << fpp::calib::to_string(format);
+        } catch (const fpp::InputError& e) {
+            EXPECT_EQ(e.file(), fs::path("list.yml")) << e.what();
+            EXPECT_EQ(std::string(e.what()).find("OpenCV("), std::string::npos) << e.what();
+        }
+    }
+}
+
+// Found by tests/fuzz/fuzz_calibration: OpenCV 4.6's XML parser dereferences
+// a null pointer when the text ends inside a tag (the fuzzer's input had NUL
+// bytes after `type_id=`; OpenCV reads up to the first). The reader refuses
+// such XML itself, naming the file.
+TEST(CalibrationFile, XmlEndingInsideATagIsRefusedBeforeOpenCvParsesIt) {
+    const std::string truncated = "<?xml version=\"1.0\"?>\n<opencv_storage>\n<Kc type_id=";
+    for (const std::string& text : {truncated, truncated + std::string(3, '\0') + "\"x\">"}) {
+        try {
+            fpp::calib::parse_calibration(text, "calibration.xml");
+            ADD_FAILURE() << "accepted a truncated XML file";
+        } catch (const fpp::InputError& e) {
+            EXPECT_EQ(e.file(), fs::path("calibration.xml")) << e.what();
+            EXPECT_NE(std::string(e.what()).find("ends inside a tag"), std::string::npos)
+                << e.what();
+        }
+    }
+}
+
+// Found by tests/fuzz/run-long.sh (fuzz_camera_pair, 10 minutes): OpenCV
+// 4.6's YAML parser never returns from a line of four dashes and text right
+// after the `%YAML` line (35 bytes were enough). The reader refuses any line
+// that starts with `---` and goes on with text, naming the file and line,
+// for every format it opens through FileStorage.
+TEST(CalibrationFile, YamlLineOfDashesAndTextIsRefusedBeforeOpenCvHangsOnIt) {
+    const std::string hanging = "%YAML:1.\n-----x\nC\nS";
+    for (const std::string& text : {hanging, std::string("%YAML:1.0\n---\nM1: 1\n---x 2\n")}) {
+        try {
+            (void)fpp::calib::parse_camera_pair(text, "pair.yml",
+                                                fpp::calib::CameraPairFormat::opencv_stereo);
+            ADD_FAILURE() << "accepted: " << text;
+        } catch (const fpp::InputError& e) {
+            EXPECT_EQ(e.file(), fs::path("pair.yml")) << e.what();
+            EXPECT_NE(std::string(e.what()).find("'---' followed by text"), std::string::npos)
+                << e.what();
+        }
+        EXPECT_THROW((void)fpp::calib::parse_calibration(text, "calibration.yml"),
+                     fpp::InputError);
+        EXPECT_FALSE(fpp::calib::looks_like_camera_pair(text));
+    }
+    // A document marker alone or with a space is YAML as OpenCV writes it:
+    // refused for its missing keys, not for the marker.
+    for (const std::string text : {"%YAML:1.0\n---\nx: 1\n", "%YAML:1.0\n--- \nx: 1\n"}) {
+        try {
+            (void)fpp::calib::parse_calibration(text, "c.yml");
+            ADD_FAILURE() << "accepted: " << text;
+        } catch (const fpp::InputError& e) {
+            EXPECT_EQ(std::string(e.what()).find("'---'"), std::string::npos) << e.what();
+        }
+    }
+}

@@ -3,6 +3,7 @@
 
 #include "test_support.hpp"
 
+#include "fpp/capture_set.hpp"
 #include "fpp/decode_accuracy.hpp"
 #include "fpp/image_io.hpp"
 #include "fpp/sim/rig.hpp"
@@ -75,6 +76,65 @@ TEST(CliDecode, SimulatedPlaneDecodesToGroundTruth) {
     EXPECT_LT(ay.rms_px, 0.02);
     EXPECT_GT(ax.coverage(), 0.98);
     EXPECT_NE(dec.output.find("Error against ground truth"), std::string::npos) << dec.output;
+    // The report counts the pixels (fpp/decode_report.hpp): the plane fills
+    // the view, every lit pixel decodes and the counts add up to the image.
+    std::ostringstream text;
+    text << std::ifstream(out / "decode.md").rdbuf();
+    const std::string report = text.str();
+    EXPECT_NE(report.find("(coverage of lit 100.00 %)"), std::string::npos) << report;
+    EXPECT_NE(report.find("lit floor"), std::string::npos) << report;
+    for (const char* reason : {"| dark (not lit) |", "| saturated | 0 |", "| low modulation |",
+                               "| code and phase disagree | 0 |", "| out of range",
+                               "| no cue | 0 |", "| other (no flag) | 0 |"})
+        EXPECT_NE(report.find(reason), std::string::npos) << reason << "\n" << report;
+    EXPECT_EQ(report.find("## Diagnosis"), std::string::npos) << report;
+}
+
+// A capture whose description has the wrong shift direction in one phase
+// block: decode names the fix, exits 3 and still writes its outputs.
+TEST(CliDecode, ReversedShiftIsDiagnosedAndExitsNonZero) {
+    TempDir dir;
+    const fs::path rig = write_small_rig(dir);
+    const fs::path capture = dir / "capture";
+    auto sim = run_calib("simulate --rig " + quote(rig.string()) +
+                             " --scene plane --sequence heterodyne-x --out " +
+                             quote(capture.string()),
+                         dir);
+    ASSERT_EQ(sim.exit_code, 0) << sim.output;
+    fpp::CaptureManifest manifest = fpp::read_manifest(capture / "capture.yaml");
+    std::get<fpp::PhaseBlock>(manifest.sequence[2]).shift_sign = -1;
+    std::ofstream(capture / "capture.yaml") << fpp::manifest_to_yaml(manifest);
+
+    const fs::path out = dir / "decoded";
+    auto dec = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
+    EXPECT_EQ(dec.exit_code, 3) << dec.output;
+    EXPECT_NE(dec.output.find("With shift_sign 1 in sequence[2], 100 % of lit pixels decode"),
+              std::string::npos)
+        << dec.output;
+    EXPECT_TRUE(fs::exists(out / "proj_x.tiff"));
+    std::ostringstream text;
+    text << std::ifstream(out / "decode.md").rdbuf();
+    EXPECT_NE(text.str().find("## Diagnosis"), std::string::npos) << text.str();
+}
+
+TEST(CliDecode, BadOptionNamesTheOptionAndWritesNothing) {
+    TempDir dir;
+    const fs::path rig = write_small_rig(dir);
+    const fs::path capture = dir / "capture";
+    ASSERT_EQ(run_calib("simulate --rig " + quote(rig.string()) +
+                            " --scene plane --sequence gray-x --out " + quote(capture.string()),
+                        dir)
+                  .exit_code,
+              0);
+    const fs::path out = dir / "out";
+    auto run = run_calib("decode " + quote(capture.string()) + " --min-modulation 1.5 --out " +
+                             quote(out.string()),
+                         dir);
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_NE(run.output.find("command line: --min-modulation: "), std::string::npos)
+        << run.output;
+    EXPECT_NE(run.output.find("in [0, 1)"), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(CliDecode, MalformedManifestExitsNonZeroAndWritesNothing) {

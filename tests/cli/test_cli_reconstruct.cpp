@@ -5,6 +5,7 @@
 #include "test_support.hpp"
 
 #include "fpp/calib/stereo_calibration.hpp"
+#include "fpp/capture_set.hpp"
 #include "fpp/image_io.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/sim/rig.hpp"
@@ -72,6 +73,17 @@ class CliReconstruct : public ::testing::Test {
 };
 
 TempDir* CliReconstruct::dir_ = nullptr;
+
+// A copy of the gray-x capture whose description has the projector's shift
+// direction reversed (the frames are as captured).
+fs::path misdescribed_copy(const fs::path& from, const fs::path& to) {
+    fs::copy(from, to, fs::copy_options::recursive);
+    fpp::CaptureManifest manifest = fpp::read_manifest(to / "capture.yaml");
+    for (auto& block : manifest.sequence)
+        if (auto* phase = std::get_if<fpp::PhaseBlock>(&block)) phase->shift_sign = -1;
+    std::ofstream(to / "capture.yaml") << fpp::manifest_to_yaml(manifest);
+    return to;
+}
 
 bool folder_is_empty(const fs::path& folder) {
     return fs::is_empty(folder);
@@ -251,6 +263,50 @@ TEST_F(CliReconstruct, UnknownFormatNameIsRejected) {
     EXPECT_NE(run.exit_code, 0);
     EXPECT_NE(run.output.find("matlab"), std::string::npos) << run.output;
     EXPECT_TRUE(folder_is_empty(out.path()));
+}
+
+// A failed decode gives the likely cause, exit 3 and no cloud, never an empty PLY.
+TEST_F(CliReconstruct, MisdescribedCaptureWritesNoCloud) {
+    TempDir out;
+    const fs::path capture = misdescribed_copy(path("gray-x"), out / "capture");
+    const fs::path ply = out / "cloud.ply";
+    const auto run = run_calib("reconstruct " + q(capture) + " --calib " + q(path("calib.yaml")) +
+                                   " --out " + q(ply),
+                               out.path());
+    EXPECT_EQ(run.exit_code, 3) << run.output;
+    EXPECT_NE(run.output.find("shift_sign 1 in sequence[2]"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("no point cloud written"), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(ply));
+}
+
+// Decoded pixels but no point (a calibration that puts every ray pair
+// behind the camera): a clear error naming the calibration, no file.
+TEST_F(CliReconstruct, NoPointIsAnErrorNotAnEmptyCloud) {
+    TempDir out;
+    fpp::calib::StereoCalibration wrong = fpp::calib::calibration_from_rig(small_rig());
+    for (double& t : wrong.T) t = -t;
+    const fs::path calib = out / "wrong.yaml";
+    fpp::calib::save_calibration(calib, wrong);
+    const fs::path ply = out / "cloud.ply";
+    const auto run = run_calib("reconstruct " + q(path("gray-x")) + " --calib " + q(calib) +
+                                   " --axes x --out " + q(ply),
+                               out.path());
+    std::printf("%s\n", run.output.c_str());
+    EXPECT_EQ(run.exit_code, 3) << run.output;
+    EXPECT_NE(run.output.find("none gave a point"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("wrong.yaml"), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(ply));
+}
+
+TEST_F(CliReconstruct, BadDecodeOptionNamesTheOption) {
+    TempDir out;
+    const fs::path ply = out / "cloud.ply";
+    const auto run = run_calib("reconstruct " + q(path("gray-x")) + " --calib " +
+                                   q(path("calib.yaml")) + " --threads 5000 --out " + q(ply),
+                               out.path());
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    EXPECT_NE(run.output.find("command line: --threads: "), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(ply));
 }
 
 } // namespace

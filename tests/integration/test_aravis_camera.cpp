@@ -126,6 +126,7 @@ TEST(AravisCamera, NoCameraAtTheAddressIsAClearDeviceError) {
         FAIL() << "opened a camera where there is none";
     } catch (const DeviceError& e) {
         EXPECT_EQ(e.device(), "camera 127.0.0.1");
+        EXPECT_EQ(e.kind(), fpp::drivers::DeviceKind::camera);
         EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos) << e.what();
     }
 }

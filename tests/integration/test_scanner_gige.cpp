@@ -28,6 +28,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <optional>
 #include <string>
@@ -124,6 +125,82 @@ TEST(ScannerGige, ScanThroughTheFakeGigeCameraIsCloseToTruth) {
                 0.001 * static_cast<double>(out.points));
 }
 
+// Packet loss on the link: a share of the UDP datagrams (GVCP control and
+// GVSP stream alike) dropped on the loopback interface of this test's own
+// network namespace, by iptables' statistic match (this kernel has no netem
+// queueing discipline, so frames cannot be made late, only lost).
+struct PacketLoss {
+    static bool available() {
+        return isolation.namespaced &&
+               std::system("iptables-legacy -L OUTPUT -n > /dev/null 2>&1") == 0;
+    }
+    explicit PacketLoss(double probability) {
+        char command[200];
+        std::snprintf(command, sizeof command,
+                      "iptables-legacy -A OUTPUT -o lo -p udp -m statistic --mode random "
+                      "--probability %.4f -j DROP",
+                      probability);
+        ok = std::system(command) == 0;
+    }
+    ~PacketLoss() { (void)std::system("iptables-legacy -F OUTPUT"); }
+    PacketLoss(const PacketLoss&) = delete;
+    PacketLoss& operator=(const PacketLoss&) = delete;
+    bool ok = false;
+};
+
+TEST(ScannerGige, PacketLossRetriesOrFailsCleanlyAndNeverDecodesOnePatternAsAnother) {
+    if (!PacketLoss::available()) {
+        if (fpp::test::in_ci())
+            FAIL() << "needs its own network namespace and iptables-legacy (package iptables)";
+        GTEST_SKIP() << "needs its own network namespace and iptables-legacy";
+    }
+    GigeFixture f;
+    const Logger log{[](LogLevel, const std::string&) {}};
+    SimBoard sim(f.board, log);
+    write_table(f.dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
+    Scanner scanner(f.board, sim.devices(), log);
+    constexpr int kScans = 6;
+    for (const double loss : {0.001, 0.01}) {
+        int written = 0, retried = 0, failed = 0;
+        std::string first_failure;
+        {
+            const PacketLoss dropping(loss);
+            ASSERT_TRUE(dropping.ok);
+            for (int k = 0; k < kScans; ++k) {
+                const std::size_t scans_before = list_scans(f.store).size();
+                try {
+                    const ScanOutcome out = scanner.scan(ScanMode::scan);
+                    ++written;
+                    retried += out.attempts > 1 ? 1 : 0;
+                    EXPECT_LE(out.attempts, 2);
+                    // Every frame decoded under its own pattern: one frame
+                    // of another pattern would put the cloud far off truth.
+                    std::size_t compared = 0;
+                    const double rms = fpp::test::ply_rms_against_truth(
+                        out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
+                    EXPECT_LT(rms, 0.1) << "loss " << loss << ", scan " << k;
+                    EXPECT_GT(out.points, 60000u);
+                } catch (const drivers::DeviceError& e) {
+                    if (failed++ == 0)
+                        first_failure = e.what();
+                    EXPECT_NE(std::string(e.what()).find("camera"), std::string::npos) << e.what();
+                    EXPECT_EQ(sim.led().state(), drivers::LedState::error);
+                    EXPECT_EQ(list_scans(f.store).size(), scans_before);
+                }
+            }
+        }
+        std::printf("packet loss %.1f %%: %d of %d scans written (%d after a retry), %d failed%s%s\n",
+                    100 * loss, written, kScans, retried, failed, failed ? ", first: " : "",
+                    first_failure.c_str());
+    }
+    // The link whole again: the next scan is written at the first attempt.
+    const ScanOutcome out = scanner.scan(ScanMode::scan);
+    EXPECT_EQ(out.attempts, 1);
+    // Nothing but whole scans in the store.
+    for (const fs::path& entry : fpp::test::entries_under(f.store))
+        EXPECT_EQ(entry.string().find(".tmp"), std::string::npos) << entry;
+}
+
 #ifdef FPP_SCANNER_EXE
 TEST(ScannerGige, ScannerBinaryScansThroughTheLink) {
     GigeFixture f;
@@ -157,6 +234,94 @@ struct LogLines {
         return n;
     }
 };
+
+// Pulls the link's cable when frame `at` of a scan has arrived (on the
+// scanning thread, between two frames: mid-scan).
+struct UnplugAtFrame final : ScanObserver {
+    SimBoard& sim;
+    int at;
+    bool unplugged = false;
+    std::string failure;
+    UnplugAtFrame(SimBoard& s, int frame) : sim(s), at(frame) {}
+    void scan_started(const std::string&, ScanMode, int) override {}
+    void frame_captured(int frame, int) override {
+        if (!unplugged && frame == at) {
+            sim.unplug_camera();
+            unplugged = true;
+        }
+    }
+    void decoded() override {}
+    void written(const ScanOutcome&) override {}
+    void failed(const std::string& reason) override { failure = reason; }
+};
+
+TEST(ScannerGige, CameraLostMidScanFailsCleanlyAndTheScanAfterItsReturnSucceeds) {
+    // Aravis's fake camera goes away at frame 5 of a scan (the cable pulled)
+    // and comes back later (a new one at the same address, as after a power
+    // cycle). The same Scanner, never rebuilt, is the running service.
+    GigeFixture f;
+    LogLines lines;
+    const Logger log = lines.logger();
+    SimBoard sim(f.board, log);
+    write_table(f.dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
+    Scanner scanner(f.board, sim.devices(), log);
+    UnplugAtFrame observer(sim, 5);
+    scanner.set_observer(&observer);
+
+    try {
+        scanner.scan(ScanMode::scan);
+        FAIL() << "a scan without its camera succeeded";
+    } catch (const drivers::DeviceError& e) {
+        EXPECT_NE(std::string(e.what()).find("camera 127.0.0.1"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(observer.unplugged);
+    EXPECT_EQ(observer.failure.rfind("camera 127.0.0.1", 0), 0u) << observer.failure;
+    EXPECT_EQ(sim.led().state(), drivers::LedState::error);
+    EXPECT_TRUE(fpp::test::entries_under(f.store).empty())
+        << fpp::test::entries_under(f.store).front();
+    // Logged: the loss (the driver closed) and the failure with its reason.
+    bool closed = false;
+    bool failed = false;
+    for (const auto& [level, line] : lines.lines) {
+        closed |= level == LogLevel::warning && line.find("camera 127.0.0.1 closed after an "
+                                                          "error") != std::string::npos;
+        failed |= level == LogLevel::error &&
+                  line.rfind("scan failed: camera 127.0.0.1", 0) == 0;
+    }
+    EXPECT_TRUE(closed);
+    EXPECT_TRUE(failed);
+
+    // Still away: the next scan fails at its first camera request.
+    observer.at = 0;
+    EXPECT_THROW(scanner.scan(ScanMode::scan), drivers::DeviceError);
+    EXPECT_EQ(sim.led().state(), drivers::LedState::error);
+    EXPECT_TRUE(fpp::test::entries_under(f.store).empty());
+
+    // Back: the next scan opens it again and is as good as before the loss.
+    sim.plug_camera();
+    const std::size_t exposures_before = sim.camera().exposures().size();
+    const ScanOutcome out = scanner.scan(ScanMode::scan);
+    EXPECT_EQ(out.attempts, 1);
+    EXPECT_EQ(sim.led().state(), drivers::LedState::ready);
+    EXPECT_EQ(list_scans(f.store).size(), 1u);
+    std::size_t compared = 0;
+    const double rms = fpp::test::ply_rms_against_truth(out.folder / "cloud.ply",
+                                                        sim.renderer().truth_xyz(), compared);
+    std::printf("after the camera's return: %zu points, RMS %.4f mm against truth\n", out.points,
+                rms);
+    EXPECT_GT(out.points, 60000u);
+    EXPECT_LT(rms, 0.1);
+    // Each frame of it was exposed under its own pattern.
+    const auto& exposures = sim.camera().exposures();
+    ASSERT_EQ(exposures.size(), exposures_before + static_cast<std::size_t>(out.frames));
+    for (std::size_t i = 0; i < static_cast<std::size_t>(out.frames); ++i)
+        EXPECT_EQ(exposures[exposures_before + i].pattern, static_cast<int>(i));
+    bool answered = false;
+    for (const auto& [level, line] : lines.lines)
+        answered |= level == LogLevel::info &&
+                    line.find("camera 127.0.0.1 answers again") != std::string::npos;
+    EXPECT_TRUE(answered);
+}
 
 TEST(ScannerGige, ServiceWaitsForACameraThatDoesNotAnswerYet) {
     // Nothing answers at 127.0.0.1 at the first attempt (the real Aravis

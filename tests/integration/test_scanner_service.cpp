@@ -12,8 +12,7 @@
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/scanner_service.hpp"
 #include "fpp/scanner/sim_board.hpp"
-#include "rig_truth_table.hpp"
-#include "sim_board_yaml.hpp"
+#include "running_service.hpp"
 #include "test_support.hpp"
 
 #include <algorithm>
@@ -32,88 +31,13 @@
 namespace fs = std::filesystem;
 using namespace fpp;
 using namespace fpp::scanner;
-
-namespace {
-
-// "event: NAME\ndata: JSON\n\n" -> NAME and JSON.
-std::pair<std::string, std::string> parse_event(const std::string& text) {
-    const std::size_t name_end = text.find('\n');
-    const std::string name = text.substr(7, name_end - 7);
-    const std::size_t data = text.find("data: ", name_end);
-    return {name, text.substr(data + 6, text.find('\n', data) - data - 6)};
-}
-
-// The value of "id" in one line of JSON written by the service.
-std::string id_of(const std::string& json) {
-    const std::size_t at = json.find("\"id\":\"");
-    if (at == std::string::npos)
-        return {};
-    return json.substr(at + 6, json.find('"', at + 6) - at - 6);
-}
-
-// The test board (camera binned 4 x 4: 400 x 300, virtual clock) in `dir`,
-// its table at dir/table.fpt, a store without pruning (a folder per scan stays).
-BoardConfig sim_board_in(const fs::path& dir, const fs::path& store) {
-    fpp::test::SimBoardYaml b;
-    b.store = store;
-    b.table = "table.fpt";
-    b.max_mb = 4096;
-    std::ofstream(dir / "board.yaml") << b.text();
-    return read_board_config(dir / "board.yaml");
-}
-
-// The service on the test board, its table made from the rig's truth, run
-// on its own thread, its events followed from the start; stopped and joined
-// at the end.
-struct RunningService {
-    explicit RunningService(Logger::Sink sink = [](LogLevel, const std::string&) {})
-        : board(sim_board_in(dir.path(), dir / "scans")), sim(board), log(std::move(sink)) {
-        write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim.rig()));
-        scanner.emplace(board, sim.devices(), log);
-        service.emplace(board, *scanner, sim.devices(), events, log,
-                        ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
-        stream = events.subscribe("");
-        loop = std::thread([this] { service->run(ScanMode::scan, stop); });
-    }
-    ~RunningService() { stop_loop(); }
-    RunningService(const RunningService&) = delete;
-    RunningService& operator=(const RunningService&) = delete;
-
-    void stop_loop() {
-        stop = true;
-        if (loop.joinable())
-            loop.join();
-    }
-    fs::path store() const { return dir / "scans"; }
-
-    fpp::test::TempDir dir;
-    BoardConfig board;
-    SimBoard sim;
-    Logger log;
-    std::optional<Scanner> scanner;
-    EventHub events;
-    std::optional<ScannerService> service; // after what it uses: destroyed first
-    std::shared_ptr<EventHub::Subscription> stream;
-    std::atomic<bool> stop{false};
-    std::thread loop;
-};
-
-} // namespace
+using fpp::test::id_of;
+using fpp::test::parse_event;
+using fpp::test::RunningService;
 
 TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
-    std::mutex lines_mutex;
-    std::vector<std::string> lines;
-    RunningService rs([&](LogLevel, const std::string& m) {
-        const std::lock_guard lock(lines_mutex);
-        lines.push_back(m);
-    });
-    const auto count_logged = [&](const std::string& part) {
-        const std::lock_guard lock(lines_mutex);
-        int n = 0;
-        for (const auto& l : lines)
-            n += l.find(part) != std::string::npos ? 1 : 0;
-        return n;
-    };
+    fpp::test::Journal journal;
+    RunningService rs(journal.sink());
 
     Scanner& scanner = *rs.scanner;
     ScannerService& service = *rs.service;
@@ -196,8 +120,8 @@ TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
                 kRounds, api_won, refused);
     EXPECT_EQ(api_won + refused, kRounds);
     // The loser is refused (409) or its press logged as ignored, every round.
-    EXPECT_EQ(count_logged("button pressed while a scan is queued: ignored") +
-                  count_logged("during the scan: ignored"),
+    EXPECT_EQ(journal.count("button pressed while a scan is queued: ignored") +
+                  journal.count("during the scan: ignored"),
               api_won);
     EXPECT_EQ(scanner.scans_completed(), kRounds);
     EXPECT_EQ(list_scans(store).size(), static_cast<std::size_t>(kRounds));

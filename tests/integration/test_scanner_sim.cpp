@@ -24,6 +24,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fcntl.h>
 #include <fstream>
 #include <mutex>
@@ -119,6 +120,18 @@ TEST(ScannerSim, ScanWritesCloudCloseToTruth) {
                 out.timings.last_frame_to_written_ms);
     EXPECT_GT(compared, out.points * 9 / 10);
     EXPECT_LT(rms, 0.1);
+
+    // scan.json counts the decode (fpp/decode_report.hpp): nearly every lit pixel decodes.
+    std::stringstream scan_json;
+    scan_json << std::ifstream(out.folder / "scan.json").rdbuf();
+    const std::string json = scan_json.str();
+    const auto coverage_at = json.find("\"coverage_of_lit\": ");
+    ASSERT_NE(coverage_at, std::string::npos) << json;
+    const double coverage = std::strtod(json.c_str() + coverage_at + 19, nullptr);
+    std::printf("scan.json: coverage of lit %.4f\n", coverage);
+    EXPECT_GT(coverage, 0.99);
+    EXPECT_NE(json.find("\"statistics_of\": \"pass\""), std::string::npos) << json;
+    EXPECT_NE(json.find("\"unwrap_inconsistent\": "), std::string::npos) << json;
 
     // Every frame shows the pattern it was triggered for, over the whole exposure.
     const auto& exposures = sim.camera().exposures();
@@ -288,6 +301,30 @@ TEST(ScannerSim, FrameTimeoutAndDroppedFrameAreRetriedOnce) {
         EXPECT_TRUE(f.logged("a frame was dropped"));
         EXPECT_EQ(out.attempts, 2);
     }
+}
+
+TEST(ScannerSim, FrameIdsWrappingAt16BitsFollowEachOtherAndAGapAcrossTheWrapIsSeen) {
+    // A GigE Vision 1.x camera's block id goes 65534, 65535, 1, 2: one scan
+    // every 65,535 frames (3,855 scans of 17) crosses it.
+    Fixture f;
+    SimBoard sim(f.board);
+    f.make_table(sim.rig());
+    Scanner scanner(f.board, sim.devices(), f.log);
+    sim.camera().set_next_frame_id(65530, true);
+    const ScanOutcome out = scanner.scan(ScanMode::scan);
+    EXPECT_EQ(out.attempts, 1);
+    const auto& exposures = sim.camera().exposures();
+    ASSERT_EQ(exposures.size(), 17u);
+    EXPECT_EQ(exposures[5].frame_id, 65535u);
+    EXPECT_EQ(exposures[6].frame_id, 1u);
+    // The frame after 65535 lost: seen, and the scan retried.
+    sim.camera().set_next_frame_id(65530, true);
+    sim.camera().inject_fault(sim::CameraFault::dropped, 17 + 6);
+    const ScanOutcome again = scanner.scan(ScanMode::scan);
+    EXPECT_TRUE(f.logged("frame id 2 after 65535: a frame was dropped"));
+    EXPECT_EQ(again.attempts, 2);
+    EXPECT_THROW(sim.camera().set_next_frame_id(0, false), std::invalid_argument);
+    EXPECT_THROW(sim.camera().set_next_frame_id(65536, true), std::invalid_argument);
 }
 
 TEST(ScannerSim, FlipFailureAndStopRequestLeaveNothing) {

@@ -21,6 +21,7 @@
 #include "rig_truth_table.hpp"
 #include "sim_board_yaml.hpp"
 #include "test_support.hpp"
+#include "tiny_rig.hpp"
 
 #include <algorithm>
 #include <array>
@@ -41,30 +42,8 @@ using namespace fpp::scanner;
 namespace {
 
 constexpr int kScans = 1000;
-constexpr int kCameraBinning = 16;   // 1600 x 1200 -> 100 x 75
-constexpr int kProjectorBinning = 8; // 1280 x 800 -> 160 x 100
-
-// The paper rig with its effects, both images binned: rendering a frame costs
-// in proportion to the camera and the projector image (at 1280 x 800 the
-// projector's defocus took 90 % of the time), so the 14 000 frames take
-// seconds. Scaled with the pixels, both defocus sigmas fall to 0.1 px and
-// below, where the blur is the identity: they are set to 0, which skips it.
-// Pixel centres on integers: c' = (c + 0.5) / k - 0.5.
-sim::Rig small_rig() {
-    sim::Rig rig = sim::load_rig(fpp::test::source_dir() / "board/sim/paper-rig-effects.yaml")
-                       .binned_camera(kCameraBinning);
-    constexpr int k = kProjectorBinning;
-    rig.name += "-small";
-    rig.projector_size = {rig.projector_size.width / k, rig.projector_size.height / k};
-    rig.projector.fu /= k;
-    rig.projector.fv /= k;
-    rig.projector.skew /= k;
-    rig.projector.cu = (rig.projector.cu + 0.5) / k - 0.5;
-    rig.projector.cv = (rig.projector.cv + 0.5) / k - 0.5;
-    rig.projector_optics.defocus_sigma_px = 0;
-    rig.sensor.defocus_sigma_px = 0;
-    return rig;
-}
+constexpr int kCameraBinning = fpp::test::kTinyCameraBinning;
+constexpr int kProjectorBinning = fpp::test::kTinyProjectorBinning;
 
 std::string board_yaml(const fs::path& store, const fs::path& rig) {
     fpp::test::SimBoardYaml b;
@@ -113,7 +92,7 @@ TEST(ScannerStress, ThousandScansEachFrameShowsItsPattern) {
     fpp::test::TempDir dir;
     const StoreDir store_dir(dir.path());
     const fs::path store = store_dir.path() / "scans";
-    std::ofstream(dir / "rig.yaml") << sim::rig_to_yaml(small_rig());
+    std::ofstream(dir / "rig.yaml") << sim::rig_to_yaml(fpp::test::tiny_rig());
     std::ofstream(dir / "board.yaml") << board_yaml(store, dir / "rig.yaml");
     const BoardConfig board = read_board_config(dir / "board.yaml");
     SimBoard sim(board);

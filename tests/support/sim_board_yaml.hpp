@@ -1,6 +1,6 @@
 #pragma once
-// The text of a simulated board file (fpp-scanner-board/1, schema in
-// fpp/scanner/board_config.hpp) for tests and benchmarks: GPIO lines 17, 27,
+// The text of a simulated board file (fpp-scanner-board/1, format in
+// firmware/core/formats/board-file.md) for tests and benchmarks: GPIO lines 17, 27,
 // 22 (unused by the sim), gray-x, 8 ms exposure, composite scene. Fields are
 // laid out one way only, so that tests can replace a piece of text (e.g.
 // "clock: virtual", "trigger: line", "seed: 3}") to make a variant.

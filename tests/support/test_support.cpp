@@ -59,6 +59,14 @@ std::string shell_quote(const std::string& s) {
     return q + "'";
 }
 
+std::vector<std::filesystem::path> entries_under(const std::filesystem::path& dir) {
+    std::vector<std::filesystem::path> entries;
+    if (std::filesystem::exists(dir))
+        for (const auto& entry : std::filesystem::recursive_directory_iterator(dir))
+            entries.push_back(entry.path());
+    return entries;
+}
+
 ToolRun run_tool(const std::string& exe, const std::string& args,
                  const std::filesystem::path& scratch) {
     const std::filesystem::path log = scratch / "tool.log";

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "fpp/image.hpp"
 
@@ -49,6 +50,10 @@ inline std::string shell_quote(const std::filesystem::path& p) {
 // a log file in `scratch` that is removed afterwards.
 ToolRun run_tool(const std::string& exe, const std::string& args,
                  const std::filesystem::path& scratch);
+
+// Every file and folder below `dir`, recursively ({} when `dir` is not
+// there): what a failed write must not leave in a store.
+std::vector<std::filesystem::path> entries_under(const std::filesystem::path& dir);
 
 // A figures.csv written by fpp-calib (header name,value,unit): name -> value.
 // Throws std::runtime_error naming the file if it is missing or malformed.

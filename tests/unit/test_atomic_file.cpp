@@ -18,6 +18,8 @@
 #include <thread>
 #include <vector>
 
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -258,4 +260,53 @@ TEST(AtomicFolder, MissingParentIsIoError) {
     EXPECT_THROW(fpp::write_folder_atomically(dir / "no" / "set", [](const fs::path&) {}),
                  fpp::IoError);
     EXPECT_TRUE(listing(dir.path()).empty());
+}
+
+// A process killed in the middle of an atomic write (a power cut) leaves its
+// hidden temporary behind, and never a half-written target; at the next
+// start remove_interrupted_writes takes the temporaries and nothing else.
+TEST(AtomicFile, WritesCutShortLeaveOnlyTemporariesThatAreRemovedAtStart) {
+    TempDir dir;
+    fpp::write_file_atomically(dir / "table.fpt", "old table");
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) { // killed while writing a file, then while writing a folder
+        const pid_t again = ::fork();
+        if (again == 0) {
+            fpp::write_atomically(dir / "table.fpt", [](const fs::path& temp) {
+                std::ofstream(temp) << "new ta";
+                ::kill(::getpid(), SIGKILL);
+            });
+            _exit(0);
+        }
+        int status = 0;
+        ::waitpid(again, &status, 0);
+        fpp::write_folder_atomically(dir / "scan-1", [](const fs::path& temp) {
+            fpp::write_file_synced(temp / "cloud.ply", "half a clo");
+            ::kill(::getpid(), SIGKILL);
+        });
+        _exit(0);
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFSIGNALED(status));
+    std::ofstream(dir / ".keep") << "not ours";
+    std::ofstream(dir / ".notes.tmp") << "not ours either";
+    const std::vector<std::string> before = listing(dir.path());
+    ASSERT_EQ(before.size(), 5u) << ::testing::PrintToString(before);
+    EXPECT_TRUE(before[2].starts_with(".scan-1.partial-")) << before[2];
+    EXPECT_TRUE(before[3].starts_with(".table.fpt.tmp-")) << before[3];
+    EXPECT_FALSE(fs::exists(dir / "scan-1"));
+    EXPECT_EQ(read_text(dir / "table.fpt"), "old table");
+
+    // Only another target's: nothing of table.fpt's is touched.
+    EXPECT_EQ(fpp::remove_interrupted_writes(dir.path(), "settings.yaml").size(), 0u);
+    const auto table_only = fpp::remove_interrupted_writes(dir.path(), "table.fpt");
+    ASSERT_EQ(table_only.size(), 1u);
+    EXPECT_EQ(table_only[0], before[3]);
+    const auto rest = fpp::remove_interrupted_writes(dir.path());
+    ASSERT_EQ(rest.size(), 1u);
+    EXPECT_EQ(rest[0], before[2]);
+    EXPECT_EQ(listing(dir.path()), (std::vector<std::string>{".keep", ".notes.tmp", "table.fpt"}));
+    EXPECT_TRUE(fpp::remove_interrupted_writes(dir / "missing").empty());
 }

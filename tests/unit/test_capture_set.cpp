@@ -236,7 +236,8 @@ TEST(CaptureManifest, ReadsFromFileAndNamesMissingFile) {
 // ---------------------------------------------------------------------------
 
 TEST(CaptureManifestRejects, UnknownFormat) {
-    expect_rejected(with("fpp-capture/1", "fpp-capture/2"), "format", "fpp-capture/2");
+    // fpp-capture/2 is known (test_capture_set_v2.cpp); a later version is not.
+    expect_rejected(with("fpp-capture/1", "fpp-capture/3"), "format", "fpp-capture/3");
 }
 
 TEST(CaptureManifestRejects, MissingFormat) {

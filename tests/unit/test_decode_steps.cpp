@@ -16,6 +16,8 @@
 #include <cstring>
 #include <numbers>
 #include <set>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace {
@@ -208,3 +210,101 @@ TEST(DecodePlan, PhaseBlockIsSlicedUntilItsMeanIsRead) {
     const auto last = fpp::detail::make_plan({phase}, camera, projector);
     EXPECT_EQ(phase_step(last).parts, 1);
 }
+
+// fpp-capture/2 families: the method each axis gets, the wrapped steps of a
+// shifted code, and the refusals that name the block and the reason.
+namespace {
+
+fpp::GrayBlock gray_block(double period, int bits) {
+    fpp::GrayBlock g;
+    g.axis = fpp::Axis::x;
+    g.period = period;
+    g.bits = bits;
+    return g;
+}
+
+fpp::PhaseBlock phase_block(double period, int steps) {
+    fpp::PhaseBlock p;
+    p.axis = fpp::Axis::x;
+    p.period = period;
+    p.steps = steps;
+    return p;
+}
+
+std::string method_of(const fpp::Sequence& sequence) {
+    return fpp::detail::make_plan(sequence, {64, 40}, {1280, 800}).axes[0].name;
+}
+
+std::string refusal(const fpp::Sequence& sequence) {
+    try {
+        fpp::detail::make_plan(sequence, {64, 40}, {1280, 800});
+    } catch (const std::invalid_argument& e) {
+        return e.what();
+    }
+    return "accepted";
+}
+
+TEST(DecodePlanFamilies, MethodNames) {
+    fpp::GrayBlock inverse = gray_block(1.25, 10);
+    inverse.inverse = true;
+    EXPECT_EQ(method_of({inverse}), "inverse-gray-code");
+    fpp::GrayBlock binary = gray_block(1.25, 10);
+    binary.code = fpp::CodeKind::binary;
+    EXPECT_EQ(method_of({fpp::WhiteBlock{}, fpp::BlackBlock{}, binary}), "binary-code");
+    fpp::GrayBlock quaternary = gray_block(1.25, 5);
+    quaternary.levels = 4;
+    EXPECT_EQ(method_of({fpp::WhiteBlock{}, fpp::BlackBlock{}, quaternary}), "gray-code-4-level");
+    fpp::GrayBlock shifted = gray_block(20, 7);
+    shifted.offset = 10;
+    EXPECT_EQ(method_of({phase_block(20, 4), shifted}), "shifted-gray");
+    fpp::PhaseBlock two_plus_one = phase_block(1280.0 / 58.0, 3);
+    two_plus_one.shifting = fpp::PhaseShifting::two_plus_one;
+    fpp::GrayBlock rational = gray_block(1280.0 / 58.0, 6);
+    rational.complementary = true;
+    EXPECT_EQ(method_of({two_plus_one, rational}), "complementary-gray");
+    fpp::MicroPhaseBlock micro;
+    micro.periods = {16, 16.5, 17, 17.5, 18};
+    EXPECT_EQ(method_of({micro}), "micro-phase");
+}
+
+TEST(DecodePlanFamilies, ShiftedCodeWrapsLeftOfTheOffset) {
+    fpp::GrayBlock shifted = gray_block(20, 7);
+    shifted.offset = 10;
+    const fpp::detail::Plan plan =
+        fpp::detail::make_plan({phase_block(20, 4), shifted}, {64, 40}, {1280, 800});
+    const auto& table = plan.grays[0].step_of_code;
+    ASSERT_EQ(table.size(), 128u);
+    // Gray codeword of 127 (pixels 0 .. 9, left of the offset) is 64.
+    EXPECT_EQ(table[64], -1.0f);
+    EXPECT_EQ(table[0], 0.0f);
+    EXPECT_EQ(table[1], 1.0f);
+    EXPECT_EQ(table[3], 2.0f); // Gray 2 = 11b
+    EXPECT_EQ(plan.grays[0].max_step, 63.0f); // 10 + 63 * 20 = 1270 < 1279.5
+}
+
+TEST(DecodePlanFamilies, RefusalsNameTheBlockAndReason) {
+    fpp::MicroPhaseBlock micro;
+    micro.periods = {16, 17};
+    EXPECT_NE(refusal({micro, gray_block(16, 7)}).find("micro phase shifting codes its axis alone"),
+              std::string::npos);
+    fpp::GrayBlock quaternary = gray_block(1.25, 5);
+    quaternary.levels = 4;
+    EXPECT_NE(refusal({quaternary}).find("need white and black frames"), std::string::npos);
+    quaternary.inverse = true;
+    EXPECT_NE(refusal({quaternary}).find("inverse frames are not defined"), std::string::npos);
+    EXPECT_NE(refusal({gray_block(1.25, 10)}).find("gray block 0 (axis x)"), std::string::npos);
+    fpp::PhaseBlock two_plus_one = phase_block(1280, 4);
+    two_plus_one.shifting = fpp::PhaseShifting::two_plus_one;
+    EXPECT_NE(refusal({two_plus_one}).find("2+1 phase shifting has steps 3"), std::string::npos);
+    fpp::PhaseBlock modulated = phase_block(1280, 3);
+    modulated.shifting = fpp::PhaseShifting::modulated;
+    modulated.carrier_period = 8;
+    modulated.carrier_steps = 2;
+    EXPECT_NE(refusal({modulated}).find("carrier_steps must be in [3, 16]"), std::string::npos);
+    fpp::GrayBlock levels = gray_block(1.25, 9);
+    levels.levels = 4;
+    EXPECT_NE(refusal({fpp::WhiteBlock{}, fpp::BlackBlock{}, levels}).find("at most 65536"),
+              std::string::npos);
+}
+
+} // namespace

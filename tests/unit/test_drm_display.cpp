@@ -44,6 +44,7 @@ std::string message_of(const std::vector<DrmConnectorInfo>& connectors,
         (void)choose_drm_output(connectors, request, "display card0");
     } catch (const DeviceError& e) {
         EXPECT_EQ(e.device(), "display card0");
+        EXPECT_EQ(e.kind(), fpp::drivers::DeviceKind::display);
         return e.what();
     }
     ADD_FAILURE() << "no error for connector '" << request.connector << "' mode '"

@@ -78,6 +78,7 @@ void expect_missing_chip(const std::function<void(const GpioLineConfig&)>& open)
         FAIL() << "opened a line on a chip that does not exist";
     } catch (const DeviceError& e) {
         EXPECT_EQ(e.device(), "/nonexistent/gpiochip7 line 17");
+        EXPECT_EQ(e.kind(), fpp::drivers::DeviceKind::gpio);
         EXPECT_NE(std::string(e.what()).find("cannot open the chip"), std::string::npos)
             << e.what();
     }

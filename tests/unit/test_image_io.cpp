@@ -10,6 +10,7 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <bit>
 #include <cmath>
@@ -390,4 +391,60 @@ TEST(ImageIo, TiffWriterRefusesUnsupportedImages) {
     EXPECT_THROW(fpp::write_tiff(dir / "missing" / "c.tiff", fpp::Image<float>(4, 4, 1)),
                  fpp::IoError);
     EXPECT_TRUE(listing(dir.path()).empty());
+}
+
+TEST(PngRead, HeaderClaimingMoreThanTheFileCanHoldIsRefusedBeforeAllocating) {
+    // A 59-byte PNG whose IHDR claims 16000 x 16000 16-bit grey (512 MB).
+    std::string png = "\x89PNG\r\n\x1a\n";
+    auto be32 = [](std::uint32_t v) {
+        std::string s(4, '\0');
+        for (int k = 0; k < 4; ++k) s[std::size_t(k)] = static_cast<char>(v >> (24 - 8 * k));
+        return s;
+    };
+    auto chunk = [&](const std::string& type, const std::string& data) {
+        const std::string body = type + data;
+        const auto crc = static_cast<std::uint32_t>(
+            crc32(0, reinterpret_cast<const Bytef*>(body.data()), static_cast<uInt>(body.size())));
+        return be32(static_cast<std::uint32_t>(data.size())) + body + be32(crc);
+    };
+    std::string ihdr = be32(16000) + be32(16000);
+    ihdr += std::string("\x10\x00\x00\x00\x00", 5); // 16-bit, grey, deflate, filter 0, no interlace
+    png += chunk("IHDR", ihdr);
+    png += chunk("IDAT", std::string("\x78\x9c", 2)); // a zlib header, then nothing
+    png += chunk("IEND", "");
+    TempDir dir;
+    const fs::path path = dir / "bomb.png";
+    std::ofstream(path, std::ios::binary) << png;
+    try {
+        fpp::read_png_gray(path);
+        ADD_FAILURE() << "accepted";
+    } catch (const fpp::InputError& e) {
+        EXPECT_EQ(e.file(), path);
+        EXPECT_NE(std::string(e.what()).find("more than a 59-byte file can hold"), std::string::npos)
+            << e.what();
+    }
+}
+
+// Found while fuzzing (issue 17): the TIFF readers asked fs::exists without an
+// error code, so a name the file system cannot look up (longer than NAME_MAX)
+// escaped as std::filesystem::filesystem_error instead of InputError naming
+// the file. Every frame reader answers such a name with InputError.
+TEST(ImageIo, NameTooLongForTheFileSystemIsAnInputError) {
+    TempDir dir;
+    const fs::path path = dir / (std::string(300, 'a') + ".tiff");
+    const auto expect_input_error = [&](const char* reader, auto&& read) {
+        try {
+            read();
+            ADD_FAILURE() << reader << " accepted a missing file";
+        } catch (const fpp::InputError& e) {
+            EXPECT_EQ(e.file(), path) << reader;
+            EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos) << e.what();
+        }
+    };
+    expect_input_error("read_tiff_float", [&] { fpp::read_tiff_float(path); });
+    expect_input_error("read_tiff_gray", [&] { fpp::read_tiff_gray(path); });
+    expect_input_error("read_tiff_gray_info", [&] { fpp::read_tiff_gray_info(path); });
+    expect_input_error("read_png_gray", [&] { fpp::read_png_gray(path); });
+    expect_input_error("read_bmp_gray", [&] { fpp::read_bmp_gray(path); });
+    expect_input_error("read_frame", [&] { fpp::read_frame(path); });
 }

@@ -3,6 +3,8 @@
 
 #include "fpp/calib/stereo_calibration.hpp"
 
+#include "calibration_reader.hpp"
+
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
 #include "fpp/sim/rig.hpp"
@@ -54,6 +56,14 @@ StereoCalibration calibration_from_rig(const sim::Rig& rig) {
     return c;
 }
 
+CameraPairFileError::CameraPairFileError(const fs::path& file, CameraPairCalibration pair_)
+    : InputError(file, "",
+                 "a camera-camera calibration of " + pair_.summary() +
+                     ", not a camera-projector calibration: it allows two-camera scanning "
+                     "(fpp-calib reconstruct with two capture sets, one per camera, and this "
+                     "file), not a camera-projector table (the projector is not calibrated)"),
+      pair(std::move(pair_)) {}
+
 CalibrationFormat parse_calibration_format(const std::string& name) {
     if (name == "auto")
         return CalibrationFormat::automatic;
@@ -63,8 +73,15 @@ CalibrationFormat parse_calibration_format(const std::string& name) {
         return CalibrationFormat::slstudio;
     if (name == "slmaster")
         return CalibrationFormat::slmaster;
+    if (name == "opencv-stereo")
+        return CalibrationFormat::opencv_stereo;
+    if (name == "bouguet")
+        return CalibrationFormat::bouguet;
+    if (name == "matlab")
+        return CalibrationFormat::matlab;
     throw std::invalid_argument("unknown calibration format '" + name +
-                                "' (auto, fpp, slstudio, slmaster)");
+                                "' (auto, fpp, slstudio, slmaster, opencv-stereo, bouguet, "
+                                "matlab)");
 }
 
 const char* to_string(CalibrationFormat format) {
@@ -77,232 +94,25 @@ const char* to_string(CalibrationFormat format) {
         return "slstudio";
     case CalibrationFormat::slmaster:
         return "slmaster";
+    case CalibrationFormat::opencv_stereo:
+        return "opencv-stereo";
+    case CalibrationFormat::bouguet:
+        return "bouguet";
+    case CalibrationFormat::matlab:
+        return "matlab";
     }
     return "?";
 }
 
 namespace {
 
-// Key names of one format.
-struct KeySet {
-    const char* camera_matrix;
-    const char* camera_distortion;
-    const char* projector_matrix;
-    const char* projector_distortion;
-    const char* R;
-    const char* T;
-};
+using detail::KeySet;
+using detail::Reader;
 
 constexpr KeySet kFppKeys{
     "camera_matrix", "camera_distortion", "projector_matrix", "projector_distortion", "R", "T"};
 constexpr KeySet kSlStudioKeys{"Kc", "kc", "Kp", "kp", "Rp", "Tp"};
 constexpr KeySet kSlMasterKeys{"M1", "D1", "M4", "D4", "Rlp", "Tlp"};
-
-// Reads keys of one parsed file, throwing InputError(origin, key, ...).
-class Reader {
-  public:
-    Reader(const cv::FileNode& root, fs::path origin) : root_(root), origin_(std::move(origin)) {}
-
-    [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-        throw InputError(origin_, key, what);
-    }
-
-    bool has(const char* key) const { return !root_[key].empty(); }
-
-    cv::FileNode require(const std::string& key) const {
-        cv::FileNode n = root_[key];
-        if (n.empty())
-            fail(key, "missing");
-        return n;
-    }
-
-    // A !!opencv-matrix of finite numbers, as doubles.
-    cv::Mat matrix(const std::string& key) const { return matrix_node(require(key), key); }
-
-    cv::Mat matrix_node(const cv::FileNode& n, const std::string& key) const {
-        cv::Mat m;
-        if (n.isMap()) {
-            try {
-                n >> m;
-            } catch (const cv::Exception& e) {
-                fail(key, "malformed opencv-matrix: " + e.msg);
-            }
-        }
-        if (m.empty())
-            fail(key, "expected an opencv-matrix (a map with rows, cols, dt and data)");
-        if (m.channels() != 1)
-            fail(key, "expected a single-channel matrix");
-        cv::Mat d;
-        m.convertTo(d, CV_64F);
-        for (int r = 0; r < d.rows; ++r)
-            for (int c = 0; c < d.cols; ++c)
-                if (!std::isfinite(d.at<double>(r, c)))
-                    fail(key, "element (" + std::to_string(r) + ", " + std::to_string(c) +
-                                  ") is not a finite number");
-        return d;
-    }
-
-    cv::Mat matrix_shaped(const std::string& key, int rows, int cols) const {
-        cv::Mat m = matrix(key);
-        if (m.rows != rows || m.cols != cols)
-            fail(key, "expected a " + std::to_string(rows) + "x" + std::to_string(cols) +
-                          " matrix, got " + std::to_string(m.rows) + "x" + std::to_string(m.cols));
-        return m;
-    }
-
-    // 3 elements as a row or a column.
-    Vec3 vector3(const std::string& key) const {
-        cv::Mat m = matrix(key);
-        if (m.total() != 3 || (m.rows != 1 && m.cols != 1))
-            fail(key, "expected a 3x1 vector, got " + std::to_string(m.rows) + "x" +
-                          std::to_string(m.cols));
-        return {m.at<double>(0), m.at<double>(1), m.at<double>(2)};
-    }
-
-    double number(const cv::FileNode& n, const std::string& key) const {
-        if (!n.isReal() && !n.isInt())
-            fail(key, "expected a number");
-        const double v = n.real();
-        if (!std::isfinite(v))
-            fail(key, "not a finite number");
-        return v;
-    }
-    double number(const std::string& key) const { return number(require(key), key); }
-
-    int integer(const cv::FileNode& n, const std::string& key) const {
-        const double v = number(n, key);
-        if (v != std::floor(v) || std::fabs(v) > 2147483647.0)
-            fail(key, "expected an integer");
-        return static_cast<int>(v);
-    }
-
-    int dimension(const cv::FileNode& n, const std::string& key) const {
-        const int v = integer(n, key);
-        if (v < 1 || v > 65535)
-            fail(key, "image dimension " + std::to_string(v) + " outside 1..65535");
-        return v;
-    }
-
-    // [width, height] as a sequence or a 1x2 / 2x1 matrix.
-    Size size(const std::string& key) const {
-        const cv::FileNode n = require(key);
-        double w = 0, h = 0;
-        if (n.isSeq()) {
-            if (n.size() != 2)
-                fail(key, "expected [width, height]");
-            return {dimension(n[0], key + "[0]"), dimension(n[1], key + "[1]")};
-        }
-        if (n.isMap()) {
-            cv::Mat m = matrix_node(n, key);
-            if (m.total() != 2 || (m.rows != 1 && m.cols != 1))
-                fail(key, "expected [width, height]");
-            w = m.at<double>(0);
-            h = m.at<double>(1);
-            if (w != std::floor(w) || h != std::floor(h) || w < 1 || h < 1 || w > 65535 ||
-                h > 65535)
-                fail(key, "expected integer image dimensions in 1..65535");
-            return {static_cast<int>(w), static_cast<int>(h)};
-        }
-        fail(key, "expected [width, height]");
-    }
-
-    std::string text(const cv::FileNode& n, const std::string& key) const {
-        if (!n.isString())
-            fail(key, "expected a string");
-        return n.string();
-    }
-
-    LensModel lens(const char* matrix_key, const char* distortion_key) const {
-        const cv::Mat K = matrix_shaped(matrix_key, 3, 3);
-        const double fu = K.at<double>(0, 0), skew = K.at<double>(0, 1), cu = K.at<double>(0, 2);
-        const double fv = K.at<double>(1, 1), cv = K.at<double>(1, 2);
-        if (K.at<double>(1, 0) != 0 || K.at<double>(2, 0) != 0 || K.at<double>(2, 1) != 0 ||
-            std::fabs(K.at<double>(2, 2) - 1) > 1e-12)
-            fail(matrix_key, "not a camera matrix (expected [fu s cu; 0 fv cv; 0 0 1])");
-        if (!(fu > 0) || !(fv > 0))
-            fail(matrix_key, "focal lengths must be positive");
-
-        const cv::Mat D = matrix(distortion_key);
-        const std::size_t n = D.total();
-        if ((D.rows != 1 && D.cols != 1) || (n != 4 && n != 5 && n != 8 && n != 12 && n != 14))
-            fail(distortion_key, "expected 5 coefficients k1 k2 p1 p2 k3 (1x5 or 5x1), got " +
-                                     std::to_string(D.rows) + "x" + std::to_string(D.cols));
-        for (std::size_t i = 5; i < n; ++i)
-            if (D.at<double>(static_cast<int>(i)) != 0)
-                fail(distortion_key, "coefficient " + std::to_string(i) +
-                                         " (rational or prism term) is not zero: the model "
-                                         "has k1 k2 p1 p2 k3 only");
-        LensModel lens;
-        lens.fu = fu;
-        lens.fv = fv;
-        lens.cu = cu;
-        lens.cv = cv;
-        lens.skew = skew;
-        lens.k1 = D.at<double>(0);
-        lens.k2 = D.at<double>(1);
-        lens.p1 = D.at<double>(2);
-        lens.p2 = D.at<double>(3);
-        lens.k3 = n >= 5 ? D.at<double>(4) : 0.0;
-        return lens;
-    }
-
-    Mat3 rotation(const char* key) const {
-        const cv::Mat m = matrix_shaped(key, 3, 3);
-        Mat3 R{};
-        for (int i = 0; i < 9; ++i)
-            R[std::size_t(i)] = m.at<double>(i / 3, i % 3);
-        // Orthonormal to the precision of a float-stored file.
-        const Mat3 P = mul(R, transpose(R));
-        double worst = 0;
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j)
-                worst =
-                    std::max(worst, std::fabs(P[std::size_t(i * 3 + j)] - (i == j ? 1.0 : 0.0)));
-        const double det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) +
-                           R[2] * (R[3] * R[7] - R[4] * R[6]);
-        if (worst > 1e-5 || !(det > 0))
-            fail(key, "not a rotation matrix (R R^T differs from I by " + std::to_string(worst) +
-                          ", det " + std::to_string(det) + ")");
-        return R;
-    }
-
-    void geometry(const KeySet& keys, StereoCalibration& c) const {
-        c.camera = lens(keys.camera_matrix, keys.camera_distortion);
-        c.projector = lens(keys.projector_matrix, keys.projector_distortion);
-        c.R = rotation(keys.R);
-        c.T = vector3(keys.T);
-    }
-
-    // An optional correction grid over an image of `image` pixels, from the
-    // matrices <prefix>_du and <prefix>_dv.
-    CorrectionGrid correction(const std::string& prefix, Size image) const {
-        const std::string du = prefix + "_du", dv = prefix + "_dv";
-        if (!has(du.c_str()) && !has(dv.c_str()))
-            return {};
-        const cv::Mat mu = matrix(du), mv = matrix(dv);
-        if (mu.rows < 4 || mu.cols < 4)
-            fail(du, "a correction grid needs at least 4 x 4 control points");
-        if (mv.rows != mu.rows || mv.cols != mu.cols)
-            fail(dv, "expected the shape of " + du + " (" + std::to_string(mu.rows) + "x" +
-                         std::to_string(mu.cols) + ")");
-        CorrectionGrid grid(image, mu.cols, mu.rows);
-        for (int j = 0; j < mu.rows; ++j)
-            for (int i = 0; i < mu.cols; ++i) {
-                const double a = mu.at<double>(j, i), b = mv.at<double>(j, i);
-                if (std::fabs(a) > 1000 || std::fabs(b) > 1000)
-                    fail(std::fabs(a) > 1000 ? du : dv,
-                         "a control point moves the image by more than 1000 px");
-                grid.at(i, j) = {a, b};
-            }
-        return grid;
-    }
-
-    const cv::FileNode& root() const { return root_; }
-
-  private:
-    cv::FileNode root_;
-    fs::path origin_;
-};
 
 StereoCalibration read_fpp(const Reader& in) {
     StereoCalibration c;
@@ -377,19 +187,45 @@ StereoCalibration read_slmaster(const Reader& in) {
 
 } // namespace
 
+namespace {
+
+// A two-device file named explicitly: its first camera is the camera, its
+// second device the projector (sizes unknown, supplied by the user).
+StereoCalibration from_pair(const CameraPairCalibration& pair) {
+    StereoCalibration c;
+    c.camera = pair.first;
+    c.projector = pair.second;
+    c.camera_size = pair.first_size;
+    c.R = pair.R;
+    c.T = pair.T;
+    c.origin = pair.origin + ", second device read as the projector";
+    return c;
+}
+
+CameraPairFormat pair_format(CalibrationFormat format) {
+    if (format == CalibrationFormat::opencv_stereo)
+        return CameraPairFormat::opencv_stereo;
+    return format == CalibrationFormat::bouguet ? CameraPairFormat::bouguet
+                                                : CameraPairFormat::matlab;
+}
+
+} // namespace
+
 StereoCalibration parse_calibration(const std::string& text, const fs::path& origin,
                                     CalibrationFormat format) {
     if (text.find_first_not_of(" \t\r\n") == std::string::npos)
         throw InputError(origin, "", "empty calibration file");
-    cv::FileStorage storage;
-    try {
-        storage.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-    } catch (const cv::Exception& e) {
-        throw InputError(origin, "",
-                         "not an OpenCV FileStorage file (YAML, XML or JSON): " + e.msg);
+    if (format == CalibrationFormat::opencv_stereo || format == CalibrationFormat::bouguet ||
+        format == CalibrationFormat::matlab) {
+        StereoCalibration c = from_pair(parse_camera_pair(text, origin, pair_format(format)));
+        c.format = format;
+        return c;
     }
-    if (!storage.isOpened())
-        throw InputError(origin, "", "not an OpenCV FileStorage file (YAML, XML or JSON)");
+    // Camera-camera files (OpenCV stereo YAML, SLMaster's binocular caliInfo.yml
+    // without M4, Bouguet's or MATLAB's stereo text): say what they are.
+    if (format == CalibrationFormat::automatic && looks_like_camera_pair(text))
+        throw CameraPairFileError(origin, parse_camera_pair(text, origin));
+    const cv::FileStorage storage = detail::open_file_storage(text, origin);
     const Reader in(storage.root(), origin);
 
     if (format == CalibrationFormat::automatic) {
@@ -404,7 +240,8 @@ StereoCalibration parse_calibration(const std::string& text, const fs::path& ori
                              "not a recognised calibration: expected the keys of fpp-calib "
                              "(camera_matrix, projector_matrix, R, T, ...), SLStudio's "
                              "calibration.xml (Kc, Kp, Rp, Tp, ...) or SLMaster's caliInfo.yml "
-                             "(M1, M4, Rlp, Tlp, ...)");
+                             "(M1, M4, Rlp, Tlp, ...); camera-camera files (OpenCV's M1 D1 M2 "
+                             "D2 R T, Bouguet's or MATLAB's stereo text) are recognised too");
     }
     StereoCalibration c;
     try {
@@ -419,6 +256,9 @@ StereoCalibration parse_calibration(const std::string& text, const fs::path& ori
             c = read_slmaster(in);
             break;
         case CalibrationFormat::automatic:
+        case CalibrationFormat::opencv_stereo:
+        case CalibrationFormat::bouguet:
+        case CalibrationFormat::matlab:
             break;
         }
     } catch (const cv::Exception& e) { // a node of an unexpected kind deep inside

@@ -191,9 +191,10 @@ struct AravisCamera::Impl {
         error.throw_if_set(name, "cannot read the ExposureTime bounds");
         if (!(exposure_range.min_us <= exposure_range.max_us) ||
             !std::isfinite(exposure_range.min_us) || !std::isfinite(exposure_range.max_us))
-            throw DeviceError(name, "reports an empty ExposureTime range " +
-                                        format_us(exposure_range.min_us) + ".." +
-                                        format_us(exposure_range.max_us) + " us");
+            throw DeviceError(DeviceKind::camera, name,
+                              "reports an empty ExposureTime range " +
+                                  format_us(exposure_range.min_us) + ".." +
+                                  format_us(exposure_range.max_us) + " us");
         check_exposure(settings.exposure_us, exposure_range);
         arv_camera_set_exposure_time(cam, settings.exposure_us, error.out());
         error.throw_if_set(name, "cannot set ExposureTime = " +
@@ -223,16 +224,18 @@ struct AravisCamera::Impl {
         payload = payload_bytes;
         const std::size_t needed = size.area() * std::size_t(layout.container_bits / 8);
         if (payload < needed)
-            throw DeviceError(name, "payload of " + std::to_string(payload) +
-                                        " bytes is smaller than a " + std::to_string(width) +
-                                        "x" + std::to_string(height) + " " +
-                                        settings.pixel_format + " image");
+            throw DeviceError(DeviceKind::camera, name,
+                              "payload of " + std::to_string(payload) +
+                                  " bytes is smaller than a " + std::to_string(width) + "x" +
+                                  std::to_string(height) + " " + settings.pixel_format + " image");
     }
 
     void create_stream() {
         glib::Error error;
         stream.reset(arv_camera_create_stream(camera.get(), nullptr, nullptr, error.out()));
-        if (!stream) throw DeviceError(name, "cannot open the stream: " + error.message());
+        if (!stream)
+            throw DeviceError(DeviceKind::camera, name,
+                              "cannot open the stream: " + error.message());
         if (ARV_IS_GV_STREAM(stream.get())) {
             // Room in the UDP receive buffer for as many frames as the pool
             // holds (the kernel caps it at net.core.rmem_max), so that a
@@ -263,22 +266,24 @@ struct AravisCamera::Impl {
         const auto id = std::to_string(frame_id);
         if (arv_buffer_get_image_width(buffer) != size.width ||
             arv_buffer_get_image_height(buffer) != size.height)
-            throw DeviceError(name, "frame " + id + " is " +
-                                        std::to_string(arv_buffer_get_image_width(buffer)) + "x" +
-                                        std::to_string(arv_buffer_get_image_height(buffer)) +
-                                        ", expected " + std::to_string(size.width) + "x" +
-                                        std::to_string(size.height));
+            throw DeviceError(
+                DeviceKind::camera, name,
+                "frame " + id + " is " + std::to_string(arv_buffer_get_image_width(buffer)) + "x" +
+                    std::to_string(arv_buffer_get_image_height(buffer)) + ", expected " +
+                    std::to_string(size.width) + "x" + std::to_string(size.height));
         const ArvPixelFormat format = arv_buffer_get_image_pixel_format(buffer);
         const int bits = int(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format));
         if (bits != layout.container_bits)
-            throw DeviceError(name, "frame " + id + " has " + std::to_string(bits) +
-                                        " bits per pixel, expected " + settings.pixel_format);
+            throw DeviceError(DeviceKind::camera, name,
+                              "frame " + id + " has " + std::to_string(bits) +
+                                  " bits per pixel, expected " + settings.pixel_format);
         std::size_t bytes = 0;
         const void* data = arv_buffer_get_image_data(buffer, &bytes);
         const std::size_t needed = size.area() * std::size_t(layout.container_bits / 8);
         if (data == nullptr || bytes < needed)
-            throw DeviceError(name, "frame " + id + " holds " + std::to_string(bytes) +
-                                        " bytes, expected " + std::to_string(needed));
+            throw DeviceError(DeviceKind::camera, name,
+                              "frame " + id + " holds " + std::to_string(bytes) +
+                                  " bytes, expected " + std::to_string(needed));
 
         Frame frame;
         frame.bit_depth = layout.container_bits;
@@ -315,17 +320,20 @@ struct AravisCamera::Impl {
         if (!previous_id) return;
         const std::uint64_t missed = gige_frames_missed(*previous_id, frame_id);
         if (missed == UINT64_MAX)
-            throw DeviceError(name, "frame " + std::to_string(frame_id) +
-                                        " does not follow frame " + std::to_string(*previous_id));
+            throw DeviceError(DeviceKind::camera, name,
+                              "frame " + std::to_string(frame_id) + " does not follow frame " +
+                                  std::to_string(*previous_id));
         if (missed > 0)
-            throw DeviceError(name, std::to_string(missed) + " frame(s) missing: expected frame " +
-                                        std::to_string(gige_next_frame_id(*previous_id)) +
-                                        ", got frame " + std::to_string(frame_id));
+            throw DeviceError(DeviceKind::camera, name,
+                              std::to_string(missed) + " frame(s) missing: expected frame " +
+                                  std::to_string(gige_next_frame_id(*previous_id)) +
+                                  ", got frame " + std::to_string(frame_id));
         if (camera_timestamp != 0 && previous_timestamp != 0 &&
             camera_timestamp <= previous_timestamp)
-            throw DeviceError(name, "frame " + std::to_string(frame_id) +
-                                        " is stamped no later than frame " +
-                                        std::to_string(*previous_id));
+            throw DeviceError(DeviceKind::camera, name,
+                              "frame " + std::to_string(frame_id) +
+                                  " is stamped no later than frame " +
+                                  std::to_string(*previous_id));
     }
 };
 
@@ -345,7 +353,8 @@ AravisCamera::AravisCamera(const std::string& device, const CameraSettings& sett
 
     glib::Error error;
     d.camera.reset(arv_camera_new(device.c_str(), error.out()));
-    if (!d.camera) throw DeviceError(d.name, "cannot open: " + error.message());
+    if (!d.camera)
+        throw DeviceError(DeviceKind::camera, d.name, "cannot open: " + error.message());
 
     ArvDevice* arv_device = arv_camera_get_device(d.camera.get());
     d.control_lost_handler = g_signal_connect_data(
@@ -403,7 +412,8 @@ ExposureRange AravisCamera::exposure_range_us() const { return impl_->exposure_r
 void AravisCamera::set_exposure_us(double exposure_us) {
     Impl& d = *impl_;
     check_exposure(exposure_us, d.exposure_range);
-    if (d.streaming) throw DeviceError(d.name, "exposure changed while acquiring");
+    if (d.streaming)
+        throw DeviceError(DeviceKind::camera, d.name, "exposure changed while acquiring");
     glib::Error error;
     arv_camera_set_exposure_time(d.camera.get(), exposure_us, error.out());
     d.unreachable = bool(error);
@@ -414,9 +424,12 @@ void AravisCamera::set_exposure_us(double exposure_us) {
 void AravisCamera::software_trigger() {
     Impl& d = *impl_;
     if (d.settings.trigger != TriggerMode::software)
-        throw DeviceError(d.name, "software trigger requested but the camera is set to "
-                                  "trigger on " + d.settings.trigger_source);
-    if (!d.streaming) throw DeviceError(d.name, "software trigger while not started");
+        throw DeviceError(DeviceKind::camera, d.name,
+                          "software trigger requested but the camera is set to "
+                          "trigger on " +
+                              d.settings.trigger_source);
+    if (!d.streaming)
+        throw DeviceError(DeviceKind::camera, d.name, "software trigger while not started");
     glib::Error error;
     arv_camera_software_trigger(d.camera.get(), error.out());
     d.unreachable = bool(error);
@@ -425,16 +438,17 @@ void AravisCamera::software_trigger() {
 
 CapturedFrame AravisCamera::next_frame(std::chrono::milliseconds timeout) {
     Impl& d = *impl_;
-    if (!d.streaming) throw DeviceError(d.name, "next_frame() while not started");
+    if (!d.streaming)
+        throw DeviceError(DeviceKind::camera, d.name, "next_frame() while not started");
     const auto expected = d.last_frame_id ? "frame " + std::to_string(gige_next_frame_id(*d.last_frame_id))
                                           : std::string("first frame");
     const auto timeout_us = std::chrono::duration_cast<std::chrono::microseconds>(timeout);
     ArvBuffer* raw = arv_stream_timeout_pop_buffer(
         d.stream.get(), static_cast<guint64>(std::max<std::int64_t>(0, timeout_us.count())));
     if (raw == nullptr)
-        throw DeviceError(d.name, expected + " did not arrive within " +
-                                      std::to_string(timeout.count()) + " ms" +
-                                      (d.control_lost ? " (control of the camera lost)" : ""));
+        throw DeviceError(DeviceKind::camera, d.name,
+                          expected + " did not arrive within " + std::to_string(timeout.count()) +
+                              " ms" + (d.control_lost ? " (control of the camera lost)" : ""));
     const BufferLease lease(d.stream.get(), raw, d.outstanding);
 
     CapturedFrame captured;
@@ -444,8 +458,9 @@ CapturedFrame AravisCamera::next_frame(std::chrono::milliseconds timeout) {
         // The frame is lost; what follows it is checked against it.
         d.last_frame_id = captured.frame_id;
         d.last_camera_timestamp = 0;
-        throw DeviceError(d.name, "frame " + std::to_string(captured.frame_id) +
-                                      " incomplete: " + buffer_status_text(status));
+        throw DeviceError(DeviceKind::camera, d.name,
+                          "frame " + std::to_string(captured.frame_id) +
+                              " incomplete: " + buffer_status_text(status));
     }
     d.check_sequence(captured.frame_id, arv_buffer_get_timestamp(raw));
     captured.timestamp_ns = realtime_to_monotonic_ns(arv_buffer_get_system_timestamp(raw));

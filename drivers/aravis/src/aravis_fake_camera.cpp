@@ -85,7 +85,7 @@ AravisFakeCamera::AravisFakeCamera(Size size, const std::string& address,
 
     d.camera.reset(arv_gv_fake_camera_new(address.c_str(), serial.c_str()));
     if (!d.camera || !arv_gv_fake_camera_is_running(d.camera.get()))
-        throw DeviceError("fake camera " + address,
+        throw DeviceError(DeviceKind::camera, "fake camera " + address,
                           "cannot start (address not local, or port 3956 taken by another "
                           "fake camera in this network namespace)");
     ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(d.camera.get());

@@ -37,9 +37,10 @@ public:
     std::string message() const {
         return error_ != nullptr ? std::string(error_->message) : std::string("unknown error");
     }
-    // Throws DeviceError(device, what + ": " + message) if the call failed.
+    // Throws DeviceError(camera, device, what + ": " + message) if the call failed.
     void throw_if_set(const std::string& device, const std::string& what) const {
-        if (error_ != nullptr) throw DeviceError(device, what + ": " + message());
+        if (error_ != nullptr)
+            throw DeviceError(DeviceKind::camera, device, what + ": " + message());
     }
 
 private:

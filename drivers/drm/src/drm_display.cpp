@@ -59,7 +59,8 @@ public:
         create.height = static_cast<std::uint32_t>(size.height);
         create.bpp = 32;
         if (drmIoctl(fd, DRM_IOCTL_MODE_CREATE_DUMB, &create) != 0)
-            throw DeviceError(device, "cannot create a dumb buffer: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, device,
+                              "cannot create a dumb buffer: " + errno_text(errno));
         handle_ = create.handle;
         pitch_ = create.pitch;
         bytes_ = create.size;
@@ -70,7 +71,8 @@ public:
                           offsets, &fb_id_, 0) != 0) {
             const int error = errno;
             destroy_dumb();
-            throw DeviceError(device, "cannot add a framebuffer: " + errno_text(error));
+            throw DeviceError(DeviceKind::display, device,
+                              "cannot add a framebuffer: " + errno_text(error));
         }
         drm_mode_map_dumb map{};
         map.handle = handle_;
@@ -82,7 +84,8 @@ public:
             const int error = errno;
             drmModeRmFB(fd, fb_id_);
             destroy_dumb();
-            throw DeviceError(device, "cannot map a dumb buffer: " + errno_text(error));
+            throw DeviceError(DeviceKind::display, device,
+                              "cannot map a dumb buffer: " + errno_text(error));
         }
         pixels_ = static_cast<std::uint8_t*>(pixels);
     }
@@ -130,7 +133,8 @@ class PropertyBlob {
 public:
     PropertyBlob(int fd, const void* data, std::size_t size, const std::string& device) : fd_(fd) {
         if (drmModeCreatePropertyBlob(fd, data, size, &id_) != 0)
-            throw DeviceError(device, "cannot create the mode blob: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, device,
+                              "cannot create the mode blob: " + errno_text(errno));
     }
     ~PropertyBlob() { drmModeDestroyPropertyBlob(fd_, id_); }
     PropertyBlob(const PropertyBlob&) = delete;
@@ -151,7 +155,7 @@ std::uint32_t property_id(int fd, std::uint32_t object, std::uint32_t type, cons
             if (prop && std::strcmp(prop->name, name) == 0)
                 return prop->prop_id;
         }
-    throw DeviceError(device,
+    throw DeviceError(DeviceKind::display, device,
                       std::string("object ") + std::to_string(object) + " has no property " + name);
 }
 
@@ -224,14 +228,14 @@ struct DrmDisplay::Impl {
         name = "display " + path;
         fd.reset(open(path.c_str(), O_RDWR | O_CLOEXEC));
         if (!fd.valid())
-            throw DeviceError(name, "cannot open: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, name, "cannot open: " + errno_text(errno));
     }
 
     void pick_output(const DrmDisplaySettings& settings) {
         const int f = fd.get();
         const ResourcesPtr res(drmModeGetResources(f));
         if (!res)
-            throw DeviceError(name, "not a KMS device: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, name, "not a KMS device: " + errno_text(errno));
 
         std::vector<ConnectorPtr> connectors;
         std::vector<DrmConnectorInfo> infos;
@@ -270,7 +274,8 @@ struct DrmDisplay::Impl {
                     crtc_index = c;
         }
         if (!crtc_index)
-            throw DeviceError(name, "no CRTC can drive " + infos[choice.connector].name);
+            throw DeviceError(DeviceKind::display, name,
+                              "no CRTC can drive " + infos[choice.connector].name);
         crtc_id = res->crtcs[*crtc_index];
         saved_crtc.reset(drmModeGetCrtc(f, crtc_id));
 
@@ -335,21 +340,21 @@ struct DrmDisplay::Impl {
         drmModeAtomicAddProperty(r, plane_id, ids.crtc_h, h);
         if (drmModeAtomicCommit(f, r, DRM_MODE_ATOMIC_TEST_ONLY | DRM_MODE_ATOMIC_ALLOW_MODESET,
                                 nullptr) != 0)
-            throw DeviceError(name,
+            throw DeviceError(DeviceKind::display, name,
                               "the card rejects the modeset (test commit): " + errno_text(errno));
         if (drmModeAtomicCommit(f, r, DRM_MODE_ATOMIC_ALLOW_MODESET | DRM_MODE_PAGE_FLIP_EVENT,
                                 this) != 0)
-            throw DeviceError(name, "modeset failed: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, name, "modeset failed: " + errno_text(errno));
     }
 
     void legacy_modeset(std::size_t index) {
         const int f = fd.get();
         if (drmModeSetCrtc(f, crtc_id, buffers[index]->fb_id(), 0, 0, &connector_id, 1, &mode) != 0)
-            throw DeviceError(name, "modeset failed: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, name, "modeset failed: " + errno_text(errno));
         // A flip to the same buffer gives the event that marks it on screen.
         if (drmModePageFlip(f, crtc_id, buffers[index]->fb_id(), DRM_MODE_PAGE_FLIP_EVENT, this) !=
             0)
-            throw DeviceError(name, "page flip failed: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, name, "page flip failed: " + errno_text(errno));
     }
 
     void flip(std::size_t index) {
@@ -361,12 +366,14 @@ struct DrmDisplay::Impl {
             drmModeAtomicAddProperty(req.get(), plane_id, ids.plane_fb_id, buffers[index]->fb_id());
             if (drmModeAtomicCommit(f, req.get(),
                                     DRM_MODE_ATOMIC_NONBLOCK | DRM_MODE_PAGE_FLIP_EVENT, this) != 0)
-                throw DeviceError(name, "page flip to pattern " + std::to_string(index) +
-                                            " failed: " + errno_text(errno));
+                throw DeviceError(DeviceKind::display, name,
+                                  "page flip to pattern " + std::to_string(index) +
+                                      " failed: " + errno_text(errno));
         } else if (drmModePageFlip(f, crtc_id, buffers[index]->fb_id(), DRM_MODE_PAGE_FLIP_EVENT,
                                    this) != 0) {
-            throw DeviceError(name, "page flip to pattern " + std::to_string(index) +
-                                        " failed: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, name,
+                              "page flip to pattern " + std::to_string(index) +
+                                  " failed: " + errno_text(errno));
         }
     }
 };
@@ -381,7 +388,7 @@ DrmDisplay::DrmDisplay(const DrmDisplaySettings& settings) : impl_(std::make_uni
                 candidates.push_back(path);
         }
         if (candidates.empty())
-            throw DeviceError("display auto", "no DRM card in /dev/dri");
+            throw DeviceError(DeviceKind::display, "display auto", "no DRM card in /dev/dri");
     } else {
         candidates.push_back(settings.card);
     }
@@ -425,7 +432,7 @@ const std::vector<FlipEvent>& DrmDisplay::flip_log() const {
 void DrmDisplay::prepare(const std::vector<Image<std::uint8_t>>& patterns) {
     Impl& d = *impl_;
     if (d.pending)
-        throw DeviceError(d.name, "prepare() while a flip is pending");
+        throw DeviceError(DeviceKind::display, d.name, "prepare() while a flip is pending");
     for (std::size_t i = 0; i < patterns.size(); ++i)
         if (patterns[i].size() != size() || patterns[i].channels() != 1)
             throw std::invalid_argument("pattern " + std::to_string(i) +
@@ -448,12 +455,14 @@ void DrmDisplay::prepare(const std::vector<Image<std::uint8_t>>& patterns) {
 void DrmDisplay::show(std::size_t index) {
     Impl& d = *impl_;
     if (index >= d.buffers.size())
-        throw DeviceError(d.name, "pattern " + std::to_string(index) + " not prepared (" +
-                                      std::to_string(d.buffers.size()) + " are)");
+        throw DeviceError(DeviceKind::display, d.name,
+                          "pattern " + std::to_string(index) + " not prepared (" +
+                              std::to_string(d.buffers.size()) + " are)");
     if (d.pending)
-        throw DeviceError(d.name, "flip to pattern " + std::to_string(index) +
-                                      " while the flip to pattern " + std::to_string(*d.pending) +
-                                      " is pending");
+        throw DeviceError(DeviceKind::display, d.name,
+                          "flip to pattern " + std::to_string(index) +
+                              " while the flip to pattern " + std::to_string(*d.pending) +
+                              " is pending");
     d.completed.reset();
     d.pending = index;
     try {
@@ -476,7 +485,7 @@ void DrmDisplay::show(std::size_t index) {
 FlipEvent DrmDisplay::wait_flip(std::chrono::milliseconds timeout) {
     Impl& d = *impl_;
     if (!d.pending)
-        throw DeviceError(d.name, "wait_flip() with no flip pending");
+        throw DeviceError(DeviceKind::display, d.name, "wait_flip() with no flip pending");
     drmEventContext context{};
     context.version = 3; // page_flip_handler2: also gets the CRTC
     context.page_flip_handler2 = &Impl::on_flip;
@@ -485,18 +494,20 @@ FlipEvent DrmDisplay::wait_flip(std::chrono::milliseconds timeout) {
         const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
             deadline - std::chrono::steady_clock::now());
         if (left.count() < 0)
-            throw DeviceError(d.name, "flip to pattern " + std::to_string(*d.pending) +
-                                          " not completed within " +
-                                          std::to_string(timeout.count()) + " ms");
+            throw DeviceError(DeviceKind::display, d.name,
+                              "flip to pattern " + std::to_string(*d.pending) +
+                                  " not completed within " + std::to_string(timeout.count()) +
+                                  " ms");
         pollfd p{d.fd.get(), POLLIN, 0};
         const int ready = poll(&p, 1, static_cast<int>(left.count()));
         if (ready < 0) {
             if (errno == EINTR)
                 continue;
-            throw DeviceError(d.name, "poll failed: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, d.name, "poll failed: " + errno_text(errno));
         }
         if (ready > 0 && drmHandleEvent(d.fd.get(), &context) != 0)
-            throw DeviceError(d.name, "reading the flip event failed: " + errno_text(errno));
+            throw DeviceError(DeviceKind::display, d.name,
+                              "reading the flip event failed: " + errno_text(errno));
     }
     const FlipEvent event = *d.completed;
     d.completed.reset();

@@ -67,9 +67,11 @@ DrmOutputChoice choose_drm_output(const std::vector<DrmConnectorInfo>& connector
     }
     if (!chosen) {
         if (request.connector.empty())
-            throw DeviceError(device, "no connected connector with modes (connectors: " + present + ")");
-        throw DeviceError(device, "connector " + request.connector +
-                                      " is not present and connected (connectors: " + present + ")");
+            throw DeviceError(DeviceKind::display, device,
+                              "no connected connector with modes (connectors: " + present + ")");
+        throw DeviceError(DeviceKind::display, device,
+                          "connector " + request.connector +
+                              " is not present and connected (connectors: " + present + ")");
     }
     const auto& modes = connectors[*chosen].modes;
 
@@ -97,8 +99,9 @@ DrmOutputChoice choose_drm_output(const std::vector<DrmConnectorInfo>& connector
     if (!best) {
         std::string listed;
         for (const auto& m : modes) listed += (listed.empty() ? "" : ", ") + describe(m);
-        throw DeviceError(device, "connector " + connectors[*chosen].name + " has no mode " +
-                                      request.mode + " (modes: " + listed + ")");
+        throw DeviceError(DeviceKind::display, device,
+                          "connector " + connectors[*chosen].name + " has no mode " + request.mode +
+                              " (modes: " + listed + ")");
     }
     return {*chosen, *best};
 }

@@ -28,23 +28,28 @@ public:
            bool initial_active)
         : Line(line_name(config)) {
         chip_.reset(gpiod_chip_open_lookup(config.chip.c_str()));
-        if (!chip_) throw DeviceError(name(), "cannot open the chip: " + std::string(std::strerror(errno)));
+        if (!chip_)
+            throw DeviceError(DeviceKind::gpio, name(),
+                              "cannot open the chip: " + std::string(std::strerror(errno)));
         gpiod_line* line = gpiod_chip_get_line(chip_.get(), config.offset);
         if (line == nullptr)
-            throw DeviceError(name(), "no such line on the chip: " + std::string(std::strerror(errno)));
+            throw DeviceError(DeviceKind::gpio, name(),
+                              "no such line on the chip: " + std::string(std::strerror(errno)));
         const int flags = config.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
         const int result =
             output ? gpiod_line_request_output_flags(line, consumer.c_str(), flags, initial_active ? 1 : 0)
                    : gpiod_line_request_both_edges_events_flags(line, consumer.c_str(), flags);
         if (result != 0)
-            throw DeviceError(name(), "cannot request the line (held by another process?): " +
-                                          std::string(std::strerror(errno)));
+            throw DeviceError(DeviceKind::gpio, name(),
+                              "cannot request the line (held by another process?): " +
+                                  std::string(std::strerror(errno)));
         request_.reset(line);
     }
 
     void set(bool active) override {
         if (gpiod_line_set_value(request_.get(), active ? 1 : 0) != 0)
-            throw DeviceError(name(), "cannot set the line: " + std::string(std::strerror(errno)));
+            throw DeviceError(DeviceKind::gpio, name(),
+                              "cannot set the line: " + std::string(std::strerror(errno)));
     }
 
     std::optional<Edge> wait_edge(std::chrono::nanoseconds timeout) override {
@@ -57,11 +62,13 @@ public:
         // caller looks at its stop flag.
         if (ready < 0 && errno == EINTR) return std::nullopt;
         if (ready < 0)
-            throw DeviceError(name(), "waiting for an edge failed: " + std::string(std::strerror(errno)));
+            throw DeviceError(DeviceKind::gpio, name(),
+                              "waiting for an edge failed: " + std::string(std::strerror(errno)));
         if (ready == 0) return std::nullopt;
         gpiod_line_event event{};
         if (gpiod_line_event_read(request_.get(), &event) != 0)
-            throw DeviceError(name(), "reading an edge failed: " + std::string(std::strerror(errno)));
+            throw DeviceError(DeviceKind::gpio, name(),
+                              "reading an edge failed: " + std::string(std::strerror(errno)));
         Edge edge;
         edge.timestamp_ns = std::int64_t(event.ts.tv_sec) * 1'000'000'000 + event.ts.tv_nsec;
         edge.rising = event.event_type == GPIOD_LINE_EVENT_RISING_EDGE;

@@ -38,7 +38,8 @@ int SimCamera::bit_depth() const {
 
 void SimCamera::check_present() const {
     if (gone_)
-        throw drivers::DeviceError(kDevice, "camera gone (no response)");
+        throw drivers::DeviceError(drivers::DeviceKind::camera, kDevice,
+                                   "camera gone (no response)");
 }
 
 void SimCamera::start() {
@@ -82,17 +83,20 @@ void SimCamera::set_exposure_us(double exposure_us) {
                              format_us(exposure_range_.min_us) + ".." +
                              format_us(exposure_range_.max_us) + " us");
     if (streaming_)
-        throw drivers::DeviceError(kDevice, "exposure changed while streaming");
+        throw drivers::DeviceError(drivers::DeviceKind::camera, kDevice,
+                                   "exposure changed while streaming");
     settings_.exposure_us = exposure_us;
 }
 
 void SimCamera::software_trigger() {
     check_present();
     if (settings_.trigger != drivers::TriggerMode::software)
-        throw drivers::DeviceError(kDevice, "software trigger while triggered by line " +
-                                                settings_.trigger_source);
+        throw drivers::DeviceError(drivers::DeviceKind::camera, kDevice,
+                                   "software trigger while triggered by line " +
+                                       settings_.trigger_source);
     if (!streaming_)
-        throw drivers::DeviceError(kDevice, "software trigger while stopped");
+        throw drivers::DeviceError(drivers::DeviceKind::camera, kDevice,
+                                   "software trigger while stopped");
     expose(clock_.now_ns());
 }
 
@@ -102,6 +106,14 @@ void SimCamera::line_trigger(std::int64_t t_ns) {
     expose(t_ns);
 }
 
+void SimCamera::set_next_frame_id(std::uint64_t next, bool wrap_16_bit) {
+    if (next == 0 || (wrap_16_bit && next > 0xFFFFu))
+        throw std::invalid_argument("SimCamera::set_next_frame_id: " + std::to_string(next) +
+                                    " is not a frame id");
+    next_frame_id_ = next;
+    wrap_16_bit_ = wrap_16_bit;
+}
+
 void SimCamera::expose(std::int64_t t_ns) {
     const int trigger = triggers_++;
     CameraFault fault = trigger == fault_at_ ? fault_ : CameraFault::none;
@@ -109,15 +121,21 @@ void SimCamera::expose(std::int64_t t_ns) {
         gone_ = true;
         return;
     }
+    const auto advance = [this] {
+        const std::uint64_t id = next_frame_id_++;
+        if (wrap_16_bit_ && next_frame_id_ > 0xFFFFu)
+            next_frame_id_ = 1;
+        return id;
+    };
     if (fault == CameraFault::dropped)
-        ++next_frame_id_;
+        advance();
     Exposure e;
-    e.frame_id = next_frame_id_++;
+    e.frame_id = advance();
     e.start_ns = t_ns;
     e.pattern = display_.on_screen_at(t_ns);
     const auto exposure_ns = static_cast<std::int64_t>(settings_.exposure_us * 1000.0);
     e.pattern_at_end = display_.on_screen_at(t_ns + exposure_ns);
-    exposures_.push_back(e);
+    exposures_.push(e);
     if (fault == CameraFault::timeout)
         return;
     queue_.push_back({e, fault == CameraFault::incomplete});
@@ -127,7 +145,7 @@ drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) 
     check_present();
     if (queue_.empty()) {
         clock_.sleep_for(timeout);
-        throw drivers::DeviceError(kDevice,
+        throw drivers::DeviceError(drivers::DeviceKind::camera, kDevice,
                                    "no frame within " + std::to_string(timeout.count()) + " ms");
     }
     Pending p = queue_.front();
@@ -136,8 +154,9 @@ drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) 
     clock_.sleep_until_ns(p.exposure.start_ns +
                           static_cast<std::int64_t>(settings_.exposure_us * 1000.0));
     if (p.incomplete)
-        throw drivers::DeviceError(kDevice, "frame " + std::to_string(p.exposure.frame_id) +
-                                                " incomplete (missing packets)");
+        throw drivers::DeviceError(drivers::DeviceKind::camera, kDevice,
+                                   "frame " + std::to_string(p.exposure.frame_id) +
+                                       " incomplete (missing packets)");
     const Image<std::uint8_t>& light =
         p.exposure.pattern == Screen::kNothing
             ? dark_

@@ -7,7 +7,7 @@ SimTrigger::SimTrigger(drivers::Clock& clock, std::function<void(std::int64_t)> 
 
 void SimTrigger::pulse(std::chrono::microseconds width) {
     const std::int64_t rise = clock_.now_ns();
-    pulses_.push_back(rise);
+    pulses_.push(rise);
     if (wire_) wire_(rise);
     clock_.sleep_until_ns(rise + std::chrono::duration_cast<std::chrono::nanoseconds>(width).count());
 }
@@ -47,12 +47,17 @@ int SimButton::drain() {
 
 void SimLed::set(drivers::LedState state) {
     std::lock_guard lock(mutex_);
-    history_.push_back(state);
+    history_.push(state);
 }
 
 std::vector<drivers::LedState> SimLed::history() const {
     std::lock_guard lock(mutex_);
-    return history_;
+    return history_.items();
+}
+
+void SimLed::limit_records(std::size_t limit) {
+    std::lock_guard lock(mutex_);
+    history_.set_limit(limit);
 }
 
 drivers::LedState SimLed::state() const {

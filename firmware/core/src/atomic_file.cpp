@@ -226,4 +226,29 @@ void write_folder_atomically(const std::filesystem::path& target,
     fsync_path(parent);
 }
 
+std::vector<std::string> remove_interrupted_writes(const fs::path& folder,
+                                                   const std::string& target_name) {
+    std::vector<std::string> removed;
+    const std::string prefix = "." + target_name;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(folder, ec)) {
+        const std::string name = entry.path().filename().string();
+        const std::size_t tag = name.find(".tmp-", prefix.size());
+        const std::size_t folder_tag = name.find(".partial-", prefix.size());
+        const bool ours = name.size() > 1 && name.starts_with(prefix) &&
+                          (tag != std::string::npos || folder_tag != std::string::npos) &&
+                          (target_name.empty() || tag == prefix.size() ||
+                           folder_tag == prefix.size());
+        if (!ours)
+            continue;
+        std::error_code remove_ec;
+        fs::remove_all(entry.path(), remove_ec);
+        if (remove_ec)
+            throw IoError(entry.path(),
+                          "cannot remove what an interrupted write left: " + remove_ec.message());
+        removed.push_back(name);
+    }
+    return removed; // a folder that does not exist (yet) holds nothing to remove
+}
+
 } // namespace fpp

@@ -1,83 +1,8 @@
-// The coefficient table in memory and its file (.fpt).
-//
-// FILE FORMAT, version 1. All integers little-endian, unsigned unless marked
-// i64 (two's complement); coefficients IEEE-754 binary32, little-endian.
-// Offsets in bytes from the start of the file.
-//
-//   HEADER (128 bytes)
-//   off  size type  field
-//     0     8 char  magic: the ASCII bytes "FPPTABLE" (no terminator)
-//     8     4 u32   version: 1. A reader rejects any other value; a later
-//                   version may change everything after this field.
-//    12     4 u32   header_size: 128, bytes from offset 0 to the end of header_crc
-//    16     4 u32   camera_width   camera image the table belongs to, px, 1..65535
-//    20     4 u32   camera_height
-//    24     4 u32   tile_width     px, a multiple of 8 in 8..256
-//    28     4 u32   tile_height    px, a multiple of 8 in 8..256
-//    32     4 u32   model          1 = polynomial, 2 = ray, 3 = rational
-//    36     4 u32   planes         planes per pixel: 14 (polynomial), 8 (ray),
-//                                  9 (rational)
-//    40     4 u32   phase_axis     0 = x (phase is a projector column),
-//                                  1 = y (a projector row)
-//    44     4 u32   projector_width   projector image the phase refers to, px, 1..65535
-//    48     4 u32   projector_height
-//    52     4 u32   phase_unit     1 = the phase p is in projector pixels along
-//                                  phase_axis (as decoded), normalised per pixel
-//                                  to t = (p - centre) * inv_half_range before
-//                                  the cubics are evaluated. No other value in
-//                                  version 1.
-//    56     8 u64   calibration_hash  FNV-1a 64 of the source calibration file's bytes
-//    64     8 i64   created_unix_s    creation time, seconds since 1970-01-01 UTC
-//    72     4 u32   tiles_x        ceil(camera_width / tile_width)
-//    76     4 u32   tiles_y        ceil(camera_height / tile_height)
-//    80     4 u32   tile_count     tiles_x * tiles_y
-//    84     4 u32   tile_bytes     planes * tile_width * tile_height * 4
-//    88     8 u64   crc_table_offset  128
-//    96     8 u64   data_offset    (128 + 4 * tile_count + 4) rounded up to a
-//                                  multiple of 4096
-//   104    20       reserved, zero
-//   124     4 u32   header_crc     CRC-32 of bytes 0..123
-//
-//   TILE CRC TABLE (at crc_table_offset = 128)
-//   128                   4 * tile_count  u32[tile_count]  CRC-32 of each tile's
-//                                         tile_bytes bytes, in tile order
-//   128 + 4 * tile_count  4               u32  CRC-32 of the tile_count CRCs
-//                                         above (their 4 * tile_count bytes)
-//   then zero bytes up to data_offset.
-//
-//   TILES (at data_offset; the file ends exactly at
-//          data_offset + tile_count * tile_bytes)
-//   Tile i = ty * tiles_x + tx (row-major over tiles) starts at
-//   data_offset + i * tile_bytes and covers camera pixels
-//   x in [tx * tile_width, (tx + 1) * tile_width), y likewise with ty and
-//   tile_height. It holds its planes one after the other, plane k at
-//   k * tile_width * tile_height floats into the tile, each plane in
-//   row-major order: pixel (x, y) is float
-//     (y - ty * tile_height) * tile_width + (x - tx * tile_width)
-//   of the plane. Planes (see fpp/coefficient_table.hpp, table_plane):
-//     polynomial: centre, inv_half_range, X0..X3, Y0..Y3, Z0..Z3
-//     ray:        centre, inv_half_range, Z0..Z3, xn, yn
-//     rational:   centre, inv_half_range, Z0..Z3, d, xn, yn
-//   With t = (p - centre) * inv_half_range for a phase p, valid for |t| <= 1:
-//     polynomial: X = X0 + X1 t + X2 t^2 + X3 t^3, Y and Z alike (mm)
-//     ray:        Z = Z0 + Z1 t + Z2 t^2 + Z3 t^3 (mm), X = xn Z, Y = yn Z
-//     rational:   Z = (Z0 + Z1 t + Z2 t^2 + Z3 t^3) / (1 + d t) (mm),
-//                 X = xn Z, Y = yn Z
-//   Camera frame, mm. A pixel without a model has a NaN centre (any NaN;
-//   its other planes mean nothing; a new table holds 0x7FC00000 and zeros);
-//   a pixel with a model has a finite centre, a finite inv_half_range > 0,
-//   finite coefficients and, rational, |d| < 1 (the loader checks this). Pixels of edge tiles
-//   outside the camera image are padding: written without a model, ignored
-//   by readers.
-//
-//   CRC-32: the IEEE 802.3 / zlib crc32() one (reflected polynomial
-//   0xEDB88320, initial value 0xFFFFFFFF, final XOR 0xFFFFFFFF);
-//   CRC-32("123456789") = 0xCBF43926.
-//
-//   Alignment: data_offset is a multiple of 4096 and tile_bytes of 256 (tile
-//   sides are multiples of 8), so in a page-aligned mapping of the file every
-//   tile and every plane starts on a 256-byte boundary and the tiles can be
-//   used in place as float arrays.
+// The coefficient table in memory and its file (.fpt, version 1): a
+// 128-byte header with its CRC-32, a CRC-32 per tile, then the float32
+// coefficients tile by tile, 4096-byte aligned so a mapped file is used in
+// place. load_table refuses anything that does not match the format exactly.
+// Format: firmware/core/formats/coefficient-table.md
 
 #include "fpp/coefficient_table.hpp"
 
@@ -224,7 +149,7 @@ std::string hex32(std::uint32_t v) {
 }
 
 // The first pixel of a tile whose planes break the model rules (see the
-// format above), as "pixel (x, y): ..." in camera pixels, or "".
+// format document), as "pixel (x, y): ..." in camera pixels, or "".
 std::string tile_value_problem(const float* tile, const TableInfo& info, int planes, int tx,
                                int ty) {
     const int tp = info.tile_pixels();

@@ -1,6 +1,8 @@
 #include "decode_engine.hpp"
 
+#include "decode_family_kernels.hpp"
 #include "decode_kernels.hpp"
+#include "decode_micro.hpp"
 #include "unwrap_spatial.hpp"
 #include "unwrap_temporal.hpp"
 
@@ -26,50 +28,27 @@ constexpr int kMaxBlocksPerAxis = 16;
 constexpr std::size_t kSpanPixels = 4096;
 constexpr std::size_t kCacheLine = 64;
 
-std::uint8_t axis_bit(int axis) {
-    return static_cast<std::uint8_t>(1u << axis);
+// The modulation floor as an integer bound on a difference of samples:
+// d < x is d < ceil(x) for integer d.
+std::int32_t ceil_dn(float x) {
+    return static_cast<std::int32_t>(std::ceil(x));
 }
 
-AxisConstants axis_constants(const Plan& plan, int a) {
-    AxisConstants c;
-    const AxisPlan& ap = plan.axes[a];
-    if (!ap.coded)
-        return c;
-    if (ap.method == UnwrapMethod::gray) {
-        const GrayInfo& g = plan.grays[static_cast<std::size_t>(ap.gray)];
-        const double period = g.block.period;
-        const double unit = g.block.complementary ? period / 2.0 : period;
-        c.gray.period = static_cast<float>(period);
-        c.gray.unit = static_cast<float>(unit);
-        c.gray.complementary = g.block.complementary;
-        c.gray.max_code = static_cast<std::uint32_t>(std::floor((ap.extent - 1.0) / unit));
-        // Code errors only happen where the camera pixel straddles a code edge
-        // (blur and noise of about a projector pixel).
-        c.gray.edge_band = static_cast<float>(std::min(period / 4.0, std::max(1.5, period / 8.0)));
-        c.repair.period = static_cast<float>(period);
-        c.repair.tolerance = static_cast<float>(period / 8.0);
-        c.repair.max_slope = static_cast<float>(period / 4.0);
-    }
-    if (ap.method == UnwrapMethod::centerline) {
-        const CenterlineInfo& cl = plan.centerlines[static_cast<std::size_t>(ap.centerline)];
-        c.centerline.period =
-            static_cast<float>(plan.phases[static_cast<std::size_t>(ap.phases[0])].block.period);
-        c.centerline.position = cl.block.position;
-        c.centerline.half_width = cl.block.width / 2.0;
-        c.centerline.sat_bit = axis_bit(a);
-        c.centerline.highest = static_cast<float>(ap.extent + 0.5);
-    }
-    if (ap.method == UnwrapMethod::heterodyne) {
-        for (const auto& level : ap.levels) {
-            HeterodyneStep s;
-            s.period = static_cast<float>(level.period);
-            for (int j = 0; j < 3; ++j)
-                s.coef[j] = static_cast<float>(level.coef[j]);
-            s.single = level.single;
-            c.heterodyne.push_back(s);
-        }
-    }
-    return c;
+// The doubt plane of a code-only axis's thresholded plane (white and black
+// are read only for the planes doubt_against_levels names).
+template <class T>
+FPP_KERNEL void code_doubt_row(const GrayInfo& g, const T* in, const T* threshold, const T* white,
+                               const T* black, int n, float min_modulation_dn, std::uint16_t flag,
+                               bool first, std::uint16_t* doubt) {
+    if (doubt_against_levels(g, flag))
+        doubt_levels_row(in, threshold, white, black, n, ceil_dn(min_modulation_dn), flag, first,
+                         doubt);
+    else
+        doubt_threshold_row(in, threshold, n, ceil_dn(min_modulation_dn), flag, first, doubt);
+}
+
+std::uint8_t axis_bit(int axis) {
+    return static_cast<std::uint8_t>(1u << axis);
 }
 
 } // namespace
@@ -114,11 +93,38 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
         }
         if (plan_.phases[b].thresholds)
             ps.threshold = make_plane(u16_store_, full_);
+        const PhaseInfo& info = plan_.phases[b];
+        if (info.kind == PhaseKind::micro) {
+            ps.ambiguous = make_plane(u8_store_, full_);
+            scratch_floats_ =
+                std::max(scratch_floats_,
+                         micro_scratch_floats(static_cast<int>(info.micro_periods.size()) - 1));
+        }
+        if (info.kind == PhaseKind::modulated)
+            scratch_floats_ = std::max(scratch_floats_, 3);
+    }
+    code_.resize(plan_.grays.size());
+    code_modulation_.resize(plan_.grays.size());
+    code_mean_.resize(plan_.grays.size());
+    code_doubt_.resize(plan_.grays.size());
+    for (std::size_t g = 0; g < plan_.grays.size(); ++g) {
+        code_[g] = make_plane(u16_store_, full_);
+        if (plan_.grays[g].phase < 0)
+            code_doubt_[g] = make_plane(u16_store_, full_);
+        if (plan_.grays[g].phase < 0 &&
+            static_cast<int>(g) != plan_.axes[report_axis].gray) { // reported: result images
+            code_modulation_[g] = make_plane(float_store_, full_);
+            code_mean_[g] = make_plane(float_store_, full_);
+        }
     }
     bind_report_planes();
-    code_.resize(plan_.grays.size());
-    for (std::size_t g = 0; g < plan_.grays.size(); ++g)
-        code_[g] = make_plane(u16_store_, full_);
+    if (plan_.uses_levels) {
+        white_ = make_plane(u16_store_, full_);
+        black_ = make_plane(u16_store_, full_);
+    }
+    for (int w = 0; scratch_floats_ > 0 && w < pool_.size(); ++w)
+        scratch_.push_back(std::make_unique_for_overwrite<float[]>(
+            static_cast<std::size_t>(scratch_floats_) * static_cast<std::size_t>(span_)));
     line_.resize(plan_.centerlines.size());
     for (std::size_t c = 0; c < plan_.centerlines.size(); ++c)
         if (plan_.centerlines[c].phase >= 0)
@@ -227,6 +233,10 @@ PlaneRef<T> DecodeEngine::make_plane(std::vector<std::unique_ptr<T[]>>& store, b
     return p;
 }
 
+float* DecodeEngine::scratch_buffer(int worker) const {
+    return scratch_.empty() ? nullptr : scratch_[static_cast<std::size_t>(worker)].get();
+}
+
 std::byte* DecodeEngine::local_buffer(int worker) const {
     if (local_spans_.empty())
         return nullptr;
@@ -304,6 +314,12 @@ void DecodeEngine::allocate_result(DecodeResult* recycled) {
 void DecodeEngine::bind_report_planes() {
     const int report_axis = plan_.axes[0].coded ? 0 : 1;
     const int report = plan_.axes[report_axis].report_phase;
+    if (plan_.axes[report_axis].method == UnwrapMethod::code) {
+        const auto g = static_cast<std::size_t>(plan_.axes[report_axis].gray);
+        code_modulation_[g].full = result_.modulation.data();
+        code_mean_[g].full = result_.mean.data();
+        return;
+    }
     if (report < 0)
         return;
     PhaseState& ps = phase_state_[static_cast<std::size_t>(report)];
@@ -346,22 +362,25 @@ void DecodeEngine::check_frame(const Frame& frame, int index) const {
                                     " differs from the first frame's " + std::to_string(depth_));
 }
 
-void DecodeEngine::set_depth(int bit_depth) {
-    depth_ = bit_depth;
-    const double full_scale = bit_depth == 8 ? 255.0 : 65535.0;
+void DecodeEngine::set_depth(const Frame& first) {
+    depth_ = first.bit_depth;
+    // The bits in use, not the container's: a 12-bit camera in 16-bit frames
+    // saturates at 4095 and its modulation floor scales with 4095.
+    const double full_scale = static_cast<double>(first.max_value());
     const double level = std::clamp(std::ceil(options_.saturation * full_scale), 0.0, full_scale);
     sat_level_ = static_cast<std::uint16_t>(level);
     min_modulation_dn_ = static_cast<float>(options_.min_modulation * full_scale);
+    full_scale_ = static_cast<float>(full_scale);
 }
 
 template <class T>
 FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, std::size_t offset, int n,
-                                              std::byte* local) const {
+                                              std::byte* local, float* scratch) const {
     const T* in = s.frame >= 0 ? frame_at<T>(s.frame, offset) : nullptr;
     const T level = static_cast<T>(sat_level_);
     std::uint8_t* sat = at(sat_, offset, local);
     if (s.kind == StepKind::phase_block) {
-        run_phase_block<T>(s, offset, n, local);
+        run_phase_block<T>(s, offset, n, local, scratch);
         return;
     }
     if (in != nullptr && (s.sat_bits != 0 || s.sat_first))
@@ -372,7 +391,7 @@ FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, std::size_t offset,
         break;
     case StepKind::gray_threshold: {
         const GrayInfo& g = plan_.grays[static_cast<std::size_t>(s.index)];
-        const auto bit = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
+        const std::uint16_t bit = g.weight[static_cast<std::size_t>(s.k)];
         const T* threshold =
             g.threshold == GrayThreshold::white_black
                 ? threshold_at<T>(white_black_, offset, local)
@@ -380,6 +399,11 @@ FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, std::size_t offset,
                                   local);
         gray_planes_row<T, 1>(&in, n, threshold, &bit, s.first,
                               at(code_[static_cast<std::size_t>(s.index)], offset, local));
+        if (g.phase < 0)
+            code_doubt_row(g, in, threshold, threshold_at<T>(white_, offset, local),
+                           threshold_at<T>(black_, offset, local), n, min_modulation_dn_,
+                           doubt_flag(g, s.k), s.first,
+                           at(code_doubt_[static_cast<std::size_t>(s.index)], offset, local));
         break;
     }
     case StepKind::gray_inverse: {
@@ -387,9 +411,15 @@ FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, std::size_t offset,
         const T* inverse = frame_at<T>(s.frame2, offset);
         if (s.sat_bits != 0)
             saturation_row(inverse, n, level, s.sat_bits, false, sat);
-        const auto bit = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
-        gray_inverse_row(in, inverse, n, bit, s.first,
-                         at(code_[static_cast<std::size_t>(s.index)], offset, local));
+        const std::uint16_t bit = g.weight[static_cast<std::size_t>(s.k)];
+        const auto gi = static_cast<std::size_t>(s.index);
+        if (g.phase < 0)
+            code_inverse_plane_row(
+                in, inverse, n, bit, ceil_dn(2.0f * min_modulation_dn_), doubt_flag(g, s.k),
+                s.first, at(code_[gi], offset, local), at(code_doubt_[gi], offset, local),
+                at(code_modulation_[gi], offset, local), at(code_mean_[gi], offset, local));
+        else
+            gray_inverse_row(in, inverse, n, bit, s.first, at(code_[gi], offset, local));
         break;
     }
     case StepKind::centerline_bit: {
@@ -401,6 +431,7 @@ FPP_VECTOR_CLONES void DecodeEngine::run_step(const Step& s, std::size_t offset,
         break;
     }
     default:
+        run_family_step<T>(s, offset, n, local);
         break;
     }
 }
@@ -425,8 +456,12 @@ FPP_KERNEL void phase_block_classes_any(int steps, const T* const* in, int n, co
 
 template <class T>
 FPP_VECTOR_CLONES void DecodeEngine::run_phase_block(const Step& step, std::size_t offset, int n,
-                                                     std::byte* local) const {
+                                                     std::byte* local, float* scratch) const {
     const PhaseInfo& p = plan_.phases[static_cast<std::size_t>(step.index)];
+    if (p.kind != PhaseKind::standard) {
+        run_family_block<T>(step, offset, n, local, scratch);
+        return;
+    }
     const PhaseState& ps = phase_state_[static_cast<std::size_t>(step.index)];
     float* c = at(ps.fraction, offset, local);
     float* sn = at(ps.modulation, offset, local);
@@ -485,7 +520,7 @@ FPP_VECTOR_CLONES void DecodeEngine::run_gray_planes(const BatchGroup& group, st
     for (int k = 0; k < group.count; ++k) {
         const Step& s = plan_.steps[static_cast<std::size_t>(group.first + k)];
         in[k] = frame_at<T>(s.frame, offset);
-        bits[k] = static_cast<std::uint16_t>(1u << (g.planes - 1 - s.k));
+        bits[k] = g.weight[static_cast<std::size_t>(s.k)];
         if (s.sat_bits != 0 || s.sat_first)
             saturation_row(in[k], n, level, s.sat_bits, s.sat_first, at(sat_, offset, local));
     }
@@ -509,9 +544,17 @@ FPP_VECTOR_CLONES void DecodeEngine::run_gray_planes(const BatchGroup& group, st
         gray_planes_row<T, 4>(in, n, threshold, bits, head.first, code);
         break;
     }
+    if (g.phase < 0)
+        for (int k = 0; k < group.count; ++k)
+            code_doubt_row(g, in[k], threshold, threshold_at<T>(white_, offset, local),
+                           threshold_at<T>(black_, offset, local), n, min_modulation_dn_,
+                           doubt_flag(g, plan_.steps[static_cast<std::size_t>(group.first + k)].k),
+                           head.first && k == 0,
+                           at(code_doubt_[static_cast<std::size_t>(head.index)], offset, local));
 }
 
-template <class T> void DecodeEngine::run_batch_span(std::size_t offset, int n, std::byte* local) {
+template <class T>
+void DecodeEngine::run_batch_span(std::size_t offset, int n, std::byte* local, float* scratch) {
     // The frames of later steps are read only after the first step's work on
     // this span (a phase block: the heaviest arithmetic); asking for them now
     // lets that arithmetic hide their memory latency.
@@ -528,7 +571,7 @@ template <class T> void DecodeEngine::run_batch_span(std::size_t offset, int n, 
             run_gray_planes<T>(g, offset, n, local);
             break;
         case GroupKind::single:
-            run_step<T>(plan_.steps[static_cast<std::size_t>(g.first)], offset, n, local);
+            run_step<T>(plan_.steps[static_cast<std::size_t>(g.first)], offset, n, local, scratch);
             break;
         }
     }
@@ -581,6 +624,19 @@ void DecodeEngine::finish_span(std::size_t offset, int n, std::byte* local, bool
         case UnwrapMethod::centerline:
             flag_row(n, rows[0], sat, checks, first, mask);
             break;
+        case UnwrapMethod::code:
+            unwrap_code_row(
+                n, at(code_[static_cast<std::size_t>(ap.gray)], offset, local), k.gray,
+                at(code_modulation_[static_cast<std::size_t>(ap.gray)], offset, local),
+                at(code_doubt_[static_cast<std::size_t>(ap.gray)], offset, local), sat, checks,
+                first, out, mask);
+            break;
+        case UnwrapMethod::micro: {
+            const PhaseState& ps = phase_state_[static_cast<std::size_t>(ap.phases[0])];
+            unwrap_micro_row(n, rows[0].fraction, rows[0].modulation,
+                             at(ps.ambiguous, offset, local), sat, checks, first, out, mask);
+            break;
+        }
         }
         first = false;
     }
@@ -643,7 +699,7 @@ void DecodeEngine::push(const Frame& frame) {
                                     std::to_string(plan_.frame_count) + " frames");
     check_frame(frame, received_);
     if (depth_ == 0) {
-        set_depth(frame.bit_depth);
+        set_depth(frame);
         const std::size_t bytes = area_ * static_cast<std::size_t>(frame.bit_depth / 8);
         if (bytes != slot_bytes_) {
             slots_.clear();
@@ -676,9 +732,9 @@ void DecodeEngine::push(const Frame& frame) {
                     continue;
                 const Step& step = plan_.steps[static_cast<std::size_t>(w.step)];
                 if (depth_ == 8)
-                    run_step<std::uint8_t>(step, offset, n, local);
+                    run_step<std::uint8_t>(step, offset, n, local, scratch_buffer(worker));
                 else
-                    run_step<std::uint16_t>(step, offset, n, local);
+                    run_step<std::uint16_t>(step, offset, n, local, scratch_buffer(worker));
             }
         });
     }
@@ -714,7 +770,7 @@ DecodeResult DecodeEngine::run_batch(const std::vector<Frame>& frames) {
     for (std::size_t f = 0; f < frames.size(); ++f) {
         check_frame(frames[f], static_cast<int>(f));
         if (depth_ == 0)
-            set_depth(frames[f].bit_depth);
+            set_depth(frames[f]);
         frame_base_[f] = frames[f].bit_depth == 8 ? static_cast<const void*>(frames[f].u8.data())
                                                   : static_cast<const void*>(frames[f].u16.data());
     }
@@ -722,9 +778,9 @@ DecodeResult DecodeEngine::run_batch(const std::vector<Frame>& frames) {
     for_spans(spans_per_task(), [&](std::size_t offset, int n, int worker) {
         std::byte* local = local_buffer(worker);
         if (depth_ == 8)
-            run_batch_span<std::uint8_t>(offset, n, local);
+            run_batch_span<std::uint8_t>(offset, n, local, scratch_buffer(worker));
         else
-            run_batch_span<std::uint16_t>(offset, n, local);
+            run_batch_span<std::uint16_t>(offset, n, local, scratch_buffer(worker));
     });
     if (plan_.needs_full_storage)
         global_stages();

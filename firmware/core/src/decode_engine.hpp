@@ -38,8 +38,13 @@ struct AxisConstants {
     GrayRowParams gray;
     GrayRepairParams repair;
     CenterlineParams centerline;
+    float code_unit = 0;   // code-only: projector px per code step
+    float code_offset = 0; // code-only: projector px
     std::vector<HeterodyneStep> heterodyne;
 };
+
+// Axis `a`'s constants (decode_axis_constants.cpp).
+AxisConstants axis_constants(const Plan& plan, int a);
 
 class DecodeEngine {
 public:
@@ -66,6 +71,7 @@ private:
         // floor(A) in the frames' sample type when gray/centerline use it
         // (16-bit storage, read as 8-bit for 8-bit frames).
         PlaneRef<std::uint16_t> threshold;
+        PlaneRef<std::uint8_t> ambiguous; // micro: 1 where the column is not clearly best
     };
 
     // Batch mode: the plan's steps in order, runs of gray planes of one block
@@ -98,15 +104,26 @@ private:
     void build_batch_groups();
     void build_streaming_work();
     void check_frame(const Frame& frame, int index) const;
-    void set_depth(int bit_depth);
+    void set_depth(const Frame& first);
     template <class T>
-    void run_step(const Step& step, std::size_t offset, int n, std::byte* local) const;
+    void run_step(const Step& step, std::size_t offset, int n, std::byte* local,
+                  float* scratch) const;
     template <class T>
-    void run_phase_block(const Step& step, std::size_t offset, int n, std::byte* local) const;
+    void run_phase_block(const Step& step, std::size_t offset, int n, std::byte* local,
+                         float* scratch) const;
+    // decode_engine_families.cpp: 2+1, modulated and micro blocks, n-ary
+    // digits, white/black levels and code-only modulation.
+    template <class T>
+    void run_family_block(const Step& step, std::size_t offset, int n, std::byte* local,
+                          float* scratch) const;
+    template <class T>
+    void run_family_step(const Step& step, std::size_t offset, int n, std::byte* local) const;
+    float* scratch_buffer(int worker) const;
     template <class T>
     void run_gray_planes(const BatchGroup& group, std::size_t offset, int n,
                          std::byte* local) const;
-    template <class T> void run_batch_span(std::size_t offset, int n, std::byte* local);
+    template <class T>
+    void run_batch_span(std::size_t offset, int n, std::byte* local, float* scratch);
     void finish_span(std::size_t offset, int n, std::byte* local, bool with_valid);
     void valid_span(std::size_t offset, int n);
     void global_stages();
@@ -132,11 +149,21 @@ private:
     int depth_ = 0;
     std::uint16_t sat_level_ = 0;
     float min_modulation_dn_ = 0;
+    float full_scale_ = 0; // of the bits in use (Frame::max_value)
 
     std::vector<PhaseState> phase_state_;       // per plan phase block (unused: empty refs)
     std::vector<PlaneRef<std::uint16_t>> code_; // per gray block
     std::vector<PlaneRef<std::uint8_t>> line_;  // per centerline block
     PlaneRef<std::uint16_t> white_black_;       // floor((white + black) / 2), sample type
+    PlaneRef<std::uint16_t> white_, black_;     // white and black frames (Plan::uses_levels)
+    // Code-only axes: modulation and mean per gray block (the result's images
+    // for the reported axis).
+    std::vector<PlaneRef<float>> code_modulation_, code_mean_;
+    std::vector<PlaneRef<std::uint16_t>> code_doubt_; // doubtful planes (doubt_threshold_row)
+    // Per worker scratch of the modulated and micro kernels (scratch_floats_
+    // floats per pixel of a span).
+    int scratch_floats_ = 0;
+    std::vector<std::unique_ptr<float[]>> scratch_;
     PlaneRef<std::uint8_t> sat_;
 
     std::vector<std::unique_ptr<float[]>> float_store_;

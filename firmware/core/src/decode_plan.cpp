@@ -3,7 +3,9 @@
 #include "decode_weights.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -27,6 +29,8 @@ bool same_period(double a, double b) {
 
 void check_phase(const PhaseBlock& b, int index) {
     const std::string name = block_name("phase", index, b.axis == Axis::x ? 0 : 1);
+    if (b.shifting == PhaseShifting::two_plus_one && b.steps != 3)
+        fail(name + ": 2+1 phase shifting has steps 3, got " + std::to_string(b.steps));
     if (b.steps < 3)
         fail(name + ": steps must be >= 3, got " + std::to_string(b.steps));
     if (!(std::isfinite(b.period) && b.period > 0))
@@ -35,16 +39,127 @@ void check_phase(const PhaseBlock& b, int index) {
         fail(name + ": shift_sign must be +1 or -1");
     if (!std::isfinite(b.phase_offset))
         fail(name + ": phase_offset must be finite");
+    if (b.shifting == PhaseShifting::modulated) {
+        if (!(std::isfinite(b.carrier_period) && b.carrier_period > 0))
+            fail(name + ": carrier_period must be > 0");
+        if (b.carrier_steps < 3 || b.carrier_steps > 16)
+            fail(name + ": carrier_steps must be in [3, 16], got " +
+                 std::to_string(b.carrier_steps));
+        if (b.steps > 16)
+            fail(name + ": a modulated block has at most 16 steps, got " +
+                 std::to_string(b.steps));
+    }
+}
+
+void check_micro(const MicroPhaseBlock& b, int index) {
+    const std::string name = block_name("micro_phase", index, b.axis == Axis::x ? 0 : 1);
+    if (b.periods.size() < 2 || b.periods.size() > 16)
+        fail(name + ": needs 2 to 16 periods, got " + std::to_string(b.periods.size()));
+    for (double v : b.periods)
+        if (!(std::isfinite(v) && v > 0))
+            fail(name + ": every period must be > 0");
+    if (b.shift_sign != 1 && b.shift_sign != -1)
+        fail(name + ": shift_sign must be +1 or -1");
+    if (!std::isfinite(b.phase_offset))
+        fail(name + ": phase_offset must be finite");
+    if (!b.extra_phase_offsets.empty() && b.extra_phase_offsets.size() + 1 != b.periods.size())
+        fail(name + ": extra_phase_offsets needs one entry per period after the first (" +
+             std::to_string(b.periods.size() - 1) + "), got " +
+             std::to_string(b.extra_phase_offsets.size()));
+    for (double v : b.extra_phase_offsets)
+        if (!std::isfinite(v))
+            fail(name + ": every extra_phase_offsets entry must be finite");
 }
 
 void check_gray(const GrayBlock& b, int index) {
     const std::string name = block_name("gray", index, b.axis == Axis::x ? 0 : 1);
     if (b.bits < 1)
         fail(name + ": bits must be >= 1");
-    if (b.bits + (b.complementary ? 1 : 0) > 16)
-        fail(name + ": at most 16 bit planes are supported");
+    if (b.levels < 2)
+        fail(name + ": levels must be >= 2, got " + std::to_string(b.levels));
+    const int planes = b.bits + (b.complementary ? 1 : 0);
+    if (std::pow(double(b.levels), double(planes)) > 65536.0)
+        fail(name + ": levels^planes must be at most 65536 (16 bit planes), got " +
+             std::to_string(b.levels) + "^" + std::to_string(planes));
     if (!(std::isfinite(b.period) && b.period > 0))
         fail(name + ": period must be > 0");
+    if (!std::isfinite(b.offset))
+        fail(name + ": offset must be finite");
+}
+
+// Digit `digit` (0 = least significant) of code step n's codeword, as
+// patterns.cpp renders it: natural base-L digits, or the reflected L-ary Gray
+// code (a digit mirrored when the Gray digits above it sum to an odd number).
+int codeword_digit(const GrayBlock& b, int digits, std::int64_t n, int digit) {
+    std::int64_t place = 1;
+    for (int i = 1; i < digits; ++i)
+        place *= b.levels;
+    int gray_sum = 0;
+    for (int i = digits - 1; i >= 0; --i, place /= b.levels) {
+        const auto natural = static_cast<int>((n / place) % b.levels);
+        const int value =
+            (b.code == CodeKind::gray && gray_sum % 2 == 1) ? b.levels - 1 - natural : natural;
+        if (i == digit)
+            return value;
+        gray_sum += value;
+    }
+    return 0;
+}
+
+// Code value -> code step (GrayInfo::step_of_code). Steps are numbered from
+// the offset: step n covers [offset + n u, offset + (n + 1) u) (u = period, or
+// period / 2 with the complementary plane); values whose step would start
+// beyond the projector are the wrapped steps left of the offset (n - count).
+void build_step_table(GrayInfo& g, double extent) {
+    const GrayBlock& b = g.block;
+    const double unit = b.complementary ? b.period / 2.0 : b.period;
+    std::int64_t count = 1;
+    for (int i = 0; i < g.planes; ++i)
+        count *= b.levels;
+    g.step_of_code.assign(static_cast<std::size_t>(count), kInvalidStep);
+    g.max_step = -1e9f;
+    for (std::int64_t n = 0; n < count; ++n) {
+        std::int64_t value = 0, place = 1;
+        for (int d = 0; d < g.planes; ++d, place *= b.levels)
+            value += codeword_digit(b, g.planes, n, d) * place;
+        double step = static_cast<double>(n);
+        if (b.offset + step * unit > extent - 0.5)
+            step -= static_cast<double>(count);
+        const bool inside =
+            b.offset + step * unit <= extent - 0.5 && b.offset + (step + 1.0) * unit > -0.5;
+        if (!inside)
+            continue;
+        g.step_of_code[static_cast<std::size_t>(value)] = static_cast<float>(step);
+        g.max_step = std::max(g.max_step, static_cast<float>(step));
+    }
+}
+
+// GrayInfo::code_coordinate from step_of_code. A table lookup per pixel
+// instead of two ceilings: the code-only decode is otherwise bound by them.
+void build_coordinate_table(GrayInfo& g) {
+    const double unit = g.block.complementary ? g.block.period / 2.0 : g.block.period;
+    const double offset = g.block.offset;
+    const std::size_t count = g.step_of_code.size();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    auto valid = [&](std::size_t v) { return g.step_of_code[v] <= g.max_step; };
+    auto step = [&](std::size_t v) { return static_cast<double>(g.step_of_code[v]); };
+    auto centre = [&](std::size_t v) {
+        return static_cast<float>(0.5 * (std::ceil(offset + step(v) * unit) +
+                                         std::ceil(offset + (step(v) + 1.0) * unit)) -
+                                  0.5);
+    };
+    g.code_coordinate.assign(2 * count, nan);
+    for (std::size_t v = 0; v < count; ++v) {
+        if (valid(v))
+            g.code_coordinate[v] = centre(v);
+        if (v == 0)
+            continue;
+        float& edge = g.code_coordinate[count + v];
+        if (valid(v) && valid(v - 1) && step(v) == step(v - 1) + 1.0)
+            edge = static_cast<float>(std::ceil(offset + step(v) * unit) - 0.5);
+        else if (valid(v) != valid(v - 1)) // at an end of the projector: the step inside it
+            edge = centre(valid(v) ? v : v - 1);
+    }
 }
 
 void check_centerline(const CenterlineBlock& b, int index) {
@@ -53,6 +168,53 @@ void check_centerline(const CenterlineBlock& b, int index) {
         fail(name + ": position must be finite");
     if (!(std::isfinite(b.width) && b.width > 0))
         fail(name + ": width must be > 0");
+}
+
+// A micro phase block as a phase block of its first period (3 shifted
+// frames) followed by one frame of each other period.
+PhaseInfo micro_info(const MicroPhaseBlock& m, int first_frame, int frames) {
+    PhaseInfo info;
+    info.kind = PhaseKind::micro;
+    info.block.axis = m.axis;
+    info.block.period = m.periods[0];
+    info.block.steps = 3;
+    info.block.shift_sign = m.shift_sign;
+    info.block.phase_offset = m.phase_offset;
+    info.first_frame = first_frame;
+    info.frames = frames;
+    info.axis = m.axis == Axis::x ? 0 : 1;
+    info.micro_periods = m.periods;
+    info.micro_extra_offsets.assign(m.periods.size() - 1, 0.0f);
+    for (std::size_t f = 0; f < m.extra_phase_offsets.size() && f + 1 < m.periods.size(); ++f)
+        info.micro_extra_offsets[f] = static_cast<float>(m.extra_phase_offsets[f]);
+    for (int k = 0; k < 3; ++k) {
+        const double delta = 2.0 * std::numbers::pi * k / 3.0;
+        info.cos_w.push_back(static_cast<float>(std::cos(delta)));
+        info.sin_w.push_back(static_cast<float>(-m.shift_sign * std::sin(delta)));
+    }
+    info.offset_fraction = static_cast<float>(m.phase_offset / (2.0 * std::numbers::pi));
+    return info;
+}
+
+// The candidate fringe orders of a micro block's first period: every k whose
+// period [k P_1, (k + 1) P_1) meets the projector with its pixel of margin.
+void plan_micro_orders(PhaseInfo& info, double extent) {
+    const double p1 = info.micro_periods[0];
+    info.first_order = static_cast<int>(std::floor(-1.5 / p1));
+    const int last = static_cast<int>(std::floor((extent + 0.5) / p1));
+    info.orders = last - info.first_order + 1;
+    const std::size_t others = info.micro_periods.size() - 1;
+    info.order_cos.assign(others * static_cast<std::size_t>(info.orders), 0.0f);
+    info.order_sin.assign(others * static_cast<std::size_t>(info.orders), 0.0f);
+    for (std::size_t f = 0; f < others; ++f)
+        for (int i = 0; i < info.orders; ++i) {
+            const double k = info.first_order + i;
+            const double turns = k * p1 / info.micro_periods[f + 1];
+            const double angle = 2.0 * std::numbers::pi * (turns - std::floor(turns));
+            const std::size_t at = f * static_cast<std::size_t>(info.orders) + std::size_t(i);
+            info.order_cos[at] = static_cast<float>(std::cos(angle));
+            info.order_sin[at] = static_cast<float>(std::sin(angle));
+        }
 }
 
 // Heterodyne levels over phase blocks sorted by period (ascending): the root is
@@ -139,17 +301,74 @@ void plan_axis(Plan& plan, int axis) {
         if (plan.centerlines[static_cast<std::size_t>(i)].axis == axis)
             centerlines.push_back(i);
 
-    if (phases.empty()) {
-        if (!grays.empty() || !centerlines.empty())
-            fail("axis " + axis_name + " has a gray or centerline block but no phase block");
-        return;
-    }
     if (grays.size() > 1)
         fail("axis " + axis_name + " has more than one gray block");
     if (centerlines.size() > 1)
         fail("axis " + axis_name + " has more than one centerline block");
-    ap.coded = true;
     auto period_of = [&](int p) { return plan.phases[static_cast<std::size_t>(p)].block.period; };
+    // Appends, not operator+ on literals: GCC 12 warns falsely (-Wrestrict) there.
+    auto code_name = [](const GrayBlock& b) {
+        std::string name;
+        if (b.offset != 0.0)
+            name += "shifted-";
+        if (b.inverse)
+            name += "inverse-";
+        if (b.complementary)
+            name += "complementary-";
+        name += b.code == CodeKind::binary ? "binary" : "gray";
+        return name;
+    };
+    auto level_suffix = [](const GrayBlock& b) {
+        std::string suffix;
+        if (b.levels > 2) {
+            suffix += '-';
+            suffix += std::to_string(b.levels);
+            suffix += "-level";
+        }
+        return suffix;
+    };
+    auto check_cover = [&](const GrayBlock& b) {
+        const double cover = b.period * std::pow(double(b.levels), double(b.bits));
+        if (cover + 1e-9 < ap.extent)
+            fail("gray block on axis " + axis_name + " codes " + std::to_string(cover) +
+                 " px, fewer than the projector extent of " + std::to_string(ap.extent) + " px");
+    };
+    for (int p : phases) {
+        const PhaseInfo& info = plan.phases[static_cast<std::size_t>(p)];
+        if (info.kind != PhaseKind::micro)
+            continue;
+        if (phases.size() > 1 || !grays.empty() || !centerlines.empty())
+            fail("axis " + axis_name +
+                 " has a micro_phase block and other coding blocks: micro phase shifting "
+                 "codes its axis alone");
+        ap.coded = true;
+        ap.method = UnwrapMethod::micro;
+        ap.name = "micro-phase";
+        ap.phases = {p};
+        ap.report_phase = p;
+        plan.phases[static_cast<std::size_t>(p)].used = true;
+        plan_micro_orders(plan.phases[static_cast<std::size_t>(p)], ap.extent);
+        return;
+    }
+    if (phases.empty()) {
+        if (!centerlines.empty())
+            fail("axis " + axis_name + " has a centerline block but no phase block");
+        if (grays.empty())
+            return;
+        // Code-only axis: the code alone gives the coordinate.
+        GrayInfo& g = plan.grays[static_cast<std::size_t>(grays[0])];
+        check_cover(g.block);
+        if (g.step_of_code.empty())
+            build_step_table(g, ap.extent);
+        build_coordinate_table(g);
+        ap.coded = true;
+        ap.method = UnwrapMethod::code;
+        ap.gray = grays[0];
+        std::string name = code_name(g.block);
+        ap.name = name + "-code" + level_suffix(g.block);
+        return;
+    }
+    ap.coded = true;
 
     if (grays.size() == 1) {
         GrayInfo& g = plan.grays[static_cast<std::size_t>(grays[0])];
@@ -161,15 +380,11 @@ void plan_axis(Plan& plan, int axis) {
         if (g.phase < 0)
             fail("gray block on axis " + axis_name + " indexes period " +
                  std::to_string(g.block.period) + " but no phase block on that axis has it");
-        if (std::ldexp(g.block.period, g.block.bits) < ap.extent)
-            fail("gray block on axis " + axis_name + " codes " + std::to_string(1 << g.block.bits) +
-                 " periods of " + std::to_string(g.block.period) +
-                 " px, fewer than the projector extent of " + std::to_string(ap.extent) + " px");
+        check_cover(g.block);
         ap.method = UnwrapMethod::gray;
         ap.phases = {g.phase};
         ap.gray = grays[0];
-        ap.name = std::string(g.block.inverse ? "inverse-" : "") +
-                  (g.block.complementary ? "complementary-gray" : "gray");
+        ap.name = code_name(g.block) + level_suffix(g.block);
     } else if (phases.size() >= 2) {
         std::vector<int> sorted = phases;
         std::stable_sort(sorted.begin(), sorted.end(),
@@ -239,7 +454,18 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
             PhaseInfo info;
             info.block = *p;
             info.first_frame = frame;
+            info.frames = frame_count(block);
             info.axis = p->axis == Axis::x ? 0 : 1;
+            if (p->shifting == PhaseShifting::two_plus_one)
+                info.kind = PhaseKind::two_plus_one;
+            if (p->shifting == PhaseShifting::modulated) {
+                info.kind = PhaseKind::modulated;
+                for (int j = 0; j < p->carrier_steps; ++j) {
+                    const double delta = 2.0 * std::numbers::pi * j / p->carrier_steps;
+                    info.carrier_cos.push_back(static_cast<float>(std::cos(delta)));
+                    info.carrier_sin.push_back(static_cast<float>(std::sin(delta)));
+                }
+            }
             for (int k = 0; k < p->steps; ++k) {
                 const double delta = 2.0 * std::numbers::pi * k / p->steps;
                 info.cos_w.push_back(static_cast<float>(std::cos(delta)));
@@ -255,6 +481,9 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
             }
             info.offset_fraction = static_cast<float>(p->phase_offset / (2.0 * std::numbers::pi));
             plan.phases.push_back(std::move(info));
+        } else if (const auto* m = std::get_if<MicroPhaseBlock>(&block)) {
+            check_micro(*m, index);
+            plan.phases.push_back(micro_info(*m, frame, frame_count(block)));
         } else if (const auto* g = std::get_if<GrayBlock>(&block)) {
             check_gray(*g, index);
             GrayInfo info;
@@ -262,6 +491,15 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
             info.first_frame = frame;
             info.axis = g->axis == Axis::x ? 0 : 1;
             info.planes = g->bits + (g->complementary ? 1 : 0);
+            for (int k = 0; k < info.planes; ++k) {
+                const int position =
+                    g->order == DigitOrder::msb_first ? info.planes - 1 - k : k;
+                info.weight.push_back(static_cast<std::uint16_t>(
+                    std::lround(std::pow(double(g->levels), double(position)))));
+            }
+            // fpp-capture/1's plain Gray keeps its vectorised gray_to_binary.
+            if (g->code != CodeKind::gray || g->levels != 2 || g->offset != 0.0 || g->wrap)
+                build_step_table(info, g->axis == Axis::x ? projector.width : projector.height);
             plan.grays.push_back(info);
         } else if (const auto* c = std::get_if<CenterlineBlock>(&block)) {
             check_centerline(*c, index);
@@ -280,8 +518,9 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
         frame += frame_count(block);
     }
     plan.frame_count = frame;
-    if (plan.phases.empty())
-        fail("the sequence has no phase block, so no axis can be decoded");
+    if (plan.phases.empty() && plan.grays.empty())
+        fail("the sequence has no phase block (nor micro_phase or gray block), so no axis can "
+             "be decoded");
 
     plan_axis(plan, 0);
     plan_axis(plan, 1);
@@ -289,13 +528,36 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
         fail("no axis can be decoded");
 
     const bool have_white_black = plan.white_frame >= 0 && plan.black_frame >= 0;
-    for (auto& g : plan.grays) {
-        if (g.block.inverse)
-            g.threshold = GrayThreshold::inverse;
-        else if (have_white_black)
+    for (std::size_t gi = 0; gi < plan.grays.size(); ++gi) {
+        GrayInfo& g = plan.grays[gi];
+        const std::string name = block_name("gray", static_cast<int>(gi), g.axis) + " (" +
+                                 std::to_string(g.block.levels) + " levels)";
+        if (g.block.wrap && (g.phase < 0 || g.block.complementary || g.block.levels != 2))
+            fail(name + ": wrap needs a two-level code without the complementary plane that "
+                        "indexes a phase block (the phase tells its last step from its first)");
+        if (g.block.levels > 2) {
+            if (g.block.inverse)
+                fail(name + ": inverse frames are not defined for more than 2 levels");
+            if (!have_white_black)
+                fail(name + ": multi-level digits need white and black frames in the sequence");
             g.threshold = GrayThreshold::white_black;
-        else
+            plan.uses_levels = true;
+        } else if (g.block.inverse) {
+            g.threshold = GrayThreshold::inverse;
+        } else if (have_white_black) {
+            g.threshold = GrayThreshold::white_black;
+        } else if (g.phase >= 0) {
             g.threshold = GrayThreshold::phase_mean;
+        } else {
+            fail(name + ": a code-only axis needs inverse frames or white and black frames "
+                        "to threshold its planes");
+        }
+        if (g.phase < 0 && g.threshold == GrayThreshold::white_black)
+            plan.uses_levels = true; // its modulation is (white - black) / 2
+        if (doubt_against_levels(g))
+            for (std::uint16_t w : g.weight)
+                if (static_cast<double>(w) * g.block.period < 2.0)
+                    g.fine_planes = static_cast<std::uint16_t>(g.fine_planes | w);
         if (g.threshold == GrayThreshold::phase_mean)
             plan.phases[static_cast<std::size_t>(g.phase)].thresholds = true;
     }
@@ -315,7 +577,7 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
         s.kind = StepKind::phase_block;
         s.trigger = p.last_frame();
         s.frame = p.first_frame;
-        s.frames = p.block.steps;
+        s.frames = p.frames;
         s.index = b;
         s.sat_bits = static_cast<std::uint8_t>(1u << p.axis);
         steps.push_back(s);
@@ -324,6 +586,16 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
     for (const auto& g : plan.grays)
         if (g.threshold == GrayThreshold::white_black)
             white_black_bits = static_cast<std::uint8_t>(white_black_bits | (1u << g.axis));
+    if (plan.uses_levels) {
+        for (int fr : {plan.black_frame, plan.white_frame}) {
+            Step s;
+            s.kind = StepKind::level_frame;
+            s.trigger = s.frame = fr;
+            s.index = fr == plan.white_frame ? 1 : 0;
+            s.sat_bits = white_black_bits;
+            steps.push_back(s);
+        }
+    }
     if (white_black_bits != 0) {
         plan.uses_white_black = true;
         for (int fr : {plan.white_frame, plan.black_frame}) {
@@ -346,7 +618,11 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
             s.first = j == 0;
             s.sat_bits = bit;
             s.stage = 2;
-            if (g.threshold == GrayThreshold::inverse) {
+            if (g.block.levels > 2) {
+                s.kind = StepKind::gray_digit;
+                s.frame = g.first_frame + j;
+                s.trigger = std::max(s.frame, white_black_ready);
+            } else if (g.threshold == GrayThreshold::inverse) {
                 s.kind = StepKind::gray_inverse;
                 s.frame = g.first_frame + 2 * j;
                 s.frame2 = s.frame + 1;
@@ -361,6 +637,17 @@ Plan make_plan(const Sequence& sequence, Size camera, Size projector) {
             }
             steps.push_back(s);
         }
+    }
+    for (int gi = 0; gi < static_cast<int>(plan.grays.size()); ++gi) {
+        const GrayInfo& g = plan.grays[static_cast<std::size_t>(gi)];
+        if (g.phase >= 0 || g.threshold != GrayThreshold::white_black)
+            continue;
+        Step s; // the code-only axis's modulation and mean, from white and black
+        s.kind = StepKind::code_levels;
+        s.index = gi;
+        s.stage = 1;
+        s.trigger = white_black_ready;
+        steps.push_back(s);
     }
     for (int ci = 0; ci < static_cast<int>(plan.centerlines.size()); ++ci) {
         const CenterlineInfo& c = plan.centerlines[static_cast<std::size_t>(ci)];

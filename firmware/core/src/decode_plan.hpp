@@ -13,11 +13,16 @@
 
 namespace fpp::detail {
 
-enum class UnwrapMethod { direct, multi_period, heterodyne, gray, centerline };
+enum class UnwrapMethod { direct, multi_period, heterodyne, gray, centerline, code, micro };
+
+// How a phase block's frames give the sums c, s, a of its phase.
+enum class PhaseKind { standard, two_plus_one, modulated, micro };
 
 struct PhaseInfo {
-    PhaseBlock block;
+    PhaseBlock block; // micro: period = periods[0], steps = 3
+    PhaseKind kind = PhaseKind::standard;
     int first_frame = 0;
+    int frames = 0;           // frames the block occupies
     int axis = 0;             // 0 = x, 1 = y
     // cos(delta_k) and -shift_sign * sin(delta_k), so that
     // theta = atan2(sum sin_w I, sum cos_w I).
@@ -30,7 +35,19 @@ struct PhaseInfo {
     float offset_fraction = 0;      // phase_offset / (2 pi)
     bool used = false;
     bool thresholds = false; // a gray or centerline block is thresholded against its mean
-    int last_frame() const { return first_frame + block.steps - 1; }
+    // modulated: cos and sin of the carrier shifts 2 pi j / carrier_steps.
+    std::vector<float> carrier_cos;
+    std::vector<float> carrier_sin;
+    // micro: the periods (projector px), the candidate fringe orders k of the
+    // first period covering the projector, and cos / sin of 2 pi k P_1 / P_f
+    // per other period f (row f - 1, candidate k - first_order).
+    std::vector<double> micro_periods;
+    std::vector<float> micro_extra_offsets; // per other period, rad (0 when the block has none)
+    int first_order = 0;
+    int orders = 0;
+    std::vector<float> order_cos;
+    std::vector<float> order_sin;
+    int last_frame() const { return first_frame + frames - 1; }
 };
 
 enum class GrayThreshold { white_black, inverse, phase_mean };
@@ -41,8 +58,57 @@ struct GrayInfo {
     int axis = 0;
     int planes = 0; // bits (+1 if complementary)
     GrayThreshold threshold = GrayThreshold::phase_mean;
-    int phase = -1; // index into Plan::phases: the block it indexes (and thresholds against)
+    int phase = -1; // index into Plan::phases: the block it indexes (and thresholds against);
+                    // -1: the block codes its axis alone (UnwrapMethod::code)
+    // Weight of each plane's digit in the stored code value (capture order):
+    // levels^position, position 0 = least significant digit.
+    std::vector<std::uint16_t> weight;
+    // Code value -> code step n (after the wrap of offset codes, see
+    // decoder.hpp), or kInvalidStep for values no step inside the projector
+    // uses. Empty for the plain Gray of fpp-capture/1 (n = gray_to_binary).
+    std::vector<float> step_of_code;
+    float max_step = 0; // largest valid n
+    // Code-only axes (phase < 0), 2 x (levels^planes) entries: [v] the centre
+    // of the projector pixels showing the step of code value v,
+    // (ceil(offset + n u) + ceil(offset + (n + 1) u)) / 2 - 1/2; [count + v]
+    // the pixel-grid edge between the steps of values v - 1 and v,
+    // ceil(offset + n u) - 1/2 (natural binary's doubtful digits, see
+    // unwrap_code_row). NaN where the value shows no step (or, for an edge,
+    // the two values are not neighbouring steps and neither alone is valid).
+    std::vector<float> code_coordinate;
+    // doubt_against_levels blocks: the code weights of the planes whose
+    // stripes (one code step each) are narrower than two projector pixels,
+    // runs of single pixels on its grid that the projector's blur fills in.
+    std::uint16_t fine_planes = 0;
 };
+
+// Longest run of doubtful digits 0..j that unwrap_code_row resolves to the
+// edge inside their cell (2^(j+1) - 1, j = 3: a 16-step cell). Longer runs
+// made by noise put the pixel on an edge 2^(j+1) steps away as often as not
+// (test_decode_families.cpp, NaturalBinaryCodeOnly).
+inline constexpr std::uint32_t kMaxCarryRun = 15;
+
+inline constexpr float kInvalidStep = 1e9f;
+
+// The flag a code plane sets in the doubt plane (decode_family_kernels.hpp):
+// its code weight for two-level codes (distinct bits, which lets natural
+// binary's carry edges be recognised), else a bit of its own.
+inline std::uint16_t doubt_flag(const GrayInfo& g, int plane) {
+    return g.block.levels == 2 ? g.weight[static_cast<std::size_t>(plane)]
+                               : static_cast<std::uint16_t>(1u << plane);
+}
+
+// Natural binary on a code-only axis thresholded by white and black: its
+// digits are also doubtful near the threshold relative to W - B
+// (doubt_levels_row), and unwrap_code_row resolves them.
+inline bool doubt_against_levels(const GrayInfo& g) {
+    return g.phase < 0 && g.threshold == GrayThreshold::white_black && g.block.levels == 2 &&
+           g.block.code == CodeKind::binary && !g.block.complementary;
+}
+// Whether plane flag `flag` of such a block is judged against W - B.
+inline bool doubt_against_levels(const GrayInfo& g, std::uint16_t flag) {
+    return doubt_against_levels(g) && (g.fine_planes & flag) != 0;
+}
 
 struct CenterlineInfo {
     CenterlineBlock block;
@@ -78,6 +144,9 @@ enum class StepKind {
     gray_threshold,    // threshold one gray plane against white/black or the phase mean
     gray_inverse,      // compare a gray plane with its inverse frame
     centerline_bit,    // threshold the centerline frame against the phase mean
+    level_frame,       // copy the white (index 1) or black (index 0) frame
+    gray_digit,        // n-ary plane: digit = round((I - black) / (white - black) (L - 1))
+    code_levels,       // code-only block with white/black: modulation and mean
 };
 
 struct Step {
@@ -114,6 +183,7 @@ struct Plan {
     int slot_count = 0;
     bool needs_full_storage = false; // a stage looks at neighbouring pixels
     bool uses_white_black = false;
+    bool uses_levels = false; // white and black kept (n-ary digits, code-only contrast)
 };
 
 // Throws std::invalid_argument with a message naming the block and the reason

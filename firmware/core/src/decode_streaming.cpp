@@ -42,8 +42,11 @@ const DecodeOptions& validated(const DecodeOptions& options) {
 struct FinestBlocks {
     std::optional<PhaseBlock> axis[2];
     explicit FinestBlocks(const detail::Plan& plan) {
+        // Code-only and micro axes have no N-step block to correct.
         for (int a = 0; a < 2; ++a)
-            if (plan.axes[a].coded)
+            if (plan.axes[a].coded && plan.axes[a].report_phase >= 0 &&
+                plan.phases[static_cast<std::size_t>(plan.axes[a].report_phase)].kind !=
+                    detail::PhaseKind::micro)
                 axis[a] = plan.phases[static_cast<std::size_t>(plan.axes[a].report_phase)].block;
     }
 };

@@ -18,6 +18,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include <unistd.h>
@@ -300,6 +301,18 @@ struct TiffOptionsFree {
     void operator()(TIFFOpenOptions* o) const { TIFFOpenOptionsFree(o); }
 };
 
+// A TIFF reader's first check. A name the file system cannot look up (longer
+// than NAME_MAX, a loop of links) is the reader's InputError too: without the
+// error code, fs::exists throws filesystem_error.
+void require_tiff_exists(const fs::path& path) {
+    std::error_code ec;
+    if (fs::exists(path, ec))
+        return;
+    if (ec && ec != std::errc::no_such_file_or_directory)
+        throw InputError(path, "", "cannot open: " + ec.message());
+    throw InputError(path, "", "cannot open: file not found");
+}
+
 UniqueTiff open_tiff(const fs::path& path, const char* mode, TiffMessages& messages) {
     std::unique_ptr<TIFFOpenOptions, TiffOptionsFree> options(TIFFOpenOptionsAlloc());
     if (!options) throw std::bad_alloc();
@@ -428,6 +441,17 @@ Frame read_png_gray(const std::filesystem::path& path) {
         throw InputError(path, "", "implausible PNG size " + std::to_string(job.width) + "x" +
                                        std::to_string(job.height));
     }
+    // Deflate expands at most 1032:1, so a small file cannot hold a large
+    // image: refuse before allocating for what the header claims.
+    std::error_code size_error;
+    const std::uint64_t file_bytes = fs::file_size(path, size_error);
+    const std::uint64_t claimed =
+        std::uint64_t{job.height} * (std::uint64_t{job.width} * (job.bit_depth / 8) + 1);
+    if (!size_error && claimed > 1032 * file_bytes + (std::uint64_t{1} << 20)) {
+        throw InputError(path, "", "the header claims " + std::to_string(job.width) + "x" +
+                                       std::to_string(job.height) + " pixels, more than a " +
+                                       std::to_string(file_bytes) + "-byte file can hold");
+    }
 
     Frame frame;
     frame.bit_depth = job.bit_depth;
@@ -504,7 +528,7 @@ void write_tiff_synced(const std::filesystem::path& path, const Image<float>& im
 }
 
 Image<float> read_tiff_float(const std::filesystem::path& path) {
-    if (!fs::exists(path)) throw InputError(path, "", "cannot open: file not found");
+    require_tiff_exists(path);
     TiffMessages messages{};
     UniqueTiff tiff = open_tiff(path, "r", messages);
     if (!tiff) throw InputError(path, "", "not a readable TIFF (" + tiff_reason(messages) + ")");
@@ -592,6 +616,143 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
     }
     if (messages.has_error) throw fail();
     return image;
+}
+
+namespace {
+
+// The header of a grey frame TIFF; refuses anything else naming the file.
+FrameInfo tiff_gray_header(const fs::path& path, TIFF* t) {
+    std::uint32_t width = 0, height = 0;
+    std::uint16_t channels = 1, bits = 0, format = SAMPLEFORMAT_UINT;
+    std::uint16_t photometric = PHOTOMETRIC_MINISBLACK;
+    TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &width);
+    TIFFGetField(t, TIFFTAG_IMAGELENGTH, &height);
+    TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLESPERPIXEL, &channels);
+    TIFFGetFieldDefaulted(t, TIFFTAG_BITSPERSAMPLE, &bits);
+    TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLEFORMAT, &format);
+    TIFFGetField(t, TIFFTAG_PHOTOMETRIC, &photometric);
+    if (channels != 1) {
+        throw InputError(path, "",
+                         "TIFF with " + std::to_string(channels) +
+                             " samples per pixel; frames must be single-channel grey");
+    }
+    if (format != SAMPLEFORMAT_UINT || (bits != 8 && bits != 16)) {
+        throw InputError(path, "",
+                         "TIFF of " + std::to_string(bits) + "-bit samples of sample format " +
+                             std::to_string(format) +
+                             "; frames must be 8- or 16-bit unsigned integers");
+    }
+    if (photometric != PHOTOMETRIC_MINISBLACK) {
+        throw InputError(path, "",
+                         "TIFF photometric interpretation " + std::to_string(photometric) +
+                             " (palette, inverted or colour); frames must be "
+                             "MinIsBlack grey");
+    }
+    if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide ||
+        std::uint64_t{width} * height > kMaxPixels) {
+        throw InputError(path, "",
+                         "implausible TIFF size " + std::to_string(width) + "x" +
+                             std::to_string(height));
+    }
+    FrameInfo info;
+    info.format = FrameFileFormat::tiff;
+    info.size = {static_cast<int>(width), static_cast<int>(height)};
+    info.bit_depth = bits;
+    return info;
+}
+
+UniqueTiff open_tiff_for_reading(const fs::path& path, TiffMessages& messages) {
+    require_tiff_exists(path);
+    UniqueTiff tiff = open_tiff(path, "r", messages);
+    if (!tiff)
+        throw InputError(path, "", "not a readable TIFF (" + tiff_reason(messages) + ")");
+    return tiff;
+}
+
+} // namespace
+
+FrameInfo read_tiff_gray_info(const std::filesystem::path& path) {
+    TiffMessages messages{};
+    const UniqueTiff tiff = open_tiff_for_reading(path, messages);
+    return tiff_gray_header(path, tiff.get());
+}
+
+Frame read_tiff_gray(const std::filesystem::path& path) {
+    TiffMessages messages{};
+    const UniqueTiff tiff = open_tiff_for_reading(path, messages);
+    TIFF* t = tiff.get();
+    const FrameInfo info = tiff_gray_header(path, t);
+    const auto width = static_cast<std::uint32_t>(info.size.width);
+    const auto height = static_cast<std::uint32_t>(info.size.height);
+    const std::size_t sample_bytes = info.bit_depth / 8;
+
+    // Not more samples than the file can hold (see read_tiff_float).
+    std::error_code size_error;
+    const std::uint64_t file_bytes = fs::file_size(path, size_error);
+    const std::uint64_t holdable = 4096 * (size_error ? 0 : file_bytes) + (std::uint64_t{1} << 20);
+    if (std::uint64_t{width} * height * sample_bytes > holdable) {
+        throw InputError(path, "",
+                         "the header claims " + std::to_string(width) + "x" +
+                             std::to_string(height) + " samples, more than a " +
+                             std::to_string(file_bytes) + "-byte file can hold");
+    }
+    Frame frame;
+    frame.bit_depth = info.bit_depth;
+    std::uint8_t* pixels = nullptr;
+    if (info.bit_depth == 8) {
+        frame.u8 = Image<std::uint8_t>(info.size);
+        pixels = frame.u8.data();
+    } else {
+        frame.u16 = Image<std::uint16_t>(info.size);
+        pixels = reinterpret_cast<std::uint8_t*>(frame.u16.data());
+    }
+    const std::size_t row_bytes = std::size_t(width) * sample_bytes;
+    auto fail = [&]() {
+        return InputError(path, "", "corrupt or truncated TIFF (" + tiff_reason(messages) + ")");
+    };
+    if (TIFFIsTiled(t)) {
+        std::uint32_t tile_w = 0, tile_h = 0;
+        TIFFGetField(t, TIFFTAG_TILEWIDTH, &tile_w);
+        TIFFGetField(t, TIFFTAG_TILELENGTH, &tile_h);
+        if (tile_w == 0 || tile_h == 0 || tile_w > kMaxSide || tile_h > kMaxSide ||
+            std::uint64_t{tile_w} * tile_h * sample_bytes > holdable)
+            throw fail();
+        const std::size_t tile_bytes = std::size_t(tile_w) * tile_h * sample_bytes;
+        if (static_cast<std::size_t>(TIFFTileSize(t)) != tile_bytes)
+            throw fail();
+        std::vector<std::uint8_t> tile(tile_bytes);
+        for (std::uint32_t ty = 0; ty < height; ty += tile_h) {
+            for (std::uint32_t tx = 0; tx < width; tx += tile_w) {
+                if (TIFFReadTile(t, tile.data(), tx, ty, 0, 0) < 0)
+                    throw fail();
+                const std::uint32_t w = std::min(tile_w, width - tx);
+                const std::uint32_t h = std::min(tile_h, height - ty);
+                for (std::uint32_t y = 0; y < h; ++y) {
+                    std::memcpy(pixels + std::size_t(ty + y) * row_bytes + tx * sample_bytes,
+                                tile.data() + std::size_t(y) * tile_w * sample_bytes,
+                                std::size_t(w) * sample_bytes);
+                }
+            }
+        }
+    } else {
+        std::uint32_t rows_per_strip = height;
+        TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
+        rows_per_strip = std::min(std::max<std::uint32_t>(rows_per_strip, 1), height);
+        const std::uint32_t strips = TIFFNumberOfStrips(t);
+        if (strips != (height + rows_per_strip - 1) / rows_per_strip)
+            throw fail();
+        for (std::uint32_t s = 0; s < strips; ++s) {
+            const std::uint32_t y0 = s * rows_per_strip;
+            const std::uint32_t rows = std::min(rows_per_strip, height - y0);
+            const auto bytes = static_cast<tmsize_t>(row_bytes * rows);
+            if (TIFFReadEncodedStrip(t, s, pixels + std::size_t(y0) * row_bytes, bytes) != bytes) {
+                throw fail();
+            }
+        }
+    }
+    if (messages.has_error)
+        throw fail();
+    return frame;
 }
 
 } // namespace fpp

@@ -6,7 +6,15 @@ namespace {
 struct FrameCounter {
     int operator()(const WhiteBlock&) const { return 1; }
     int operator()(const BlackBlock&) const { return 1; }
-    int operator()(const PhaseBlock& b) const { return b.steps; }
+    int operator()(const PhaseBlock& b) const {
+        switch (b.shifting) {
+        case PhaseShifting::two_plus_one: return 3;
+        case PhaseShifting::modulated: return b.steps * b.carrier_steps;
+        case PhaseShifting::standard: break;
+        }
+        return b.steps;
+    }
+    int operator()(const MicroPhaseBlock& b) const { return static_cast<int>(b.periods.size()) + 2; }
     int operator()(const GrayBlock& b) const {
         const int planes = b.bits + (b.complementary ? 1 : 0);
         return b.inverse ? 2 * planes : planes;
@@ -19,6 +27,7 @@ struct Namer {
     std::string operator()(const PhaseBlock&) const { return "phase"; }
     std::string operator()(const GrayBlock&) const { return "gray"; }
     std::string operator()(const CenterlineBlock&) const { return "centerline"; }
+    std::string operator()(const MicroPhaseBlock&) const { return "micro_phase"; }
 };
 } // namespace
 

@@ -25,9 +25,30 @@ void check_block(const PatternBlock& block) {
             throw std::invalid_argument("phase block: invalid period, steps, shift_sign or "
                                         "phase_offset");
         }
+        if (p->shifting == PhaseShifting::modulated &&
+            (!(std::isfinite(p->carrier_period) && p->carrier_period > 0.0) ||
+             p->carrier_steps < 1)) {
+            throw std::invalid_argument("phase block: invalid carrier_period or carrier_steps");
+        }
+    } else if (const auto* m = std::get_if<MicroPhaseBlock>(&block)) {
+        const bool periods_ok = std::all_of(m->periods.begin(), m->periods.end(), [](double v) {
+            return std::isfinite(v) && v > 0.0;
+        });
+        const bool extra_ok =
+            (m->extra_phase_offsets.empty() ||
+             m->extra_phase_offsets.size() + 1 == m->periods.size()) &&
+            std::all_of(m->extra_phase_offsets.begin(), m->extra_phase_offsets.end(),
+                        [](double v) { return std::isfinite(v); });
+        if (m->periods.size() < 2 || !periods_ok || !std::isfinite(m->phase_offset) ||
+            (m->shift_sign != 1 && m->shift_sign != -1) || !extra_ok) {
+            throw std::invalid_argument("micro_phase block: invalid periods, shift_sign, "
+                                        "phase_offset or extra_phase_offsets");
+        }
     } else if (const auto* g = std::get_if<GrayBlock>(&block)) {
-        if (!(std::isfinite(g->period) && g->period > 0.0) || g->bits < 1 || g->bits > 30) {
-            throw std::invalid_argument("gray block: invalid period or bits");
+        if (!(std::isfinite(g->period) && g->period > 0.0) || g->bits < 1 || g->levels < 2 ||
+            !std::isfinite(g->offset) ||
+            std::pow(static_cast<double>(g->levels), static_cast<double>(g->bits)) > 0x1p30) {
+            throw std::invalid_argument("gray block: invalid period, bits, levels or offset");
         }
     } else if (const auto* c = std::get_if<CenterlineBlock>(&block)) {
         if (!std::isfinite(c->position) || !(std::isfinite(c->width) && c->width > 0.0)) {
@@ -69,11 +90,38 @@ GrayPlane gray_plane(const GrayBlock& b, int frame) {
     return g;
 }
 
+// Digit `digit` (0 = least significant) of code step n's codeword: natural
+// base-L digits, or the reflected L-ary Gray code (a digit is mirrored,
+// L - 1 - b, when the Gray digits above it sum to an odd number; for L = 2
+// this is n ^ (n >> 1)). n is taken modulo L^digits.
+int code_digit(const GrayBlock& b, int digits, std::int64_t n, int digit) {
+    const std::int64_t levels = b.levels;
+    std::int64_t count = 1;
+    for (int i = 0; i < digits; ++i) count *= levels;
+    n = ((n % count) + count) % count;
+    std::int64_t place = count / levels;
+    int gray_sum = 0;
+    for (int i = digits - 1; i >= 0; --i, place /= levels) {
+        const auto natural = static_cast<int>((n / place) % levels);
+        const int value = (b.code == CodeKind::gray && (gray_sum % 2) == 1)
+                              ? b.levels - 1 - natural
+                              : natural;
+        if (i == digit) return value;
+        gray_sum += value;
+    }
+    return 0;
+}
+
 double gray_intensity(const GrayBlock& b, const GrayPlane& g, double p) {
-    const auto n = static_cast<std::int64_t>(std::floor(g.scale * p / b.period));
-    const std::int64_t code = n ^ (n >> 1);
-    const bool bit = ((code >> (g.planes - 1 - g.plane)) & 1) != 0;
-    return (bit != g.inverted) ? 1.0 : 0.0;
+    const auto n = static_cast<std::int64_t>(std::floor(g.scale * (p - b.offset) / b.period));
+    const int digit = b.order == DigitOrder::msb_first ? g.planes - 1 - g.plane : g.plane;
+    const double level = static_cast<double>(code_digit(b, g.planes, n, digit)) /
+                         static_cast<double>(b.levels - 1);
+    return g.inverted ? 1.0 - level : level;
+}
+
+double fringe(double p, double period, double phase) {
+    return 0.5 + 0.5 * std::cos(kTwoPi * p / period + phase);
 }
 
 struct IntensityAt {
@@ -84,9 +132,37 @@ struct IntensityAt {
     double operator()(const BlackBlock&) const { return 0.0; }
     double operator()(const PhaseBlock& b) const {
         const double p = along(b.axis, x, y);
-        const double shift = static_cast<double>(b.shift_sign) * kTwoPi *
-                             static_cast<double>(frame) / static_cast<double>(b.steps);
-        return 0.5 + 0.5 * std::cos(kTwoPi * p / b.period + b.phase_offset + shift);
+        const double sign = static_cast<double>(b.shift_sign);
+        switch (b.shifting) {
+        case PhaseShifting::two_plus_one: {
+            const double phi = kTwoPi * p / b.period + b.phase_offset;
+            if (frame == 0) return 0.5 + 0.5 * sign * std::sin(phi);
+            return frame == 1 ? 0.5 + 0.5 * std::cos(phi) : 0.5;
+        }
+        case PhaseShifting::modulated: {
+            const int shift = frame / b.carrier_steps;
+            const int carrier_shift = frame % b.carrier_steps;
+            const double q = b.axis == Axis::x ? y : x;
+            return fringe(p, b.period,
+                          b.phase_offset + sign * kTwoPi * shift / static_cast<double>(b.steps)) *
+                   fringe(q, b.carrier_period,
+                          kTwoPi * carrier_shift / static_cast<double>(b.carrier_steps));
+        }
+        case PhaseShifting::standard: break;
+        }
+        return fringe(p, b.period,
+                      b.phase_offset + sign * kTwoPi * static_cast<double>(frame) /
+                                           static_cast<double>(b.steps));
+    }
+    double operator()(const MicroPhaseBlock& b) const {
+        const double p = along(b.axis, x, y);
+        if (frame < 3) {
+            const double shift = static_cast<double>(b.shift_sign) * kTwoPi * frame / 3.0;
+            return fringe(p, b.periods[0], b.phase_offset + shift);
+        }
+        const auto f = static_cast<std::size_t>(frame - 2); // period index, 1 .. F - 1
+        const double extra = b.extra_phase_offsets.empty() ? 0.0 : b.extra_phase_offsets[f - 1];
+        return fringe(p, b.periods[f], b.phase_offset + extra);
     }
     double operator()(const GrayBlock& b) const {
         return gray_intensity(b, gray_plane(b, frame), along(b.axis, x, y));
@@ -100,6 +176,7 @@ Axis block_axis(const PatternBlock& block) {
     if (const auto* p = std::get_if<PhaseBlock>(&block)) return p->axis;
     if (const auto* g = std::get_if<GrayBlock>(&block)) return g->axis;
     if (const auto* c = std::get_if<CenterlineBlock>(&block)) return c->axis;
+    if (const auto* m = std::get_if<MicroPhaseBlock>(&block)) return m->axis;
     return Axis::x; // white and black are uniform
 }
 
@@ -191,8 +268,19 @@ Image<std::uint8_t> render_pattern(const PatternBlock& block, int frame, Size pr
     const Axis axis = block_axis(block);
     const int extent = axis == Axis::x ? projector.width : projector.height;
 
-    // Every pattern varies along one axis only: compute that profile once and
-    // replicate it.
+    const auto* phase = std::get_if<PhaseBlock>(&block);
+    if (phase && phase->shifting == PhaseShifting::modulated) {
+        // The one pattern that varies along both axes.
+        for (int y = 0; y < projector.height; ++y) {
+            std::uint8_t* row = image.row(y);
+            for (int x = 0; x < projector.width; ++x) {
+                row[x] = to_level(pattern_intensity(block, frame, x, y), lut);
+            }
+        }
+        return image;
+    }
+    // Every other pattern varies along one axis only: compute that profile
+    // once and replicate it.
     std::vector<std::uint8_t> profile(static_cast<std::size_t>(extent));
     const IntensityAt at_x{frame, 0.0, 0.0};
     for (int i = 0; i < extent; ++i) {

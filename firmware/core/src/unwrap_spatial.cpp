@@ -339,7 +339,7 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
             out[i] += static_cast<float>(offset + shift[static_cast<std::size_t>(root)]) * period;
             if (out[i] < -1.5f || out[i] > params.highest) {
                 out[i] = kNaN;
-                mask[i] = static_cast<std::uint8_t>(mask[i] | kDecodeUnwrapInconsistent);
+                mask[i] = static_cast<std::uint8_t>(mask[i] | kDecodeOutOfRange);
             }
         }
     }

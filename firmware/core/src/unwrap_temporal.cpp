@@ -15,6 +15,7 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr std::uint32_t kLow = kDecodeLowModulation;
 constexpr std::uint32_t kSat = kDecodeSaturated;
 constexpr std::uint32_t kBad = kDecodeUnwrapInconsistent;
+constexpr std::uint32_t kOutside = kDecodeOutOfRange;
 
 // Flags are built in 32-bit lanes, like the coordinates, and narrowed to the
 // mask byte once per pixel: byte-wide flags next to float lanes make GCC pack
@@ -29,7 +30,7 @@ template <bool MaskFirst>
 FPP_KERNEL void store(float p, std::uint32_t flags, const PixelChecks& c, float& out,
                       std::uint8_t& mask) {
     const bool outside = (p < c.lowest) | (p > c.highest);
-    flags |= outside ? kBad : 0u;
+    flags |= outside ? kOutside : 0u;
     out = select(flags != 0, kNaN, p);
     const std::uint32_t bits = flags | (flags == 0 ? std::uint32_t{c.valid_flag} : 0u);
     if constexpr (MaskFirst)
@@ -118,7 +119,15 @@ FPP_KERNEL void heterodyne(int n, const PhaseRow* blocks, int count,
 // Complementary Gray with the interval centre computed from the code: the
 // general form with ceil(), or, when the half period is a whole number of
 // pixels, the exact shortcut K unit + unit/2 - 0.5.
-template <bool MaskFirst, bool WholeUnit>
+// Code step K of a code value: the table of a v2 code, else plain Gray.
+template <bool Table> FPP_KERNEL float code_step(std::uint16_t code, const float* table) {
+    if constexpr (Table)
+        return table[code];
+    else
+        return static_cast<float>(gray_to_binary(code));
+}
+
+template <bool MaskFirst, bool WholeUnit, bool Table = false>
 FPP_KERNEL void
 complementary_gray(int n, const float* __restrict fraction, const float* __restrict modulation,
                    const std::uint16_t* __restrict code, const GrayRowParams& params,
@@ -130,21 +139,36 @@ complementary_gray(int n, const float* __restrict fraction, const float* __restr
     const float half_unit = 0.5f * unit - 0.5f;
     const std::uint32_t max_code = params.max_code;
     const float max_dis = c.max_disagreement;
+    const float* table = params.step_of_code;
+    const float offset = params.offset;
+    const float max_step = params.max_step;
+    const float wrap_span = params.wrap_span;
     for (int x = 0; x < n; ++x) {
-        const std::uint32_t k = gray_to_binary(code[x]);
-        const float kf = static_cast<float>(k);
-        const float centre =
-            WholeUnit ? kf * unit + half_unit
-                      : 0.5f * (ceil_fast(kf * unit) + ceil_fast((kf + 1.0f) * unit)) - 0.5f;
+        const float kf = code_step<Table>(code[x], table);
+        float centre;
+        if constexpr (Table)
+            centre =
+                0.5f * (ceil_fast(offset + kf * unit) + ceil_fast(offset + (kf + 1.0f) * unit)) -
+                0.5f;
+        else
+            centre = WholeUnit
+                         ? kf * unit + half_unit
+                         : 0.5f * (ceil_fast(kf * unit) + ceil_fast((kf + 1.0f) * unit)) - 0.5f;
         const float pw = fraction[x] * period;
-        const float p = pw + round_nearest((centre - pw) * inv) * period;
-        const bool inconsistent = (k > max_code) | (abs_fast(p - centre) * inv > max_dis);
+        float p = pw + round_nearest((centre - pw) * inv) * period;
+        if constexpr (Table) {
+            const float shift = select(p < -0.5f, wrap_span, 0.0f);
+            p += shift;
+            centre += shift;
+        }
+        const bool unused = Table ? kf > max_step : kf > static_cast<float>(max_code);
+        const bool inconsistent = unused | (abs_fast(p - centre) * inv > max_dis);
         store<MaskFirst>(p, base_flags(modulation[x], sat[x], c) | (inconsistent ? kBad : 0u), c,
                          out[x], mask[x]);
     }
 }
 
-template <bool MaskFirst>
+template <bool MaskFirst, bool Table = false>
 FPP_KERNEL void plain_gray(int n, const float* __restrict fraction,
                            const float* __restrict modulation, const std::uint16_t* __restrict code,
                            const GrayRowParams& params, const std::uint8_t* __restrict sat,
@@ -156,15 +180,31 @@ FPP_KERNEL void plain_gray(int n, const float* __restrict fraction,
     const float unit = params.unit;
     const std::uint32_t max_code = params.max_code;
     const float band = params.edge_band;
+    const float* table = params.step_of_code;
+    const float offset = params.offset;
+    const float max_step = params.max_step;
+    const float wrap_span = params.wrap_span;
     for (int x = 0; x < n; ++x) {
-        const std::uint32_t k = gray_to_binary(code[x]);
-        const float kf = static_cast<float>(k);
-        const float lo = ceil_fast(kf * unit) - 0.5f;
-        const float hi = ceil_fast((kf + 1.0f) * unit) - 0.5f;
+        const float kf = code_step<Table>(code[x], table);
+        float lo, hi;
+        if constexpr (Table) {
+            lo = ceil_fast(offset + kf * unit) - 0.5f;
+            hi = ceil_fast(offset + (kf + 1.0f) * unit) - 0.5f;
+        } else {
+            lo = ceil_fast(kf * unit) - 0.5f;
+            hi = ceil_fast((kf + 1.0f) * unit) - 0.5f;
+        }
         const float centre = 0.5f * (lo + hi);
         const float pw = fraction[x] * period;
-        const float p = pw + round_nearest((centre - pw) * inv) * period;
-        store<MaskFirst>(p, base_flags(modulation[x], sat[x], c) | (k > max_code ? kBad : 0u), c,
+        float p = pw + round_nearest((centre - pw) * inv) * period;
+        if constexpr (Table) {
+            const float shift = select(p < -0.5f, wrap_span, 0.0f);
+            p += shift;
+            lo += shift;
+            hi += shift;
+        }
+        const bool unused = Table ? kf > max_step : kf > static_cast<float>(max_code);
+        store<MaskFirst>(p, base_flags(modulation[x], sat[x], c) | (unused ? kBad : 0u), c,
                          out[x], mask[x]);
         estimate[x] = out[x];
         edge[x] = ((p - lo < band) | (hi - p < band)) ? std::uint8_t{1} : std::uint8_t{0};
@@ -180,7 +220,7 @@ FPP_VECTOR_CLONES
 void unwrap_direct_row(int n, const PhaseRow& phase, double extent, const std::uint8_t* sat,
                        const PixelChecks& checks, bool mask_first, float* out, std::uint8_t* mask) {
     const PixelChecks c = checks;
-    const float top = window_top(phase.period, extent);
+    const float top = window_top(double(phase.period), extent);
     if (mask_first)
         direct<true>(n, phase.fraction, phase.modulation, phase.period, top, sat, c, out, mask);
     else
@@ -192,7 +232,7 @@ void unwrap_multi_period_row(int n, const PhaseRow* blocks, int count, double ex
                              const std::uint8_t* sat, const PixelChecks& checks, bool mask_first,
                              float* out, std::uint8_t* mask) {
     const PixelChecks c = checks;
-    const float top = window_top(blocks[0].period, extent);
+    const float top = window_top(double(blocks[0].period), extent);
     if (mask_first)
         multi_period<true>(n, blocks, count, top, sat, c, out, mask);
     else
@@ -205,7 +245,7 @@ void unwrap_heterodyne_row(int n, const PhaseRow* blocks, int count,
                            const std::uint8_t* sat, const PixelChecks& checks, bool mask_first,
                            float* out, std::uint8_t* mask) {
     const PixelChecks c = checks;
-    const float top = window_top(levels[0].period, extent);
+    const float top = window_top(double(levels[0].period), extent);
     if (mask_first)
         heterodyne<true>(n, blocks, count, levels, top, sat, c, out, mask);
     else
@@ -221,7 +261,18 @@ void unwrap_gray_row(int n, const PhaseRow& phase, const std::uint16_t* code,
     const GrayRowParams g = params;
     const float* f = phase.fraction;
     const float* m = phase.modulation;
-    if (!g.complementary) {
+    if (g.step_of_code != nullptr) {
+        if (!g.complementary) {
+            if (mask_first)
+                plain_gray<true, true>(n, f, m, code, g, sat, c, out, mask, estimate, edge);
+            else
+                plain_gray<false, true>(n, f, m, code, g, sat, c, out, mask, estimate, edge);
+        } else if (mask_first) {
+            complementary_gray<true, false, true>(n, f, m, code, g, sat, c, out, mask);
+        } else {
+            complementary_gray<false, false, true>(n, f, m, code, g, sat, c, out, mask);
+        }
+    } else if (!g.complementary) {
         if (mask_first)
             plain_gray<true>(n, f, m, code, g, sat, c, out, mask, estimate, edge);
         else
@@ -237,6 +288,77 @@ void unwrap_gray_row(int n, const PhaseRow& phase, const std::uint16_t* code,
         else
             complementary_gray<false, false>(n, f, m, code, g, sat, c, out, mask);
     }
+}
+
+namespace {
+
+template <bool MaskFirst, bool Carries>
+FPP_KERNEL void code_only(int n, const std::uint16_t* __restrict code, const GrayRowParams& g,
+                          const float* __restrict modulation, const std::uint16_t* __restrict doubt,
+                          const std::uint8_t* __restrict sat, const PixelChecks& c,
+                          float* __restrict out, std::uint8_t* __restrict mask) {
+    const float* __restrict table = g.code_coordinate;
+    const std::uint32_t count = g.code_count;
+    for (int x = 0; x < n; ++x) {
+        const std::uint32_t d = doubt[x];
+        const std::uint32_t read = code[x];
+        std::uint32_t index = read;
+        std::uint32_t flags = base_flags(modulation[x], sat[x], c);
+        if constexpr (Carries) {
+            // run: the doubtful digits 0..j (d's lowest run of ones).
+            const std::uint32_t run = (d ^ (d + 1u)) >> 1;
+            const std::uint32_t top = (run + 1u) >> 1;
+            index = run == 0u ? read : count + ((read & ~run) | top);
+            flags |= (((d & ~run) != 0u) | (run > g.max_carry_run)) ? kLow : 0u;
+        } else {
+            flags |= (d & (d - 1u)) != 0u ? kLow : 0u;
+        }
+        const float p = table[index];
+        flags |= p != p ? kBad : 0u;
+        store<MaskFirst>(p, flags, c, out[x], mask[x]);
+    }
+}
+
+template <bool MaskFirst>
+FPP_KERNEL void micro(int n, const float* __restrict coordinate, const float* __restrict modulation,
+                      const std::uint8_t* __restrict ambiguous, const std::uint8_t* __restrict sat,
+                      const PixelChecks& c, float* __restrict out, std::uint8_t* __restrict mask) {
+    for (int x = 0; x < n; ++x)
+        store<MaskFirst>(coordinate[x],
+                         base_flags(modulation[x], sat[x], c) | (ambiguous[x] != 0 ? kBad : 0u), c,
+                         out[x], mask[x]);
+}
+
+} // namespace
+
+FPP_VECTOR_CLONES
+void unwrap_code_row(int n, const std::uint16_t* code, const GrayRowParams& params,
+                     const float* modulation, const std::uint16_t* doubt, const std::uint8_t* sat,
+                     const PixelChecks& checks, bool mask_first, float* out, std::uint8_t* mask) {
+    const PixelChecks c = checks;
+    const GrayRowParams g = params;
+    if (g.resolve_carries) {
+        if (mask_first)
+            code_only<true, true>(n, code, g, modulation, doubt, sat, c, out, mask);
+        else
+            code_only<false, true>(n, code, g, modulation, doubt, sat, c, out, mask);
+    } else {
+        if (mask_first)
+            code_only<true, false>(n, code, g, modulation, doubt, sat, c, out, mask);
+        else
+            code_only<false, false>(n, code, g, modulation, doubt, sat, c, out, mask);
+    }
+}
+
+FPP_VECTOR_CLONES
+void unwrap_micro_row(int n, const float* coordinate, const float* modulation,
+                      const std::uint8_t* ambiguous, const std::uint8_t* sat,
+                      const PixelChecks& checks, bool mask_first, float* out, std::uint8_t* mask) {
+    const PixelChecks c = checks;
+    if (mask_first)
+        micro<true>(n, coordinate, modulation, ambiguous, sat, c, out, mask);
+    else
+        micro<false>(n, coordinate, modulation, ambiguous, sat, c, out, mask);
 }
 
 FPP_VECTOR_CLONES
@@ -261,7 +383,7 @@ void valid_row(int n, const float* const* coords, int count, std::uint8_t* mask)
         const float* b = coords[1];
         for (int x = 0; x < n; ++x)
             mask[x] = static_cast<std::uint8_t>(
-                mask[x] | ((a[x] == a[x]) & (b[x] == b[x]) ? kDecodeValid : 0));
+                mask[x] | (((a[x] == a[x]) & (b[x] == b[x])) ? kDecodeValid : 0));
     }
 }
 

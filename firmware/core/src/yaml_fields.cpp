@@ -245,9 +245,36 @@ double Reader::real_value(const YAML::Node& node, const std::string& field) cons
     return value;
 }
 
+double Reader::real_or_ratio_value(const YAML::Node& node, const std::string& field) const {
+    const std::string text = plain_scalar(node, field, "a number or a ratio such as 1920/58");
+    const auto slash = text.find('/');
+    if (slash == std::string::npos)
+        return real_value(node, field);
+    const std::string parts[2] = {text.substr(0, slash), text.substr(slash + 1)};
+    double values[2] = {0, 0};
+    for (int k = 0; k < 2; ++k) {
+        const std::string& part = parts[k];
+        const std::size_t start = !part.empty() && part[0] == '+' ? 1 : 0;
+        const auto [end, ec] =
+            std::from_chars(part.data() + start, part.data() + part.size(), values[k]);
+        if (!is_finite_real_syntax(part) || ec != std::errc() || end != part.data() + part.size() ||
+            !std::isfinite(values[k])) {
+            fail(node, field,
+                 "must be a number or a ratio of two numbers such as 1920/58, got '" + text + "'");
+        }
+    }
+    if (values[1] == 0.0)
+        fail(node, field, "ratio '" + text + "' divides by zero");
+    const double value = values[0] / values[1];
+    if (!std::isfinite(value))
+        fail(node, field, "ratio '" + text + "' is out of the double range");
+    return value;
+}
+
 bool Reader::bool_value(const YAML::Node& node, const std::string& field) const {
     const std::string text = plain_scalar(node, field, "true or false");
-    if (text == "true" || text == "True" || text == "TRUE") return true;
+    if (text == "true" || text == "True" || text == "TRUE")
+        return true;
     if (text == "false" || text == "False" || text == "FALSE") return false;
     fail(node, field, "must be true or false, got '" + text + "'");
 }

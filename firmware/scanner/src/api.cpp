@@ -134,9 +134,11 @@ std::string string_field(const json& body, const char* key, const std::string& f
 }
 
 void expect_keys(const json& body, std::initializer_list<const char*> allowed) {
-    for (const auto& [key, value] : body.items())
+    for (const auto& item : body.items()) {
+        const std::string& key = item.key();
         if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; }))
             throw ApiError(400, key + ": unknown field");
+    }
 }
 
 ScanMode mode_of(const std::string& text) {

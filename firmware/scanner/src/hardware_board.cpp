@@ -1,9 +1,11 @@
 #include "fpp/scanner/hardware_board.hpp"
 
 #include "fpp/drivers/device_error.hpp"
+#include "fpp/scanner/reconnecting_camera.hpp"
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #if FPP_HAVE_ARAVIS
 #include <fpp/drivers/aravis_camera.hpp>
@@ -19,9 +21,11 @@ namespace fpp::scanner {
 
 namespace {
 
-[[noreturn, maybe_unused]] void not_built(const std::string& device, const char* library) {
-    throw drivers::DeviceError(device, std::string("support is not built into this binary (") +
-                                           library + " was not found at build time)");
+[[noreturn, maybe_unused]] void not_built(drivers::DeviceKind kind, const std::string& device,
+                                          const char* library) {
+    throw drivers::DeviceError(kind, device,
+                               std::string("support is not built into this binary (") + library +
+                                   " was not found at build time)");
 }
 
 #if FPP_HAVE_GPIOD
@@ -53,7 +57,7 @@ HardwareBoard::HardwareBoard(const BoardConfig& board) : camera_config_(board.ca
     led_ =
         std::make_unique<drivers::GpiodStatusLed>(line(gpio, gpio.led_line, gpio.led_active_low));
 #else
-    not_built(gpio.chip, "libgpiod");
+    not_built(drivers::DeviceKind::gpio, gpio.chip, "libgpiod");
 #endif
     try {
 #if FPP_HAVE_DRM
@@ -65,7 +69,7 @@ HardwareBoard::HardwareBoard(const BoardConfig& board) : camera_config_(board.ca
         display.output.mode = board.display.mode == "auto" ? "" : board.display.mode;
         display_ = std::make_unique<drivers::DrmDisplay>(display);
 #else
-        not_built("display " + board.display.card, "libdrm");
+        not_built(drivers::DeviceKind::display, "display " + board.display.card, "libdrm");
 #endif
 #if FPP_HAVE_GPIOD
         trigger_ = std::make_unique<drivers::GpiodTriggerOutput>(
@@ -89,15 +93,21 @@ std::unique_ptr<drivers::Camera> HardwareBoard::make_camera() const {
 #if FPP_HAVE_ARAVIS
     return std::make_unique<drivers::AravisCamera>(camera_config_.device, camera_config_.settings);
 #else
-    not_built("camera " + camera_config_.device, "aravis-0.8");
+    not_built(drivers::DeviceKind::camera, "camera " + camera_config_.device, "aravis-0.8");
 #endif
 }
 
-void HardwareBoard::open_camera() {
+std::unique_ptr<drivers::Camera> HardwareBoard::reconnecting(std::unique_ptr<drivers::Camera> first,
+                                                             const Logger& log) {
+    return std::make_unique<ReconnectingCamera>([this] { return make_camera(); }, std::move(first),
+                                                "camera " + camera_config_.device, log);
+}
+
+void HardwareBoard::open_camera(const Logger& log) {
     if (camera_)
         throw std::logic_error("HardwareBoard::open_camera: the camera is already open");
     try {
-        camera_ = make_camera();
+        camera_ = reconnecting(make_camera(), log);
     } catch (const drivers::DeviceError&) {
         show_error(*led_);
         throw;
@@ -108,8 +118,11 @@ bool HardwareBoard::wait_for_camera(const Logger& log, const std::atomic<bool>& 
                                     const CameraWaitOptions& options) {
     if (camera_)
         throw std::logic_error("HardwareBoard::wait_for_camera: the camera is already open");
-    camera_ = scanner::wait_for_camera([this] { return make_camera(); }, *led_, log, stop, options)
-                  .camera;
+    auto first =
+        scanner::wait_for_camera([this] { return make_camera(); }, *led_, log, stop, options)
+            .camera;
+    if (first)
+        camera_ = reconnecting(std::move(first), log);
     return camera_ != nullptr;
 }
 

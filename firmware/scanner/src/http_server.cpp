@@ -36,7 +36,11 @@ HttpResponse HttpResponse::no_content() {
 }
 
 HttpResponse HttpResponse::error(int status, const std::string& message) {
-    return json(status, nlohmann::json{{"error", message}}.dump());
+    // The message may quote the request (a field name, a parse error at a
+    // byte): bytes that are not UTF-8 become U+FFFD instead of failing the
+    // dump, which would turn a 400 into a 500.
+    return json(status, nlohmann::json{{"error", message}}.dump(
+                            -1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
 struct HttpServer::Context {

@@ -68,7 +68,24 @@ std::string scan_json(const ScanMetadata& m) {
                       {"calibration_fnv1a64", hex64(m.table->calibration_hash)}};
     if (m.board.projector_response)
         j["projector_response"] = m.board.projector_response->string();
-    j["decode"] = {{"method_x", m.method_x}, {"method_y", m.method_y}};
+    const DecodeStatistics& d = m.decode_statistics;
+    j["decode"] = {{"method_x", m.method_x},
+                   {"method_y", m.method_y},
+                   {"statistics_of", m.decode_statistics_of},
+                   {"pixels", d.pixels},
+                   {"lit_floor_dn", d.lit_floor},
+                   {"lit_floor_rule", d.floor_from_dark_mode ? "dark_mode" : "full_scale_fraction"},
+                   {"lit", d.lit},
+                   {"decoded", d.decoded},
+                   {"coverage_of_lit", d.coverage_of_lit()},
+                   {"dropped",
+                    {{"dark", d.dark},
+                     {"saturated", d.saturated},
+                     {"low_modulation", d.low_modulation},
+                     {"unwrap_inconsistent", d.unwrap_inconsistent},
+                     {"out_of_range", d.out_of_range},
+                     {"no_cue", d.no_cue},
+                     {"other", d.other}}}};
     j["exposures_us"] = m.outcome.exposures_us;
     if (m.outcome.fusion) {
         const FusionStats& f = *m.outcome.fusion;

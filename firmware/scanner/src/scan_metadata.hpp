@@ -1,7 +1,9 @@
 #pragma once
 // scan.json (format fpp-scan/1): what a scan folder says about itself: board,
-// camera and projector, sequence, table, decode methods, points, timings and
-// every flip with its frame.
+// camera and projector, sequence, table, decode methods and statistics
+// (fpp/decode_report.hpp), points, timings and every flip with its frame.
+// Format: firmware/core/formats/scan-json.md
+#include "fpp/decode_report.hpp"
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/scanner.hpp"
 
@@ -38,6 +40,10 @@ struct ScanMetadata {
     std::string method_y;
     const ScanOutcome& outcome;
     const std::vector<FrameRecord>& records;
+    // Of the decode the cloud comes from: the single pass, or with HDR the
+    // fused result (fused_decode_statistics); decode_statistics_of says which.
+    const DecodeStatistics& decode_statistics;
+    const char* decode_statistics_of; // "pass" or "fused"
 };
 
 std::string scan_json(const ScanMetadata& m);

@@ -24,7 +24,10 @@ void prepare_store(const fs::path& directory) {
 }
 
 fs::path new_scan_folder(const fs::path& directory) {
-    const auto now = std::chrono::system_clock::now();
+    return new_scan_folder(directory, std::chrono::system_clock::now());
+}
+
+fs::path new_scan_folder(const fs::path& directory, std::chrono::system_clock::time_point now) {
     const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
     const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
     std::tm utc{};
@@ -33,9 +36,38 @@ fs::path new_scan_folder(const fs::path& directory) {
     std::snprintf(name, sizeof name, "scan-%04d%02d%02d-%02d%02d%02d-%03d", utc.tm_year + 1900,
                   utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec,
                   static_cast<int>(ms));
-    fs::path folder = directory / name;
-    for (int n = 2; fs::exists(folder); ++n) folder = directory / (std::string(name) + "-" + std::to_string(n));
-    return folder;
+    // Names must sort after every scan in the store, or pruning (oldest
+    // name first) would remove the newest scans: when the clock went back
+    // (or two scans share a millisecond) the newest name's time is kept and
+    // a 6-digit sequence number counts on.
+    const auto scans = list_scans(directory);
+    if (scans.empty() || scans.back().filename().string() < name)
+        return directory / name;
+    const std::string newest = scans.back().filename().string();
+    constexpr std::size_t kTimeLength = 24; // scan-YYYYMMDD-HHMMSS-mmm
+    long sequence = 1;
+    if (newest.size() > kTimeLength + 1 && newest[kTimeLength] == '-') {
+        const std::string digits = newest.substr(kTimeLength + 1);
+        if (digits.size() <= 6 && std::all_of(digits.begin(), digits.end(),
+                                              [](char c) { return c >= '0' && c <= '9'; }))
+            sequence = std::stol(digits);
+    }
+    if (sequence >= 999999)
+        throw IoError(directory, "a million scans named after " + newest.substr(0, kTimeLength) +
+                                     " (the clock is behind the store's newest scan)");
+    char suffix[24];
+    std::snprintf(suffix, sizeof suffix, "-%06ld", sequence + 1);
+    return directory / (newest.substr(0, kTimeLength) + suffix);
+}
+
+std::vector<std::string> remove_interrupted_scans(const fs::path& directory) {
+    std::vector<std::string> removed = remove_interrupted_writes(directory);
+    std::error_code ec;
+    for (const auto& session : fs::directory_iterator(directory / "sessions", ec))
+        if (session.is_directory())
+            for (const auto& name : remove_interrupted_writes(session.path()))
+                removed.push_back("sessions/" + session.path().filename().string() + "/" + name);
+    return removed;
 }
 
 std::vector<fs::path> list_scans(const fs::path& directory) {

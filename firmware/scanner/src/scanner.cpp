@@ -3,6 +3,7 @@
 #include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/drivers/device_error.hpp"
+#include "fpp/drivers/gige_frame_ids.hpp"
 #include "fpp/error.hpp"
 #include "fpp/patterns.hpp"
 #include "fpp/point_cloud.hpp"
@@ -19,6 +20,8 @@
 #include <cstdio>
 #include <ctime>
 #include <memory>
+
+#include <sys/stat.h>
 
 namespace fpp::scanner {
 
@@ -45,6 +48,16 @@ std::uint64_t hash_file(const fs::path& path) {
 }
 
 } // namespace
+
+std::optional<Scanner::FileStamp> Scanner::stamp_of(const fs::path& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0)
+        return std::nullopt;
+    return FileStamp{static_cast<std::uint64_t>(st.st_dev), static_cast<std::uint64_t>(st.st_ino),
+                     static_cast<std::int64_t>(st.st_size),
+                     std::int64_t{st.st_mtim.tv_sec} * 1'000'000'000 + st.st_mtim.tv_nsec,
+                     std::int64_t{st.st_ctim.tv_sec} * 1'000'000'000 + st.st_ctim.tv_nsec};
+}
 
 struct Scanner::Captured {
     std::vector<FrameRecord> records;
@@ -135,7 +148,10 @@ ResponseRamp Scanner::capture_ramp() {
 CoefficientTable Scanner::load_checked_table(const fs::path& path) const {
     const Size camera = dev_.camera.size();
     const Size projector = dev_.display.size();
-    CoefficientTable table = load_table(path, &camera);
+    // Read, not mapped: a mapping follows writes into the file (a `cp` over
+    // it truncates, then rewrites: SIGBUS on the pages past its end
+    // meanwhile, and a mix of two tables after, unchecked).
+    CoefficientTable table = load_table(path, &camera, /*map=*/false);
     if (table.info().projector != projector)
         throw InputError(path, "projector_size",
                          "table made for a " + std::to_string(table.info().projector.width) + "x" +
@@ -146,14 +162,33 @@ CoefficientTable Scanner::load_checked_table(const fs::path& path) const {
 }
 
 void Scanner::reload_table(const fs::path& path) {
+    // Stamped first: a change while it loads is seen by the next scan.
+    const std::optional<FileStamp> stamp = stamp_of(path);
     CoefficientTable table = load_checked_table(path);
     const std::uint64_t hash = hash_file(path);
     // Only now: a bad file leaves the table in use as it was.
     table_ = std::move(table);
     table_file_hash_ = hash;
     table_path_ = path;
+    table_stamp_ = stamp;
     log_.info("table " + path.string() + " loaded (" + to_string(table_.info().model) + ", hash " +
               hex64(table_file_hash_) + ")");
+}
+
+void Scanner::reload_table_if_changed() {
+    if (table_path_.empty() || stamp_of(table_path_) == table_stamp_)
+        return;
+    try {
+        reload_table(table_path_);
+    } catch (const std::exception&) {
+        // The table in memory is no longer the file's: scanning on with it
+        // would measure with a calibration that the person replaced.
+        log_.error("table " + table_path_.string() +
+                   " changed on disk and cannot be used (the scan's error says why); scans "
+                   "stop until it is whole again or another is installed");
+        throw;
+    }
+    log_.warning("table " + table_path_.string() + " changed on disk: reloaded");
 }
 
 Frame Scanner::preview_at(double exposure_us) {
@@ -184,6 +219,8 @@ ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop, fs::path
             observer_->failed(why);
     };
     try {
+        if (mode == ScanMode::scan)
+            reload_table_if_changed();
         if (folder.empty()) {
             prepare_store(board_.store.directory);
             folder = new_scan_folder(board_.store.directory);
@@ -205,7 +242,7 @@ ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop, fs::path
                 observer_->written(outcome);
             return outcome;
         } catch (const drivers::DeviceError& e) {
-            if (attempt_no == 1 && e.device().find("camera") != std::string::npos) {
+            if (attempt_no == 1 && e.kind() == drivers::DeviceKind::camera) {
                 dev_.camera.stop();
                 log_.warning(std::string("scan attempt failed: ") + e.what() + "; retrying once");
                 continue;
@@ -364,10 +401,11 @@ void Scanner::capture_pass(int pass, int passes, ScanMode mode, const std::atomi
         else
             dev_.trigger.pulse(board_.timing.trigger_pulse);
         drivers::CapturedFrame frame = dev_.camera.next_frame(board_.camera.settings.frame_timeout);
-        if (i > 0 && frame.frame_id != previous_id + 1)
-            throw drivers::DeviceError("camera", "frame id " + std::to_string(frame.frame_id) +
-                                                     " after " + std::to_string(previous_id) +
-                                                     ": a frame was dropped");
+        // (A 16-bit GigE Vision counter goes from 65535 to 1.)
+        if (i > 0 && drivers::gige_frames_missed(previous_id, frame.frame_id) != 0)
+            throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
+                                       "frame id " + std::to_string(frame.frame_id) + " after " +
+                                           std::to_string(previous_id) + ": a frame was dropped");
         previous_id = frame.frame_id;
         // The exposure must start after the pattern is on screen (both on the
         // scan clock; a camera that cannot tell reports 0).
@@ -376,7 +414,8 @@ void Scanner::capture_pass(int pass, int passes, ScanMode mode, const std::atomi
                                   " exposed before pattern " + std::to_string(i) +
                                   " was on screen");
         if (frame.frame.size() != camera)
-            throw drivers::DeviceError("camera", "frame of the wrong size");
+            throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
+                                       "frame of the wrong size");
         captured.records.push_back({flip, frame.frame_id, frame.timestamp_ns});
         // The next pattern flips while this frame is decoded.
         if (i + 1 < patterns_)
@@ -488,12 +527,22 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
     if (!table_.empty())
         table = TableSummary{table_path_, table_.info().model, table_file_hash_,
                              table_.info().calibration_hash};
+    // The decode statistics of scan.json: of the result the cloud comes from.
+    const double full_scale = dev_.camera.bit_depth() == 8 ? 255.0 : 65535.0;
+    const bool fused = passes_.size() > 1;
+    std::vector<const DecodeResult*> pass_results;
+    for (const ExposurePass& pass : passes_)
+        pass_results.push_back(&pass.decoded);
+    const DecodeStatistics statistics =
+        fused ? fused_decode_statistics(decoded, pass_results, full_scale)
+              : decode_statistics(decoded, full_scale);
     const ScanMetadata metadata{board_,           mode,
                                 captured.started_utc, camera,
                                 dev_.camera.bit_depth(), projector,
                                 table,            decoded.method_x,
                                 decoded.method_y, outcome,
-                                captured.records};
+                                captured.records, statistics,
+                                fused ? "fused" : "pass"};
     write_file_synced(temp / "scan.json", scan_json(metadata));
 }
 

@@ -47,7 +47,7 @@ sim::SessionOptions parse_session_scene(const std::string& text) {
 
 } // namespace
 
-SimBoard::SimBoard(const BoardConfig& board) {
+SimBoard::SimBoard(const BoardConfig& board, const Logger& log) {
     if (!board.sim)
         throw std::logic_error("SimBoard on a board without a sim section");
     const SimConfig& s = *board.sim;
@@ -95,7 +95,7 @@ SimBoard::SimBoard(const BoardConfig& board) {
         drivers::CameraSettings sensor = board.camera.settings;
         sensor.trigger = drivers::TriggerMode::software;
         camera_ = std::make_unique<sim::SimCamera>(*renderer_, *screen, *clock_, sensor, s.seed);
-        gige_camera_ = make_sim_gige_camera(*camera_, board.camera.device, board.camera.settings);
+        gige_camera_ = make_sim_gige_camera(*camera_, board.camera.device, board.camera.settings, log);
     } else {
         camera_ = std::make_unique<sim::SimCamera>(*renderer_, *screen, *clock_,
                                                    board.camera.settings, s.seed);
@@ -118,15 +118,39 @@ SimBoard::SimBoard(const BoardConfig& board) {
     led_ = std::make_unique<sim::SimLed>();
 }
 
+SimBoard::~SimBoard() = default;
+
+void SimBoard::unplug_camera() {
+    if (!gige_camera_)
+        throw std::logic_error("SimBoard::unplug_camera: the board has no GigE link");
+    gige_camera_->unplug();
+}
+
+void SimBoard::plug_camera() {
+    if (!gige_camera_)
+        throw std::logic_error("SimBoard::plug_camera: the board has no GigE link");
+    gige_camera_->plug();
+}
+
+void SimBoard::limit_records(std::size_t limit) {
+    camera_->limit_records(limit);
+    if (display_) // (an observed hardware display keeps only the current scan)
+        display_->limit_records(limit);
+    if (trigger_)
+        trigger_->limit_records(limit);
+    if (led_)
+        led_->limit_records(limit);
+}
+
 void SimBoard::next_session_pose() {
     // A scan that took no frame (an attempt that failed at once) and a
     // preview (one frame) keep the pose; any other scan moves the board on,
     // cycling through the poses.
-    if (camera_->exposures().size() <= exposures_at_pose_ + 1) {
-        exposures_at_pose_ = camera_->exposures().size();
+    if (camera_->exposures_taken() <= exposures_at_pose_ + 1) {
+        exposures_at_pose_ = camera_->exposures_taken();
         return;
     }
-    exposures_at_pose_ = camera_->exposures().size();
+    exposures_at_pose_ = camera_->exposures_taken();
     pose_index_ = (pose_index_ + 1) % session_poses_.size();
     auto next = std::make_unique<sim::Renderer>(
         rig_, sim::session_scene(*session_, session_poses_[pose_index_]));

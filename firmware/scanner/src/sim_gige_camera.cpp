@@ -2,9 +2,11 @@
 
 #include "fpp/drivers/device_error.hpp"
 #include "fpp/error.hpp"
+#include "fpp/scanner/reconnecting_camera.hpp"
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 
 #if FPP_HAVE_ARAVIS
 #include <fpp/drivers/aravis_camera.hpp>
@@ -16,12 +18,25 @@ namespace fpp::scanner {
 #if FPP_HAVE_ARAVIS
 namespace {
 
-class SimGigeCamera final : public drivers::Camera {
+std::unique_ptr<drivers::Camera> open_driver(const std::string& address,
+                                             const drivers::CameraSettings& settings) {
+    return std::make_unique<drivers::AravisCamera>(address, settings);
+}
+
+class GigeLinkCamera final : public SimGigeCamera {
 public:
-    SimGigeCamera(sim::SimCamera& sensor, const std::string& address,
-                  const drivers::CameraSettings& settings)
-        : sensor_(sensor), fake_(sensor.size(), address), driver_(address, settings),
+    GigeLinkCamera(sim::SimCamera& sensor, const std::string& address,
+                   const drivers::CameraSettings& settings, const Logger& log)
+        : sensor_(sensor), address_(address), fake_(std::in_place, sensor.size(), address),
+          driver_([address, settings] { return open_driver(address, settings); },
+                  open_driver(address, settings), "camera " + address, log),
           timeout_(settings.frame_timeout) {}
+
+    void unplug() override { fake_.reset(); }
+    void plug() override {
+        if (!fake_)
+            fake_.emplace(sensor_.size(), address_);
+    }
 
     Size size() const override { return driver_.size(); }
     int bit_depth() const override { return driver_.bit_depth(); }
@@ -57,7 +72,9 @@ public:
         // The image must be in the fake camera before its trigger arrives:
         // it fills the frame when it sees the trigger.
         sensor_.software_trigger();
-        fake_.set_image(sensor_.next_frame(timeout_).frame);
+        const Frame image = sensor_.next_frame(timeout_).frame;
+        if (fake_)
+            fake_->set_image(image);
         driver_.software_trigger();
     }
     drivers::CapturedFrame next_frame(std::chrono::milliseconds timeout) override {
@@ -66,22 +83,25 @@ public:
 
 private:
     sim::SimCamera& sensor_;
-    drivers::AravisFakeCamera fake_; // declared before the driver that connects to it
-    drivers::AravisCamera driver_;
+    std::string address_;
+    std::optional<drivers::AravisFakeCamera> fake_; // before the driver that connects to it
+    ReconnectingCamera driver_;
     std::chrono::milliseconds timeout_;
 };
 
 } // namespace
 
-std::unique_ptr<drivers::Camera> make_sim_gige_camera(sim::SimCamera& sensor,
-                                                      const std::string& address,
-                                                      const drivers::CameraSettings& settings) {
-    return std::make_unique<SimGigeCamera>(sensor, address, settings);
+std::unique_ptr<SimGigeCamera> make_sim_gige_camera(sim::SimCamera& sensor,
+                                                    const std::string& address,
+                                                    const drivers::CameraSettings& settings,
+                                                    const Logger& log) {
+    return std::make_unique<GigeLinkCamera>(sensor, address, settings, log);
 }
 #else
-std::unique_ptr<drivers::Camera> make_sim_gige_camera(sim::SimCamera&, const std::string& address,
-                                                      const drivers::CameraSettings&) {
-    throw drivers::DeviceError("camera " + address,
+std::unique_ptr<SimGigeCamera> make_sim_gige_camera(sim::SimCamera&, const std::string& address,
+                                                    const drivers::CameraSettings&,
+                                                    const Logger&) {
+    throw drivers::DeviceError(drivers::DeviceKind::camera, "camera " + address,
                                "Aravis support is not built into this binary (aravis-0.8 was "
                                "not found at build time)");
 }

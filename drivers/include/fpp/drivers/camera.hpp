@@ -18,7 +18,7 @@ enum class TriggerMode {
 };
 
 struct CameraSettings {
-    std::string pixel_format = "Mono8"; // GenICam PixelFormat name: Mono8, Mono12, Mono16
+    std::string pixel_format = "Mono8"; // GenICam PixelFormat name: Mono8, Mono10, Mono12, Mono16
     double exposure_us = 10000.0;       // exposure time, microseconds
     TriggerMode trigger = TriggerMode::line;
     std::string trigger_source = "Line0"; // GenICam TriggerSource for TriggerMode::line

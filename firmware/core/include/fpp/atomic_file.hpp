@@ -10,6 +10,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace fpp {
 
@@ -59,6 +60,14 @@ void write_file_synced(const std::filesystem::path& path, std::string_view bytes
 // writers do).
 void write_folder_atomically(const std::filesystem::path& target,
                              const std::function<void(const std::filesystem::path& temp)>& write);
+
+// Removes what writes cut short by a power cut or SIGKILL left in `folder`
+// (the hidden ".NAME.tmp-*" files and ".NAME.partial-*" folders of the two
+// functions above; nothing else; with `target_name`, only those of that
+// target) and returns their names. Only for a folder no one is writing to:
+// at a program's start. Throws IoError when one cannot be removed.
+std::vector<std::string> remove_interrupted_writes(const std::filesystem::path& folder,
+                                                   const std::string& target_name = {});
 
 // "what: strerror(err)", with a plain explanation added for a full disk.
 std::string describe_errno(const std::string& what, int err);

@@ -31,8 +31,7 @@
 // pixels (edge tiles padded with centre = NaN); each tile stores its planes
 // one after the other, each plane tile_width * tile_height floats in row-major
 // order, so a kernel streams a tile with unit-stride loads. The file layout
-// (header, per-tile CRC-32, alignment) is documented in coefficient_table.cpp
-// and in the README.
+// (header, per-tile CRC-32, alignment): firmware/core/formats/coefficient-table.md.
 
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"

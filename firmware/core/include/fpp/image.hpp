@@ -83,7 +83,13 @@ struct Frame {
     Image<std::uint16_t> u16;
 
     Size size() const { return bit_depth == 8 ? u8.size() : u16.size(); }
-    int max_value() const { return bit_depth == 8 ? 255 : 65535; }
+    // Bits in use, LSB-aligned (a 12-bit camera stored in 16 bits: 12); 0 =
+    // the container's. Full scale (saturation, modulation floors) follows it.
+    int significant_bits = 0;
+    int max_value() const {
+        const int bits = significant_bits > 0 ? significant_bits : bit_depth;
+        return (1 << bits) - 1;
+    }
 };
 
 } // namespace fpp

@@ -1,5 +1,6 @@
 #pragma once
-// PNG (libpng) and float TIFF (libtiff) reading and writing. Writers are
+// PNG (libpng) and float TIFF (libtiff) reading and writing; camera frames
+// read from PNG, TIFF (libtiff) or BMP (our own strict reader). Writers are
 // atomic: temporary file, fsync, rename.
 //
 // Readers throw InputError naming the file for anything that is not the
@@ -25,6 +26,35 @@ struct PngInfo {
     bool palette = false;
 };
 PngInfo read_png_info(const std::filesystem::path& path);
+
+// Camera frames: 8- or 16-bit single-channel grey images in any format a
+// capture set allows.
+enum class FrameFileFormat { png, tiff, bmp };
+const char* to_string(FrameFileFormat format); // "PNG", "TIFF", "BMP"
+struct FrameInfo {
+    FrameFileFormat format = FrameFileFormat::png;
+    Size size;
+    int bit_depth = 0; // 8 or 16
+};
+// The format from the file's first bytes (its magic), never its name.
+// InputError naming the file when it is none of PNG, TIFF, BMP.
+FrameFileFormat frame_file_format(const std::filesystem::path& path);
+// The header of a grey frame; InputError naming the file and why for
+// anything read_frame would refuse at the header (colour, depth, size, ...).
+FrameInfo read_frame_info(const std::filesystem::path& path);
+// Reads a grey frame of any of those formats (dispatch on the magic bytes).
+Frame read_frame(const std::filesystem::path& path);
+
+// An 8- or 16-bit unsigned single-channel (MinIsBlack) TIFF, strips or tiles,
+// any compression libtiff decodes. Anything else is refused naming the file.
+Frame read_tiff_gray(const std::filesystem::path& path);
+FrameInfo read_tiff_gray_info(const std::filesystem::path& path);
+// An uncompressed BMP (BITMAPINFOHEADER or a later header): 8-bit with a grey
+// palette, or 24/32-bit whose three colour channels are equal; bottom-up or
+// top-down. Colour, compression, truncation and sizes the file cannot hold
+// are refused naming the file, before any pixel buffer is allocated.
+Frame read_bmp_gray(const std::filesystem::path& path);
+FrameInfo read_bmp_gray_info(const std::filesystem::path& path);
 
 // PNG writers: fast zlib level (frames are written during capture and read by
 // tests), lossless. 16-bit samples are stored big-endian as PNG requires.

@@ -4,36 +4,12 @@
 // Conventions: camera frame, mm; pixel (column, row) of the camera image.
 // A slot without a point holds NaN in X, Y and Z.
 //
-// PLY layout written by write_ply (binary little-endian, 24 bytes a point,
-// 28 with sigma_z):
-//
-//   ply
-//   format binary_little_endian 1.0
-//   comment <free text, one line each>
-//   obj_info organised_width <camera width>
-//   obj_info organised_height <camera height>
-//   element vertex <number of valid points>
-//   property float x            mm, camera frame
-//   property float y
-//   property float z
-//   property float quality      fringe modulation B, DN (NaN if unknown)
-//   property float intensity    mean intensity A, DN (NaN if unknown)
-//   property float sigma_z      only when the cloud has it: predicted 1-sigma
-//                               of z, mm (camera noise -> phase noise, times
-//                               the table's |dz/dphase|; fpp/phase_noise.hpp)
-//   property uint pixel         row * organised_width + column
-//   end_header
-//
-// Only slots with a point are written, in row-major order, each with the
-// index of its camera pixel: the organised structure survives (width and
-// height in obj_info, pixel per vertex) without NaN coordinates, which not
-// every viewer filters out (bounding boxes, octrees and normals estimated
-// from NaN vertices go wrong). Everything else is plain PLY 1.0 that the
-// readers of Open3D and CloudCompare (rply) and MeshLab (vcglib) parse:
-// `comment` and `obj_info` lines, old-style type names, scalar properties
-// they do not know (skipped, or offered as scalar fields by CloudCompare;
-// MeshLab takes `quality` as vertex quality). The header stays short (vcglib
-// reads header lines of up to 512 characters).
+// write_ply writes binary little-endian PLY 1.0: only the slots with a
+// point, in row-major order, each with x y z quality intensity [sigma_z]
+// (float) and the index of its camera pixel (uint), the organised size in
+// obj_info lines; so the structure survives without NaN vertices, which not
+// every viewer filters out.
+// Format: firmware/core/formats/point-cloud-ply.md
 
 #include "fpp/image.hpp"
 

@@ -60,6 +60,9 @@ public:
     int int_value(const YAML::Node& node, const std::string& field) const;
     double real_value(const YAML::Node& node, const std::string& field) const;
     bool bool_value(const YAML::Node& node, const std::string& field) const;
+    // A number, or a ratio of two numbers written `1920/58` (no spaces): the
+    // double quotient of the two, as C++ divides them.
+    double real_or_ratio_value(const YAML::Node& node, const std::string& field) const;
 
     // map[key] read as a real, or `fallback` when the key is absent.
     double real_value_or(const YAML::Node& map, const std::string& parent, std::string_view key,

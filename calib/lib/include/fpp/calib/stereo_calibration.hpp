@@ -6,41 +6,17 @@
 // fpp::LensModel (pinhole with skew in K(0,1), Brown-Conrady k1 k2 k3 p1 p2;
 // pixel centres on integers).
 //
-// File: OpenCV FileStorage YAML with the keys
-//   format                             "fpp-stereo/1" (optional when reading)
-//   camera_size, projector_size        [width, height]
-//   camera_matrix, projector_matrix    3x3, skew in (0,1)
-//   camera_distortion, projector_distortion   1x5: k1 k2 p1 p2 k3 (OpenCV order)
-//   R (3x3), T (3x1, mm)               X_p = R X_c + T
-//   camera_rms, projector_rms          reprojection RMS, px (-1 = unknown)
-//   camera_correction_du, camera_correction_dv       optional (both or neither):
-//   projector_correction_du, projector_correction_dv  a dense correction of
-//                                      the lens model (correction_grid.hpp):
-//                                      rows x columns control points, px, over
-//                                      the device's image
-//   board_square_size                  optional: mm, the square size of the
-//                                      checkerboard session calibrated from
-//   poses                              per-pose names, RMS and whether used:
-//                                      a list of maps {name, camera_rms,
-//                                      projector_rms, corners, used, note}
-//   origin                             free text (optional)
-// Matrices are !!opencv-matrix nodes of doubles, so that OpenCV (C++ and
-// Python) reads them with FileStorage directly. Reading accepts any element
-// type, 5x1 as well as 1x5 distortion and 4 coefficients (k3 = 0); 8, 12 or
-// 14 coefficients only if those beyond k3 are zero (the rational and prism
-// terms are not part of the model).
-//
-// Foreign formats (CalibrationFormat):
-//   SLStudio calibration.xml: Kc, kc, Kp, kp, Rp, Tp (X_p = Rp X_c + Tp, mm),
-//     frameWidth, frameHeight, screenResX, screenResY; cam_error and
-//     proj_error become camera_rms and projector_rms.
-//   SLMaster caliInfo.yml: M1, D1 (camera), M4, D4 (projector), Rlp, Tlp
-//     (X_p = Rlp X_c + Tlp, mm). It records no projector size and no camera
-//     size we can rely on: both are left {0, 0} (sizes_known() false) and the
-//     user supplies them (fpp-calib reconstruct takes them from the capture).
-// All three use OpenCV's pixel convention (centres on integers), as we do.
+// File: OpenCV FileStorage YAML ("fpp-stereo/1"; keys camera_size,
+// camera_matrix, camera_distortion, the projector's alike, R, T, RMS, poses,
+// optional correction grids), readable by OpenCV directly. Also read:
+// SLStudio's calibration.xml, SLMaster's caliInfo.yml and, named explicitly,
+// camera-camera files (CalibrationFormat).
+// Format: firmware/core/formats/calibration-file.md (other tools' files:
+// firmware/core/formats/imports.md)
 
+#include "fpp/calib/camera_pair.hpp"
 #include "fpp/calib/correction_grid.hpp"
+#include "fpp/error.hpp"
 #include "fpp/image.hpp"
 #include "fpp/lens_model.hpp"
 
@@ -62,6 +38,22 @@ enum class CalibrationFormat {
     fpp,       // ours (keys above)
     slstudio,  // Kc kc Kp kp Rp Tp, frameWidth/Height, screenResX/Y (X_p = Rp X_c + Tp)
     slmaster,  // M1 D1 M4 D4 Rlp Tlp (X_p = Rlp X_c + Tlp); sizes must be given
+    // Two-device formats (camera_pair.hpp), read as camera (first device) and
+    // projector (second) only when named explicitly; found by content they
+    // are camera-camera calibrations (CameraPairFileError). Sizes unknown.
+    opencv_stereo, // M1 D1 M2 D2 R T
+    bouguet,       // Bouguet's stereo results text
+    matlab,        // MATLAB stereoParameters text
+};
+
+// load_calibration / parse_calibration found a camera-camera calibration
+// (two cameras; the projector, if any, only a texture): it allows two-camera
+// scanning (fpp-calib reconstruct with two capture sets), not a
+// camera-projector table. The pair is read in full.
+class CameraPairFileError : public InputError {
+  public:
+    CameraPairFileError(const std::filesystem::path& file, CameraPairCalibration pair_);
+    CameraPairCalibration pair;
 };
 
 struct PoseResidual {
@@ -107,10 +99,12 @@ struct StereoCalibration {
 // model. Pose list empty, RMS unknown.
 StereoCalibration calibration_from_rig(const sim::Rig& rig);
 
-// "auto", "fpp", "slstudio", "slmaster"; throws std::invalid_argument otherwise.
+// "auto", "fpp", "slstudio", "slmaster", "opencv-stereo", "bouguet", "matlab"; throws std::invalid_argument otherwise.
 CalibrationFormat parse_calibration_format(const std::string& name);
 const char* to_string(CalibrationFormat format);
 
+// A camera-camera file found by content (automatic format) throws
+// CameraPairFileError, which says what the file is and what it allows.
 // Throws InputError naming the file and the missing or malformed key (a file
 // that cannot be opened or parsed: the file and an empty key). Checks: every
 // key present, matrices of the right shape with finite values, camera

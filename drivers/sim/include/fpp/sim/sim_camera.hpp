@@ -14,6 +14,7 @@
 
 #include <fpp/drivers/camera.hpp>
 #include <fpp/drivers/clock.hpp>
+#include <fpp/sim/record_log.hpp>
 #include <fpp/sim/renderer.hpp>
 #include <fpp/sim/screen.hpp>
 
@@ -70,10 +71,16 @@ public:
     // Renders with `renderer` from the next exposure on; it must outlive the
     // camera and have the same camera size (std::invalid_argument otherwise).
     void set_renderer(const Renderer& renderer);
+    // Frame ids from `next` on, counting as a GigE Vision 1.x camera's 16-bit
+    // block id does (65535 is followed by 1) when `wrap_16_bit`.
+    void set_next_frame_id(std::uint64_t next, bool wrap_16_bit);
     // Fault at the `at_trigger`-th trigger (0-based) since construction.
     void inject_fault(CameraFault fault, int at_trigger);
     // Every exposure taken, in order.
-    const std::vector<Exposure>& exposures() const { return exposures_; }
+    // (The newest ones only, once limited; exposures_taken() counts them all.)
+    const std::vector<Exposure>& exposures() const { return exposures_.items(); }
+    std::size_t exposures_taken() const { return exposures_.total(); }
+    void limit_records(std::size_t limit) { exposures_.set_limit(limit); }
     bool streaming() const { return streaming_; }
 
 private:
@@ -90,6 +97,7 @@ private:
     bool streaming_ = false;
     bool gone_ = false;
     std::uint64_t next_frame_id_ = 1;
+    bool wrap_16_bit_ = false;
     int triggers_ = 0;
     CameraFault fault_ = CameraFault::none;
     int fault_at_ = -1;
@@ -98,7 +106,7 @@ private:
         bool incomplete = false;
     };
     std::deque<Pending> queue_;
-    std::vector<Exposure> exposures_;
+    RecordLog<Exposure> exposures_;
     Image<std::uint8_t> dark_; // projector off
 };
 

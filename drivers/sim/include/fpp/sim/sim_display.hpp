@@ -4,6 +4,7 @@
 // `flip_latency` later (one 60 Hz refresh by default) whether or not anybody
 // waits for it, and on_screen_at(t) tells which pattern a camera exposing at
 // time t sees. Fault hooks let tests break it.
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -13,6 +14,7 @@
 
 #include <fpp/drivers/clock.hpp>
 #include <fpp/drivers/display.hpp>
+#include <fpp/sim/record_log.hpp>
 #include <fpp/sim/screen.hpp>
 
 namespace fpp::sim {
@@ -40,7 +42,12 @@ public:
     }
     std::size_t pattern_count() const { return patterns_.size(); }
     // Every flip event delivered, in order.
-    const std::vector<drivers::FlipEvent>& flips() const { return flips_; }
+    // (The newest ones only, once limited.)
+    const std::vector<drivers::FlipEvent>& flips() const { return flips_.items(); }
+    void limit_records(std::size_t limit) {
+        flips_.set_limit(limit);
+        schedule_.set_limit(limit);
+    }
     bool restored() const { return restored_; }
 
     // Faults: the next show() fails; the next flip completes but its event is
@@ -49,6 +56,9 @@ public:
     // events lie would.
     void fail_next_flip() { fail_next_flip_ = true; }
     void lose_next_flip_event() { lose_next_event_ = true; }
+    // The projector's cable out (false) and back in (true): while it is out
+    // every show() fails, as a page flip on a connector gone does.
+    void set_connected(bool connected) { connected_ = connected; }
     void set_event_lead(std::chrono::nanoseconds lead) { event_lead_ns_ = lead.count(); }
     // Called with each delivered event (tests inject button presses from it).
     void on_flip(std::function<void(const drivers::FlipEvent&)> hook) { hook_ = std::move(hook); }
@@ -62,12 +72,13 @@ private:
     drivers::Clock& clock_;
     std::int64_t latency_ns_;
     std::vector<Image<std::uint8_t>> patterns_;
-    std::vector<Scheduled> schedule_; // chronological
+    RecordLog<Scheduled> schedule_; // chronological
     std::optional<Scheduled> pending_;
-    std::vector<drivers::FlipEvent> flips_;
+    RecordLog<drivers::FlipEvent> flips_;
     std::uint64_t sequence_ = 0;
     bool restored_ = false;
     bool fail_next_flip_ = false;
+    std::atomic<bool> connected_{true}; // set from a test's thread between scans
     bool lose_next_event_ = false;
     std::int64_t event_lead_ns_ = 0;
     std::function<void(const drivers::FlipEvent&)> hook_;

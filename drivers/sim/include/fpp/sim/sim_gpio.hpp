@@ -12,6 +12,7 @@
 
 #include <fpp/drivers/clock.hpp>
 #include <fpp/drivers/gpio.hpp>
+#include <fpp/sim/record_log.hpp>
 
 namespace fpp::sim {
 
@@ -22,12 +23,13 @@ public:
     SimTrigger(drivers::Clock& clock, std::function<void(std::int64_t)> wire);
     void pulse(std::chrono::microseconds width) override;
     // Rising-edge times of every pulse.
-    const std::vector<std::int64_t>& pulses() const { return pulses_; }
+    const std::vector<std::int64_t>& pulses() const { return pulses_.items(); }
+    void limit_records(std::size_t limit) { pulses_.set_limit(limit); }
 
 private:
     drivers::Clock& clock_;
     std::function<void(std::int64_t)> wire_;
-    std::vector<std::int64_t> pulses_;
+    RecordLog<std::int64_t> pulses_;
 };
 
 // Presses are queued edges; thread-safe (tests press from another thread).
@@ -52,13 +54,16 @@ private:
 
 class SimLed final : public drivers::StatusLed {
 public:
+    SimLed() { history_.push(drivers::LedState::off); }
     void set(drivers::LedState state) override;
+    // The states set, oldest first (the newest ones only, once limited).
     std::vector<drivers::LedState> history() const;
     drivers::LedState state() const;
+    void limit_records(std::size_t limit);
 
 private:
     mutable std::mutex mutex_;
-    std::vector<drivers::LedState> history_{drivers::LedState::off};
+    RecordLog<drivers::LedState> history_; // starts with off
 };
 
 } // namespace fpp::sim

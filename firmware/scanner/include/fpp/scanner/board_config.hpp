@@ -1,63 +1,12 @@
 #pragma once
 // The board configuration file (format fpp-scanner-board/1): which devices
-// the scanner drives and how. Read strictly: unknown or duplicate keys, wrong
-// types and out-of-range values throw InputError(file, field, message).
-// Relative paths are relative to the board file's folder.
-//
-//   format: fpp-scanner-board/1
-//   name: <text>
-//   display: {card: auto | /dev/dri/cardN, connector: auto | HDMI-A-1, mode: auto | WxH}
-//   gpio: {chip: gpiochip0, trigger_line: N, button_line: N, led_line: N,
-//          trigger_active_low: bool, button_active_low: bool, led_active_low: bool,
-//          debounce_ms: N}
-//   camera: {driver: sim | aravis, device: <id or address, "" = first>,
-//            pixel_format: Mono8 | Mono12 | Mono16, exposure_us: R,
-//            trigger: line | software, trigger_source: Line0,
-//            packet_size: N (0 = driver default), buffer_count: N, frame_timeout_ms: N,
-//            noise: {read_noise_dn: R, gain_e_per_dn: R, sensor_bit_depth: N}}
-//                                      noise optional: the camera's measured read noise
-//                                      and gain (photon transfer), DN at the sensor's
-//                                      depth; with it every point gets sigma_z
-//   sequence: <standard sequence name> | [capture-set spec blocks]
-//   table: <path.fpt>                  optional: without it only capture mode works
-//   projector_response: <path>         optional: the measured projector response
-//                                      (fpp-projector-response/1); the patterns are
-//                                      rendered through its inverse
-//   hdr: {exposures_us: [R, ...]}      optional: one pass of the sequence per exposure,
-//                                      fused per pixel; or
-//   hdr: {auto: {max_saturated: F, passes: N, ratio: R, longest_us: R (optional)}}
-//                                      exposures chosen from white previews before
-//                                      each scan: the longest exposure (from longest_us,
-//                                      default camera.exposure_us * R^(N-1), down by
-//                                      factors of R) saturating at most F of the lit
-//                                      pixels, then shorter ones (each R times less)
-//                                      while the previous one saturates any, at most
-//                                      N passes
-//   points: {max_sigma_z_mm: R}        optional: points whose predicted depth sigma
-//                                      exceeds R are dropped (needs camera.noise)
-//   store: {directory: <path>, max_mb: N}   oldest scans pruned beyond N MiB
-//   timing: {settle_us: N, trigger_pulse_us: N, flip_timeout_ms: N}
-//   http: {listen: ADDRESS:PORT, token_file: <path>, max_connections: N (default 64),
-//          timeout_s: N (default 30), web_root: <path> (optional)}
-//                                      optional: without it no socket is opened
-//   settings: <path>                   optional: the settings the API may change
-//                                      (exposure_us), written by the scanner
-//   sim: {rig: <rig yaml>, scene: <scene name or yaml>, binning: N,
-//         flip_latency_us: N, clock: virtual | steady, seed: N,
-//         camera_only: bool (optional, default false)}
-//
-// A sim section makes a simulated board: the virtual scanner stands in for
-// projector, lines and scene. With camera.driver sim its camera is simulated
-// too; with camera.driver aravis the rendered frames are served by Aravis's
-// fake GigE Vision camera at camera.device (a local address) and read by the
-// real Aravis driver (needs camera.trigger software and sim.clock steady).
-// With sim.camera_only the display and lines are the hardware ones (as
-// without a sim section) and only the camera and scene are simulated, the
-// camera seeing what the real display has flipped to (camera.trigger
-// software, sim.clock steady): a real board's kernel drivers with a virtual
-// scene.
-// Without a sim section the board is hardware: DRM display, GPIO lines and
-// an Aravis camera (camera.driver aravis).
+// the scanner drives and how (display, GPIO lines, camera, sequence, table,
+// HDR, store, timing, HTTP API, simulator). Read strictly: unknown or
+// duplicate keys, wrong types and out-of-range values throw
+// InputError(file, field, message). Relative paths are relative to the board
+// file's folder. A sim section makes a simulated board; without one the
+// board is hardware (DRM display, GPIO lines, an Aravis camera).
+// Format: firmware/core/formats/board-file.md (examples in board/*.yaml)
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -166,7 +115,7 @@ struct BoardConfig {
     PointFilterConfig points;
     StoreConfig store;
     TimingConfig timing;
-    std::optional<SimConfig> sim; // a simulated board (always with camera.driver sim)
+    std::optional<SimConfig> sim; // a simulated board (required with camera.driver sim)
     std::optional<HttpConfig> http;
     std::optional<std::filesystem::path> settings_file;
 

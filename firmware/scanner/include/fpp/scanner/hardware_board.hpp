@@ -2,7 +2,8 @@
 // A hardware board (a board file without a sim section): the projector
 // through DRM/KMS, trigger, button and LED lines through libgpiod, the camera
 // through Aravis, on the steady clock. Each device is opened once and held
-// for the life of the board.
+// for the life of the board; the camera, which a cable or a power cycle can
+// take away, is opened again when it comes back (ReconnectingCamera).
 #include <atomic>
 #include <memory>
 
@@ -29,8 +30,8 @@ public:
     HardwareBoard& operator=(const HardwareBoard&) = delete;
 
     // Opens the board's camera, once. Throws DeviceError as the constructor
-    // (the LED set to error).
-    void open_camera();
+    // (the LED set to error). `log` takes the camera's losses and returns.
+    void open_camera(const Logger& log);
     // Opens the board's camera, waiting for it while it does not answer
     // (wait_for_camera): false if `stop` was set first.
     bool wait_for_camera(const Logger& log, const std::atomic<bool>& stop,
@@ -46,6 +47,8 @@ public:
 
 private:
     std::unique_ptr<drivers::Camera> make_camera() const;
+    std::unique_ptr<drivers::Camera> reconnecting(std::unique_ptr<drivers::Camera> first,
+                                                  const Logger& log);
 
     CameraConfig camera_config_;
     drivers::SteadyClock clock_;

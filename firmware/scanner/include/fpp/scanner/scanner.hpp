@@ -99,7 +99,11 @@ public:
     Scanner(const BoardConfig& board, Devices devices, const Logger& log);
 
     // One scan: the sequence once, or once per exposure with hdr (fused per
-    // pixel). `stop`, when given and set, aborts between frames
+    // pixel). A scan-mode scan first reloads the table when its file changed
+    // on disk since it was loaded (another copied over it, or damaged): a
+    // file that no longer loads fails the scan with its InputError, and every
+    // scan after it, until the file is whole again or another is installed.
+    // `stop`, when given and set, aborts between frames
     // (ScanAborted). A camera fault (DeviceError from the camera) fails the
     // attempt and the scan is tried once more. On failure the LED shows
     // error, nothing is left in the store, and the exception propagates.
@@ -165,6 +169,14 @@ private:
     // a frame of each (the camera started and stopped around them).
     std::vector<Frame> grab_prepared(std::size_t first, std::size_t count);
     CoefficientTable load_checked_table(const std::filesystem::path& path) const;
+    // The table file as stat() saw it (nullopt: not there).
+    struct FileStamp {
+        std::uint64_t device = 0, inode = 0;
+        std::int64_t size = 0, mtime_ns = 0, ctime_ns = 0;
+        bool operator==(const FileStamp&) const = default;
+    };
+    static std::optional<FileStamp> stamp_of(const std::filesystem::path& path);
+    void reload_table_if_changed();
     void write_outputs(const std::filesystem::path& temp, ScanMode mode, Captured& captured,
                        DecodeResult& decoded, ScanOutcome& outcome);
 
@@ -178,6 +190,7 @@ private:
     CoefficientTable table_;
     std::uint64_t table_file_hash_ = 0;
     std::filesystem::path table_path_;
+    std::optional<FileStamp> table_stamp_; // of the file when table_ was loaded from it
     // Memory reused scan after scan: a fresh decoder, result or cloud costs
     // page faults on every scan (tens of ms at 1600x1200).
     std::optional<StreamingDecoder> decoder_;

@@ -88,7 +88,11 @@ private:
     // while a scan is queued or running, 503 when it does not run in 30 s).
     void run_on_scanner_thread(std::function<void()> work);
     void set_state(const std::string& state, const std::string& error);
+    void drop_presses_during_scan(); // on the scanning thread
+    bool change_state_locked(const std::string& state, const std::string& error); // under mutex_
+    void publish_state(const std::string& state, const std::string& error);
     void refresh_table_json();         // after the table changed
+    void publish_table_event();        // the `table` event, from table_json_
     std::uint64_t store_bytes() const; // under mutex_
 
     BoardConfig& board_;
@@ -109,6 +113,7 @@ private:
     std::string error_;
     nlohmann::json last_scan_; // null before the first
     nlohmann::json table_json_;
+    std::uint64_t table_hash_shown_ = 0; // the table table_json_ describes
     int scans_completed_ = 0;
     double exposure_us_;
     mutable std::uint64_t store_bytes_ = 0;

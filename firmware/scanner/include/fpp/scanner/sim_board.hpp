@@ -33,12 +33,16 @@
 
 namespace fpp::scanner {
 
+class SimGigeCamera;
+
 class SimBoard {
 public:
     // Throws InputError for a bad rig or scene file, DeviceError when the
     // GigE link cannot be set up, std::logic_error when
-    // the board is not a sim board.
-    explicit SimBoard(const BoardConfig& board);
+    // the board is not a sim board. `log` takes the GigE camera's losses and
+    // returns.
+    explicit SimBoard(const BoardConfig& board, const Logger& log = Logger());
+    ~SimBoard();
     SimBoard(const SimBoard&) = delete;
     SimBoard& operator=(const SimBoard&) = delete;
 
@@ -57,6 +61,20 @@ public:
     sim::SimButton& button() { return *button_; }
     sim::SimLed& led() { return *led_; }
 
+    // The simulated devices keep only their newest `limit` records of each
+    // kind (exposures, flips, pulses, LED states), as the scanner daemon asks
+    // (kDaemonRecordLimit): a virtual scanner that runs for months keeps
+    // flat memory. Tests that check every record do not call it.
+    void limit_records(std::size_t limit);
+    static constexpr std::size_t kDaemonRecordLimit = 1024;
+
+    // camera.driver aravis: the link's cable pulled (Aravis's fake camera
+    // gone) and plugged back (a new one at the same address). The scanner
+    // sees a camera that stops answering, then answers again.
+    // std::logic_error without a GigE link.
+    void unplug_camera();
+    void plug_camera();
+
 private:
     std::unique_ptr<drivers::Clock> clock_;
     sim::Rig rig_;
@@ -66,7 +84,7 @@ private:
     // sim.camera_only: the hardware display and lines, the display observed.
     std::unique_ptr<HardwareBoard> hardware_;
     std::unique_ptr<sim::ObservedDisplay> observed_;
-    std::unique_ptr<drivers::Camera> gige_camera_; // camera.driver aravis
+    std::unique_ptr<SimGigeCamera> gige_camera_; // camera.driver aravis
     std::unique_ptr<sim::SimTrigger> trigger_;
     std::unique_ptr<sim::SimButton> button_;
     std::unique_ptr<sim::SimLed> led_;

@@ -1,6 +1,7 @@
 #pragma once
 // Frame (block) id arithmetic of GigE Vision streams, kept apart from the
-// driver so that it can be tested without a camera.
+// driver so that it can be tested without a camera. The scan checks every
+// camera's frames with it (a camera whose ids do not wrap passes as well).
 //
 // GVSP 1.x carries a 16-bit block id that counts 1, 2, ..., 65535 and then
 // wraps to 1 (0 is reserved); GVSP 2.x extended ids are 64-bit and do not wrap

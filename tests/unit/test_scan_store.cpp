@@ -1,0 +1,73 @@
+// Scan folder names when the wall clock jumps back: they stay unique and
+// sort after every scan in the store, so that pruning (oldest name first)
+// never removes the newest scans.
+#include <gtest/gtest.h>
+
+#include "fpp/error.hpp"
+#include "fpp/scanner/scan_store.hpp"
+#include "test_support.hpp"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using namespace std::chrono;
+using fpp::scanner::list_scans;
+using fpp::scanner::new_scan_folder;
+using fpp::scanner::prune_store;
+
+namespace {
+
+// 2026-11-27 03:00:00.250 UTC plus `offset`.
+system_clock::time_point at(milliseconds offset) {
+    return system_clock::time_point(seconds(1795748400)) + milliseconds(250) + offset;
+}
+
+// A scan folder with `bytes` bytes of cloud.
+fs::path make_scan(const fs::path& folder, std::size_t bytes) {
+    fs::create_directories(folder);
+    std::ofstream(folder / "cloud.ply") << std::string(bytes, 'x');
+    return folder;
+}
+
+} // namespace
+
+TEST(ScanStore, NamesFollowTheClockWhileItMovesOn) {
+    fpp::test::TempDir dir;
+    const fs::path a = make_scan(new_scan_folder(dir.path(), at(0ms)), 1);
+    EXPECT_EQ(a.filename(), "scan-20261127-030000-250");
+    const fs::path b = make_scan(new_scan_folder(dir.path(), at(1500ms)), 1);
+    EXPECT_EQ(b.filename(), "scan-20261127-030001-750");
+}
+
+TEST(ScanStore, ClockJumpingBackKeepsNamesUniqueAndOrdered) {
+    fpp::test::TempDir dir;
+    std::vector<fs::path> made;
+    made.push_back(make_scan(new_scan_folder(dir.path(), at(0ms)), 10));
+    made.push_back(make_scan(new_scan_folder(dir.path(), at(0ms)), 10));       // same millisecond
+    made.push_back(make_scan(new_scan_folder(dir.path(), at(-hours(5))), 10)); // NTP step back
+    made.push_back(make_scan(new_scan_folder(dir.path(), at(-hours(5) + 2s)), 10));
+    made.push_back(make_scan(new_scan_folder(dir.path(), at(2s)), 10)); // caught up again
+    EXPECT_EQ(made[1].filename(), "scan-20261127-030000-250-000002");
+    EXPECT_EQ(made[2].filename(), "scan-20261127-030000-250-000003");
+    EXPECT_EQ(made[3].filename(), "scan-20261127-030000-250-000004");
+    EXPECT_EQ(made[4].filename(), "scan-20261127-030002-250");
+    // In the order they were made, and the store's newest is the last made.
+    EXPECT_EQ(list_scans(dir.path()), made);
+
+    // Pruning removes the oldest made, never the ones after the jump.
+    const auto removed = prune_store(dir.path(), 30, made.back());
+    ASSERT_EQ(removed.size(), 2u);
+    EXPECT_EQ(removed[0], made[0]);
+    EXPECT_EQ(removed[1], made[1]);
+}
+
+TEST(ScanStore, SequenceOfTheNewestContinues) {
+    fpp::test::TempDir dir;
+    make_scan(dir / "scan-20261127-030000-250-000041", 1);
+    EXPECT_EQ(new_scan_folder(dir.path(), at(-1s)).filename(), "scan-20261127-030000-250-000042");
+    make_scan(dir / "scan-20261127-030000-250-999999", 1);
+    EXPECT_THROW(new_scan_folder(dir.path(), at(-1s)), fpp::IoError);
+}
