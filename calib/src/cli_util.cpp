@@ -16,6 +16,10 @@ Sequence sequence_from_argument(const std::string& name_or_path, Size projector)
     return standard_sequence(name_or_path, projector);
 }
 
+std::string size_text(Size s) {
+    return std::to_string(s.width) + "x" + std::to_string(s.height);
+}
+
 std::string seconds_text(double seconds) {
     char text[32];
     std::snprintf(text, sizeof text, "%.1f s", seconds);

@@ -24,6 +24,8 @@ std::string truth_comparison(const PointCloud& cloud, const CaptureSet& capture)
 
 // "2.3 s": a duration for progress lines.
 std::string seconds_text(double seconds);
+// A size as the command line writes it: WIDTHxHEIGHT.
+std::string size_text(Size s);
 
 class Stopwatch {
 public:

@@ -89,7 +89,7 @@ struct Subject {
     std::vector<Item> truth_items;
 };
 
-std::string size_text(Size s) {
+std::string report_size_text(Size s) {
     return std::to_string(s.width) + " x " + std::to_string(s.height);
 }
 
@@ -281,8 +281,8 @@ Truth load_truth(const fs::path& folder) {
             t.file, "", "expected 3 channels (X, Y, Z), found " + std::to_string(t.xyz.channels()));
     if (t.xyz.size() != manifest.camera)
         throw InputError(t.file, "",
-                         "is " + size_text(t.xyz.size()) + ", but the camera is " +
-                             size_text(manifest.camera));
+                         "is " + report_size_text(t.xyz.size()) + ", but the camera is " +
+                             report_size_text(manifest.camera));
     return t;
 }
 
@@ -290,9 +290,9 @@ void compare_subject_with_truth(Subject& s, const Truth& truth) {
     require_organised(s, "the comparison against the ground truth");
     if (s.cloud.organised != truth.xyz.size())
         throw InputError(s.path, "obj_info organised_width/height",
-                         "the cloud is organised " + size_text(s.cloud.organised) +
+                         "the cloud is organised " + report_size_text(s.cloud.organised) +
                              ", but the ground truth " + truth.file.string() + " is " +
-                             size_text(truth.xyz.size()));
+                             report_size_text(truth.xyz.size()));
     s.truth = compare_with_truth(s.cloud, truth.xyz);
     const TruthComparison& t = *s.truth;
     s.truth_items = {
@@ -432,9 +432,9 @@ int run_evaluate(const EvaluateArgs& args) {
                                          "; --match pixel needs them (or use --match nearest)");
             if (a.cloud.organised != b.cloud.organised)
                 throw InputError(b.path, "obj_info organised_width/height",
-                                 "the cloud is organised " + size_text(b.cloud.organised) +
+                                 "the cloud is organised " + report_size_text(b.cloud.organised) +
                                      ", but " + a.path.string() + " is " +
-                                     size_text(a.cloud.organised) +
+                                     report_size_text(a.cloud.organised) +
                                      ": a per-pixel comparison needs two reconstructions of "
                                      "the same camera");
             distance = compare_per_pixel(a.cloud, b.cloud);
@@ -574,7 +574,7 @@ int run_evaluate(const EvaluateArgs& args) {
     for (const Subject& s : subjects)
         md << "- **" << s.label << "**: `" << s.path.string() << "`, " << s.cloud.points.size()
            << " points, "
-           << (s.cloud.is_organised() ? "organised " + size_text(s.cloud.organised)
+           << (s.cloud.is_organised() ? "organised " + report_size_text(s.cloud.organised)
                                       : std::string("unorganised"))
            << "\n";
     if (!args.fit.empty()) {

@@ -71,10 +71,6 @@ Size parse_size_option(const std::string& text, const char* option) {
     return {w, h};
 }
 
-std::string size_text(Size s) {
-    return std::to_string(s.width) + "x" + std::to_string(s.height);
-}
-
 // The key a calibration format stores a size under, for error messages.
 std::string size_key(const StereoCalibration& c, bool camera) {
     if (c.format == CalibrationFormat::slstudio)

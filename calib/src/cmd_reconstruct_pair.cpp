@@ -32,10 +32,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string size_text(Size s) {
-    return std::to_string(s.width) + "x" + std::to_string(s.height);
-}
-
 void check_output(const fs::path& path, const char* option) {
     const fs::path folder = path.parent_path();
     if (!folder.empty() && !fs::is_directory(folder))

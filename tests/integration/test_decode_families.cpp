@@ -26,6 +26,8 @@
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
 
+#include "test_support.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -41,11 +43,7 @@ namespace {
 
 using fpp::Axis;
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr int kBinning = 2;
-#else
-constexpr int kBinning = 1;
-#endif
+constexpr int kBinning = fpp::test::kSimulatedCaptureBinning;
 
 const fpp::sim::Renderer& renderer() {
     static const fpp::sim::Renderer r = [] {

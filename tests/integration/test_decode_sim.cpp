@@ -1,7 +1,8 @@
 // Decoding simulated captures of the paper's rig (effects off) against the
 // renderer's projector-coordinate truth, for every standard sequence.
-// Full 1600 x 1200 camera; 2 x 2 binned under the sanitizers (same optics,
-// 4 x fewer pixels) to keep the test fast there.
+// Full 1600 x 1200 camera; 2 x 2 binned (same optics,
+// 4 x fewer pixels) where the tests run slowly: under the sanitizers and
+// as AArch64 programs under qemu-user (test_support.hpp).
 
 #include "fpp/capture_set.hpp"
 #include "fpp/decode_accuracy.hpp"
@@ -10,6 +11,8 @@
 #include "fpp/sim/renderer.hpp"
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
+
+#include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -22,11 +25,7 @@
 
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr int kBinning = 2;
-#else
-constexpr int kBinning = 1;
-#endif
+constexpr int kBinning = fpp::test::kSimulatedCaptureBinning;
 
 fpp::sim::Rig paper_rig(double read_noise_dn) {
     fpp::sim::Rig rig = fpp::sim::Rig::paper().without_effects();
