@@ -440,3 +440,23 @@ TEST(CalibrationFile, YamlLineOfDashesAndTextIsRefusedBeforeOpenCvHangsOnIt) {
         }
     }
 }
+
+// Found by the fuzz preset's 30 s run of fuzz_calibration: OpenCV 4.6's YAML
+// parser never returns from an indented key followed by a shallower line
+// holding ", -" (the fuzzer's input is in the harness's corpus). YAML text
+// goes through yaml-cpp first; what it cannot parse is refused naming the line.
+TEST(CalibrationFile, MalformedYamlIsRefusedBeforeOpenCvHangsOnIt) {
+    const std::string hanging = "%YAML:1.0\n  us: 3\n 7, -1\nM: 3\n";
+    try {
+        (void)fpp::calib::parse_calibration(hanging, "calibration.yml");
+        ADD_FAILURE() << "accepted";
+    } catch (const fpp::InputError& e) {
+        EXPECT_EQ(e.file(), fs::path("calibration.yml")) << e.what();
+        EXPECT_EQ(e.field(), "line 4") << e.what(); // where yaml-cpp finds it
+        EXPECT_NE(std::string(e.what()).find("not valid YAML"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fpp::calib::looks_like_camera_pair(hanging));
+    EXPECT_THROW((void)fpp::calib::parse_camera_pair(hanging, "pair.yml",
+                                                     fpp::calib::CameraPairFormat::opencv_stereo),
+                 fpp::InputError);
+}

@@ -29,6 +29,12 @@ struct KeySet {
     const char* T;
 };
 
+// YAML text that yaml-cpp cannot parse, refused (InputError naming the line):
+// OpenCV 4.6's YAML parser never returns from some malformed indentation (an
+// indented key, then a shallower line holding ", -": found by tests/fuzz),
+// and its failures cannot all be listed, so it sees only valid YAML.
+void refuse_malformed_yaml(std::string_view text, const fs::path& origin);
+
 // Text that OpenCV 4.6's FileStorage mishandles, refused before it sees it
 // (each found by tests/fuzz): its XML parser dereferences a null pointer on
 // a tag still open where its text ends (`<Kc type_id=`; it reads up to the
@@ -68,6 +74,7 @@ inline void refuse_text_opencv_mishandles(std::string_view seen, const fs::path&
             break;
         line_start = end + 1;
     }
+    refuse_malformed_yaml(seen, origin);
 }
 
 // Opens FileStorage text, every failure an InputError naming `origin`. Some
