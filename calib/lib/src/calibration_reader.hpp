@@ -29,19 +29,16 @@ struct KeySet {
     const char* T;
 };
 
-// YAML text that yaml-cpp cannot parse, refused (InputError naming the line):
-// OpenCV 4.6's YAML parser never returns from some malformed indentation (an
-// indented key, then a shallower line holding ", -": found by tests/fuzz),
-// and its failures cannot all be listed, so it sees only valid YAML.
-void refuse_malformed_yaml(std::string_view text, const fs::path& origin);
-
 // Text that OpenCV 4.6's FileStorage mishandles, refused before it sees it
 // (each found by tests/fuzz): its XML parser dereferences a null pointer on
 // a tag still open where its text ends (`<Kc type_id=`; it reads up to the
 // first NUL), and its YAML parser never returns from a line of four or more
-// dashes followed by text right after the `%YAML` line (`----x`). A YAML
+// dashes followed by text right after the `%YAML` line (`----x`), nor from an
+// indented first key followed by a shallower line holding ", -". A YAML
 // document marker is `---` alone or followed by a space, so a line that
-// starts with `---` and goes on otherwise is refused wherever it is.
+// starts with `---` and goes on otherwise is refused wherever it is; and no
+// line may be indented less than the first key (OpenCV writes its top-level
+// keys in column 0, so nothing it writes is refused for this).
 inline void refuse_text_opencv_mishandles(std::string_view seen, const fs::path& origin) {
     const std::size_t first = seen.find_first_not_of(" \t\r\n");
     if (first != std::string_view::npos && seen[first] == '<') {
@@ -62,6 +59,7 @@ inline void refuse_text_opencv_mishandles(std::string_view seen, const fs::path&
         return;
     }
     std::size_t line_start = 0;
+    std::size_t first_key_indent = std::string_view::npos;
     for (int line = 1; line_start < seen.size(); ++line) {
         const std::string_view rest = seen.substr(line_start);
         if (rest.starts_with("---") && rest.size() > 3 && rest[3] != ' ' && rest[3] != '\t' &&
@@ -70,11 +68,24 @@ inline void refuse_text_opencv_mishandles(std::string_view seen, const fs::path&
                              "'---' followed by text: a YAML document marker is '---' alone or "
                              "followed by a space");
         const std::size_t end = seen.find('\n', line_start);
+        const std::string_view text = rest.substr(0, end == std::string_view::npos
+                                                         ? rest.size()
+                                                         : end - line_start);
+        const std::size_t indent = text.find_first_not_of(' ');
+        const bool content = indent != std::string_view::npos && text[indent] != '\r' &&
+                             text[indent] != '#' && text[indent] != '%' &&
+                             !text.starts_with("---") && !text.starts_with("...");
+        if (content && first_key_indent == std::string_view::npos)
+            first_key_indent = indent;
+        else if (content && indent < first_key_indent)
+            throw InputError(origin, "line " + std::to_string(line),
+                             "indented less than the first key (line indentation " +
+                                 std::to_string(indent) + ", first key " +
+                                 std::to_string(first_key_indent) + ")");
         if (end == std::string_view::npos)
             break;
         line_start = end + 1;
     }
-    refuse_malformed_yaml(seen, origin);
 }
 
 // Opens FileStorage text, every failure an InputError naming `origin`. Some
