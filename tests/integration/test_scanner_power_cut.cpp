@@ -1,10 +1,9 @@
 // Power cuts: fpp-scanner (the daemon, on a tiny virtual scanner, its store
-// on disk) is killed with SIGKILL at random moments of 200 actions (50 under
-// the sanitizers), scans through the API and table installs, and started
-// again each time. At every start the store must hold only complete scans
-// (scan.json and a cloud that reads whole), the temporaries of cut writes
-// must be gone once it listens, and the table must be the old or the new
-// one, loaded, never a mix.
+// on disk) is killed with SIGKILL at random moments of 200 actions, scans
+// through the API and table installs, and started again each time. At every
+// start the store must hold only complete scans (scan.json and a cloud that
+// reads whole), the temporaries of cut writes must be gone once it listens,
+// and the table must be the old or the new one, loaded, never a mix.
 #include <gtest/gtest.h>
 
 #include "fpp/coefficient_table.hpp"
@@ -38,13 +37,7 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// 50 under the sanitizers: a cycle (start, action, cut) of the instrumented
-// daemon takes about 0.7 s there, and 50 cuts still cut scans and installs.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr int kCuts = 50;
-#else
 constexpr int kCuts = 200;
-#endif
 const std::string kToken = "0123456789abcdef0123456789abcdef";
 
 std::string read_bytes(const fs::path& path) {
