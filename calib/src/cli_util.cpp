@@ -2,6 +2,7 @@
 
 #include "fpp/capture_set.hpp"
 #include "fpp/image_io.hpp"
+#include "fpp/error.hpp"
 #include "fpp/sequences.hpp"
 
 #include <algorithm>
@@ -18,6 +19,23 @@ Sequence sequence_from_argument(const std::string& name_or_path, Size projector)
 
 std::string size_text(Size s) {
     return std::to_string(s.width) + "x" + std::to_string(s.height);
+}
+
+Size parse_size_text(const std::string& text, const char* option) {
+    const std::size_t x = text.find_first_of("xX");
+    try {
+        if (x != std::string::npos) {
+            std::size_t used_w = 0, used_h = 0;
+            const int w = std::stoi(text.substr(0, x), &used_w);
+            const int h = std::stoi(text.substr(x + 1), &used_h);
+            if (used_w == x && used_h == text.size() - x - 1 && w > 0 && h > 0 && w <= 65535 &&
+                h <= 65535)
+                return {w, h};
+        }
+    } catch (const std::exception&) { // not a number, or out of int's range
+    }
+    throw InputError("command line", option,
+                     "expected WIDTHxHEIGHT (e.g. 1920x1080), got '" + text + "'");
 }
 
 std::string seconds_text(double seconds) {

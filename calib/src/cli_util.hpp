@@ -26,6 +26,9 @@ std::string truth_comparison(const PointCloud& cloud, const CaptureSet& capture)
 std::string seconds_text(double seconds);
 // A size as the command line writes it: WIDTHxHEIGHT.
 std::string size_text(Size s);
+// "1280x1024" (or 1280X1024) -> Size, each side 1..65535; throws
+// InputError("command line", option, ...) otherwise.
+Size parse_size_text(const std::string& text, const char* option);
 
 class Stopwatch {
 public:

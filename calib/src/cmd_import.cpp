@@ -5,6 +5,7 @@
 // tool's conventions (firmware/core/formats/imports.md). Exit status: 0
 // written; 2 bad input (named file and field); 1 other errors.
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 
 #include "fpp/calib/capture_import.hpp"
@@ -25,25 +26,9 @@ struct ImportArgs {
     ImportOptions options;
 };
 
-Size parse_projector(const std::string& text, const std::string& frames) {
-    const std::size_t x = text.find('x');
-    try {
-        if (x != std::string::npos) {
-            std::size_t used_w = 0, used_h = 0;
-            const int w = std::stoi(text.substr(0, x), &used_w);
-            const int h = std::stoi(text.substr(x + 1), &used_h);
-            if (used_w == x && used_h == text.size() - x - 1)
-                return {w, h};
-        }
-    } catch (const std::exception&) {
-    }
-    throw InputError(frames, "projector",
-                     "expected WIDTHxHEIGHT (e.g. 1920x1080), got '" + text + "'");
-}
-
 int run_import(ImportArgs args) {
     args.options.tool = parse_import_tool(args.tool);
-    args.options.projector = parse_projector(args.projector, args.frames);
+    args.options.projector = parse_size_text(args.projector, "--projector");
     const CaptureManifest m = import_capture(args.frames, args.out, args.options);
     std::cout << "imported " << m.frames.size() << " frames (" << m.camera.width << "x"
               << m.camera.height << ") of " << args.tool << "'s " << args.options.codec << " into "

@@ -37,23 +37,6 @@ struct PatternsArgs {
     std::string response;
 };
 
-Size parse_size(const std::string& text, const char* option) {
-    const std::size_t x = text.find('x');
-    try {
-        if (x != std::string::npos) {
-            std::size_t used_w = 0, used_h = 0;
-            const int w = std::stoi(text.substr(0, x), &used_w);
-            const int h = std::stoi(text.substr(x + 1), &used_h);
-            if (used_w == x && used_h == text.size() - x - 1 && w > 0 && h > 0 && w <= 65535 &&
-                h <= 65535)
-                return {w, h};
-        }
-    } catch (const std::exception&) {
-    }
-    throw InputError("command line", option,
-                     "expected WIDTHxHEIGHT (e.g. 1920x1080), got '" + text + "'");
-}
-
 std::string numbered(const char* prefix, int index, int count, const std::string& extension) {
     const int digits = count > 1000 ? 4 : (count > 100 ? 3 : 2);
     char text[64];
@@ -73,8 +56,8 @@ const char* kReadme =
     "   fpp-calib decode THIS_FOLDER --out decoded\n";
 
 int run_patterns(const PatternsArgs& args) {
-    const Size projector = parse_size(args.projector, "--projector");
-    const Size camera = parse_size(args.camera, "--camera");
+    const Size projector = parse_size_text(args.projector, "--projector");
+    const Size camera = parse_size_text(args.camera, "--camera");
     const Sequence sequence = sequence_from_argument(args.sequence, projector);
     validate_sequence(sequence, projector, args.sequence);
     std::optional<GammaLut> lut;

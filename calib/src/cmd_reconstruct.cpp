@@ -61,16 +61,6 @@ struct ReconstructArgs {
     std::string second_capture, pair_calibration; // two cameras: cmd_reconstruct_pair.cpp
 };
 
-// "1280x1024" -> Size; throws InputError naming the option.
-Size parse_size_option(const std::string& text, const char* option) {
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
-        w < 1 || h < 1 || w > 65535 || h > 65535)
-        throw InputError("command line", option, "expected WIDTHxHEIGHT, got '" + text + "'");
-    return {w, h};
-}
-
 // The key a calibration format stores a size under, for error messages.
 std::string size_key(const StereoCalibration& c, bool camera) {
     if (c.format == CalibrationFormat::slstudio)
@@ -94,7 +84,7 @@ void settle_sizes(StereoCalibration& calibration, const fs::path& calib_path,
                manifest.projector, false}}) {
         const bool known = item.size.width > 0 && item.size.height > 0;
         if (!item.option_text.empty()) {
-            const Size given = parse_size_option(item.option_text, item.option);
+            const Size given = parse_size_text(item.option_text, item.option);
             if (known && given != item.size)
                 throw InputError(calib_path, size_key(calibration, item.camera),
                                  std::string("the file says ") + size_text(item.size) + ", " +

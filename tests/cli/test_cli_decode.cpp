@@ -48,6 +48,13 @@ fs::path write_small_rig(const TempDir& dir) {
     return path;
 }
 
+// A gray-x capture of the plane scene on the small rig, written to `capture`.
+ToolRun simulate_gray_x_plane(const TempDir& dir, const fs::path& capture) {
+    return run_calib("simulate --rig " + quote(write_small_rig(dir).string()) +
+                         " --scene plane --sequence gray-x --out " + quote(capture.string()),
+                     dir);
+}
+
 TEST(CliDecode, SimulatedPlaneDecodesToGroundTruth) {
     TempDir dir;
     const fs::path rig = write_small_rig(dir);
@@ -119,13 +126,8 @@ TEST(CliDecode, ReversedShiftIsDiagnosedAndExitsNonZero) {
 
 TEST(CliDecode, BadOptionNamesTheOptionAndWritesNothing) {
     TempDir dir;
-    const fs::path rig = write_small_rig(dir);
     const fs::path capture = dir / "capture";
-    ASSERT_EQ(run_calib("simulate --rig " + quote(rig.string()) +
-                            " --scene plane --sequence gray-x --out " + quote(capture.string()),
-                        dir)
-                  .exit_code,
-              0);
+    ASSERT_EQ(simulate_gray_x_plane(dir, capture).exit_code, 0);
     const fs::path out = dir / "out";
     auto run = run_calib("decode " + quote(capture.string()) + " --min-modulation 1.5 --out " +
                              quote(out.string()),
@@ -157,13 +159,8 @@ TEST(CliDecode, MalformedManifestExitsNonZeroAndWritesNothing) {
 
 TEST(CliDecode, MissingFrameNamesTheFrame) {
     TempDir dir;
-    const fs::path rig = write_small_rig(dir);
     const fs::path capture = dir / "capture";
-    ASSERT_EQ(run_calib("simulate --rig " + quote(rig.string()) +
-                            " --scene plane --sequence gray-x --out " + quote(capture.string()),
-                        dir)
-                  .exit_code,
-              0);
+    ASSERT_EQ(simulate_gray_x_plane(dir, capture).exit_code, 0);
     fs::remove(capture / "005.png");
     const fs::path out = dir / "out";
     auto run = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
