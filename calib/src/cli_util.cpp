@@ -17,6 +17,19 @@ Sequence sequence_from_argument(const std::string& name_or_path, Size projector)
     return standard_sequence(name_or_path, projector);
 }
 
+void check_output_path(const std::filesystem::path& path, const char* option) {
+    const std::filesystem::path folder = path.parent_path();
+    if (!folder.empty() && !std::filesystem::is_directory(folder))
+        throw InputError(path, option, "the folder " + folder.string() + " does not exist");
+    if (std::filesystem::is_directory(path))
+        throw InputError(path, option, "is a folder");
+}
+
+CLI::Option* add_threads_option(CLI::App& cmd, int& threads) {
+    return cmd.add_option("--threads", threads, "worker threads (0 = all cores)")
+        ->capture_default_str();
+}
+
 std::string size_text(Size s) {
     return std::to_string(s.width) + "x" + std::to_string(s.height);
 }

@@ -1,6 +1,8 @@
 #pragma once
 // Small helpers shared by the subcommands.
 
+#include "commands.hpp"
+
 #include "fpp/capture_set.hpp"
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
@@ -8,9 +10,37 @@
 
 #include <chrono>
 #include <filesystem>
+#include <memory>
 #include <string>
+#include <utility>
 
 namespace fpp::calib {
+
+// A subcommand as its add_*_command declares it: the CLI11 subcommand, the
+// arguments its options fill in, and the action run on them once parsed.
+template <class Args>
+struct Command {
+    CLI::App* cmd;
+    std::shared_ptr<Args> args;
+    Action action;
+};
+
+// Adds subcommand `name` to `app` (`description`: its line in --help) with
+// default arguments; its action returns run(*args), the exit status.
+template <class Args, class Run>
+Command<Args> add_command(CLI::App& app, std::string name, std::string description, Run run) {
+    auto args = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand(std::move(name), std::move(description));
+    return {cmd, args, [args, run] { return run(*args); }};
+}
+
+// An output file `option` names: its folder must exist and it must not be a
+// folder (InputError naming the path and the option).
+void check_output_path(const std::filesystem::path& path, const char* option);
+
+// --threads, the same in every command that takes it: worker threads, 0 for
+// all cores (the default shown is `threads`' value).
+CLI::Option* add_threads_option(CLI::App& cmd, int& threads);
 
 // A standard sequence name (fpp/sequences.hpp) or the path of a YAML file
 // holding a `sequence:` list.

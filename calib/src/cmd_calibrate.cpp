@@ -11,6 +11,7 @@
 // (response/), the projector's response as `response` would.
 
 #include "calibration_outputs.hpp"
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "response_fit.hpp"
 
@@ -96,14 +97,14 @@ int run_calibrate(const CalibrateArgs& args) {
 } // namespace
 
 Action add_calibrate_command(CLI::App& app) {
-    auto args = std::make_shared<CalibrateArgs>();
-    auto* cmd = app.add_subcommand(
-        "calibrate",
+    const auto [cmd, args, action] = add_command<CalibrateArgs>(
+        app, "calibrate",
         "Calibrate a scanner from one checkerboard session: `stereo` (camera first, correction "
         "grids) and then `hybrid` (boards placed by the camera), each with its defaults, reading "
         "and searching every pose once. Writes the calibration file and the table, the same as "
         "the two commands would, and the projector's response (as `response`) when the "
-        "session holds a response ramp");
+        "session holds a response ramp",
+        run_calibrate);
     cmd->add_option("session", args->session, "session folder (board.yaml kind checkerboard)")
         ->required();
     cmd->add_option("--out", args->out, "calibration file to write (YAML)")->required();
@@ -124,8 +125,8 @@ Action add_calibrate_command(CLI::App& app) {
     cmd->add_option("--min-poses", args->min_poses, "poses a pixel needs for a model (at least 4)")
         ->capture_default_str()
         ->check(CLI::Range(4, 1000));
-    cmd->add_option("--threads", args->threads, "threads (0 = all cores)")->capture_default_str();
-    return [args] { return run_calibrate(*args); };
+    add_threads_option(*cmd, args->threads);
+    return action;
 }
 
 } // namespace fpp::calib

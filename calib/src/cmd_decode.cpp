@@ -34,12 +34,8 @@ int run_decode(const DecodeArgs& args) {
     std::cerr << "reading " << args.capture << "\n";
     const CaptureSet capture = read_capture_set(args.capture); // validates before anything is written
     Stopwatch watch;
-    DecodeResult result;
-    try {
-        result = decode(capture, args.options);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(capture.folder / "capture.yaml", "sequence", e.what());
-    }
+    // A sequence the decoder cannot decode: InputError naming capture.yaml's field.
+    const DecodeResult result = decode(capture, args.options);
     const double seconds = watch.seconds();
     const DecodeStatistics stats = decode_statistics(result, frames_full_scale(capture));
     const DecodeDiagnosis diagnosis = diagnose_decode(capture, result, stats, args.options);
@@ -60,14 +56,15 @@ int run_decode(const DecodeArgs& args) {
 } // namespace
 
 Action add_decode_command(CLI::App& app) {
-    auto args = std::make_shared<DecodeArgs>();
-    auto* cmd = app.add_subcommand(
-        "decode", "Decode a capture set (ours, simulated or third-party) into projector "
-                  "coordinate maps: proj_x.tiff, proj_y.tiff, modulation.tiff, mask.png, "
-                  "flags.png, false-colour PNGs and decode.md (coverage of the lit pixels, "
-                  "counts per reason a pixel was dropped). Exits 3, after writing them, when "
-                  "nearly nothing decoded or the capture's description is evidently wrong, "
-                  "with the likely cause");
+    const auto [cmd, args, action] = add_command<DecodeArgs>(
+        app, "decode",
+        "Decode a capture set (ours, simulated or third-party) into projector "
+        "coordinate maps: proj_x.tiff, proj_y.tiff, modulation.tiff, mask.png, "
+        "flags.png, false-colour PNGs and decode.md (coverage of the lit pixels, "
+        "counts per reason a pixel was dropped). Exits 3, after writing them, when "
+        "nearly nothing decoded or the capture's description is evidently wrong, "
+        "with the likely cause",
+        run_decode);
     cmd->add_option("capture", args->capture, "capture set folder (holding capture.yaml)")
         ->required()
         ->check(CLI::ExistingDirectory);
@@ -75,13 +72,12 @@ Action add_decode_command(CLI::App& app) {
     cmd->add_option("--min-modulation", args->options.min_modulation,
                     "minimum modulation as a fraction of full scale")
         ->capture_default_str();
-    cmd->add_option("--threads", args->options.threads, "worker threads (0 = all cores)")
-        ->capture_default_str();
+    add_threads_option(*cmd, args->options.threads);
     cmd->add_flag("--correct-phase-error", args->options.correct_phase_error,
                   "remove, from the capture alone, the periodic phase error a non-linear "
                   "projector response leaves (for captures whose response was never measured; "
                   "the result is reported in decode.md)");
-    return [args] { return run_decode(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

@@ -82,16 +82,17 @@ int run_demo(const DemoArgs& args) {
 } // namespace
 
 Action add_demo_command(CLI::App& app) {
-    auto args = std::make_shared<DemoArgs>();
-    auto* cmd = app.add_subcommand(
-        "demo", "Main job on the virtual scanner: simulate a scan, decode it, report the "
-                "error against ground truth");
+    const auto [cmd, args, action] = add_command<DemoArgs>(
+        app, "demo",
+        "Main job on the virtual scanner: simulate a scan, decode it, report the "
+        "error against ground truth",
+        run_demo);
     cmd->add_option("--out", args->out, "output folder")->capture_default_str();
     cmd->add_option("--rig", args->rig, "rig YAML file")->capture_default_str()->check(CLI::ExistingFile);
     cmd->add_option("--scene", args->scene, "scene name or YAML file")->capture_default_str();
     cmd->add_option("--sequence", args->sequence, "sequence name or YAML file")->capture_default_str();
     cmd->add_option("--seed", args->seed, "noise seed")->capture_default_str();
-    return [args] { return run_demo(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

@@ -18,6 +18,7 @@
 // Maps need organised clouds (pixel indices, as fpp-calib reconstruct
 // writes); without them the fit maps are left out (said in summary.md).
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 
 #include "fpp/atomic_file.hpp"
@@ -366,8 +367,10 @@ struct Png {
     std::string caption;
 };
 
-int run_evaluate(const EvaluateArgs& args) {
-    // Arguments first: bad ones cost nothing and leave nothing behind.
+// ---------------------------------------------------------------- stages
+
+// Arguments first: bad ones cost nothing and leave nothing behind.
+void check_evaluate_arguments(const EvaluateArgs& args) {
     const fs::path out = args.out;
     {
         const fs::path target = out.filename().empty() ? out.parent_path() : out;
@@ -399,7 +402,11 @@ int run_evaluate(const EvaluateArgs& args) {
         throw InputError("command line", "--other-label", "needs --compare");
     if (args.compare.empty() && args.match_option->count())
         throw InputError("command line", "--match", "needs --compare");
+}
 
+// CLOUD, and --compare's cloud (the two labels told apart by their paths
+// when they are the same).
+std::vector<Subject> load_subjects(const EvaluateArgs& args) {
     std::vector<Subject> subjects;
     const fs::path cloud_path = args.cloud;
     std::string label = args.label.empty() ? cloud_path.stem().string() : args.label;
@@ -414,16 +421,18 @@ int run_evaluate(const EvaluateArgs& args) {
         }
         subjects.push_back(load_subject(other_path, other, "other"));
     }
-    std::vector<const Subject*> all;
-    for (const Subject& s : subjects)
-        all.push_back(&s);
+    return subjects;
+}
 
-    // Cloud to cloud, checked before the (slower) fits.
+// Cloud to cloud (two subjects; nothing for one), checked before the
+// (slower) fits.
+std::optional<CloudDistance> compare_clouds(const std::vector<Subject>& subjects,
+                                            const std::string& match) {
     std::optional<CloudDistance> distance;
     if (subjects.size() == 2) {
-        Subject& a = subjects[0];
-        Subject& b = subjects[1];
-        if (args.match == "pixel") {
+        const Subject& a = subjects[0];
+        const Subject& b = subjects[1];
+        if (match == "pixel") {
             for (const Subject& s : subjects)
                 if (!s.cloud.is_organised())
                     throw InputError(s.path, "pixel",
@@ -442,6 +451,192 @@ int run_evaluate(const EvaluateArgs& args) {
             distance = compare_nearest(a.cloud, b.cloud);
         }
     }
+    return distance;
+}
+
+// The cloud-to-cloud figures ("compare." in figures.csv).
+std::vector<Item> distance_items(const CloudDistance& d, const std::vector<const Subject*>& all) {
+    std::vector<Item> compare_items;
+    compare_items.push_back(count("matched", "points matched", d.matched));
+    compare_items.push_back(count("only_cloud",
+                                  d.per_pixel ? "pixels with a point of " + all[0]->label + " only"
+                                              : "points of " + all[0]->label + " without a match",
+                                  d.only_first));
+    if (d.per_pixel) {
+        compare_items.push_back(count(
+            "only_other", "pixels with a point of " + all[1]->label + " only", d.only_second));
+        compare_items.push_back(mm("dz_mean", "Z difference, mean", d.dz.mean));
+        compare_items.push_back(mm("dz_rms", "Z difference, RMS", d.dz.rms));
+        compare_items.push_back(mm("dz_stddev", "Z difference, standard deviation", d.dz.stddev));
+    }
+    compare_items.push_back(mm("distance_rms", "3D distance, RMS", d.distance.rms));
+    compare_items.push_back(mm("distance_mean", "3D distance, mean", d.distance.mean));
+    compare_items.push_back(mm("distance_max", "3D distance, largest", d.distance.max));
+    return compare_items;
+}
+
+// figures.csv's rows: each cloud's figures, then the cloud-to-cloud ones.
+std::vector<Figure> evaluation_figures(const std::vector<Subject>& subjects,
+                                       const std::vector<Item>& compare_items) {
+    std::vector<Figure> figures;
+    for (const Subject& s : subjects) {
+        figures.push_back({s.prefix + ".points", static_cast<double>(s.cloud.points.size()), ""});
+        add_items(figures, s, s.fit_items);
+        add_items(figures, s, s.truth_items);
+    }
+    for (const Item& item : compare_items)
+        figures.push_back({"compare." + item.key, item.value, item.unit});
+    return figures;
+}
+
+// A figure's limit, shared by the clouds so that their figures compare.
+template <class ValuesOf>
+double shared_limit(const std::vector<Subject>& subjects, ValuesOf values_of) {
+    std::vector<double> values;
+    for (const Subject& s : subjects) {
+        const std::vector<double>& v = values_of(s);
+        values.insert(values.end(), v.begin(), v.end());
+    }
+    return symmetric_limit(values, 0.995);
+}
+
+// fit-histogram.png and each cloud's fit map (a note instead for a cloud
+// without pixel indices).
+void add_fit_pngs(std::vector<Png>& pngs, std::string& notes, const std::vector<Subject>& subjects,
+                  const std::string& shape) {
+    const double limit = shared_limit(
+        subjects, [](const Subject& s) -> const std::vector<double>& { return s.used_residuals; });
+    std::vector<HistogramSeries> series;
+    for (const Subject& s : subjects)
+        series.push_back({s.label, s.used_residuals});
+    const std::string sign = shape == "plane"
+                                 ? "signed distance to the plane, + towards the camera (mm)"
+                                 : "radial residual, + outside (mm)";
+    pngs.push_back({"fit-histogram.png",
+                    histogram_figure(series, -limit, limit, sign, shape + " fit residuals"),
+                    "histogram of the " + shape + " fit residuals (used points)"});
+    for (const Subject& s : subjects) {
+        const std::string name =
+            s.prefix == "cloud" ? "fit-map.png" : "fit-map-" + s.prefix + ".png";
+        if (!s.cloud.is_organised()) {
+            notes += "- no `" + name + "`: " + s.path.string() + " has no camera pixel indices\n";
+            continue;
+        }
+        pngs.push_back(
+            {name,
+             signed_map_figure(values_image(s.cloud, s.residuals), limit,
+                               s.label + ": " + shape + " fit residual, RMS " +
+                                   fixed_text(error_stats(s.used_residuals).rms, 4) + " mm"),
+             s.label + ": " + shape + " fit residual per camera pixel"});
+    }
+}
+
+// truth-histogram.png and each cloud's truth map.
+void add_truth_pngs(std::vector<Png>& pngs, const std::vector<Subject>& subjects) {
+    const double limit = shared_limit(subjects, [](const Subject& s) -> const std::vector<double>& {
+        return s.truth->dz_values;
+    });
+    std::vector<HistogramSeries> series;
+    for (const Subject& s : subjects)
+        series.push_back({s.label, s.truth->dz_values});
+    pngs.push_back({"truth-histogram.png",
+                    histogram_figure(series, -limit, limit, "Z error, point - truth (mm)",
+                                     "error against the ground truth"),
+                    "histogram of the Z error against the ground truth"});
+    for (const Subject& s : subjects) {
+        const std::string name =
+            s.prefix == "cloud" ? "truth-map.png" : "truth-map-" + s.prefix + ".png";
+        pngs.push_back({name,
+                        signed_map_figure(s.truth->dz_map, limit,
+                                          s.label +
+                                              ": Z error against the ground truth, "
+                                              "RMS " +
+                                              fixed_text(s.truth->dz.rms, 4) + " mm"),
+                        s.label + ": Z error against the ground truth per camera pixel"});
+    }
+}
+
+// difference-histogram.png, and with per-pixel matching difference-map.png.
+void add_difference_pngs(std::vector<Png>& pngs, const CloudDistance& distance,
+                         const std::vector<const Subject*>& all) {
+    const std::string pair = all[0]->label + " - " + all[1]->label;
+    if (distance.per_pixel) {
+        const double limit = symmetric_limit(distance.values, 0.995);
+        pngs.push_back(
+            {"difference-histogram.png",
+             histogram_figure({{pair, distance.values}}, -limit, limit,
+                              "Z difference per pixel (mm)", "cloud to cloud, same camera pixel"),
+             "histogram of the Z difference " + pair + " per pixel"});
+        pngs.push_back({"difference-map.png",
+                        signed_map_figure(distance.dz_map, limit,
+                                          pair + ": Z difference, RMS 3D distance " +
+                                              fixed_text(distance.distance.rms, 4) + " mm"),
+                        "Z difference " + pair + " per camera pixel"});
+    } else {
+        const double limit = symmetric_limit(distance.values, 0.995);
+        pngs.push_back({"difference-histogram.png",
+                        histogram_figure({{pair, distance.values}}, 0, limit,
+                                         "distance to the nearest point (mm)",
+                                         "cloud to cloud, nearest point"),
+                        "histogram of the nearest-point distances " + pair});
+    }
+}
+
+// summary.md's sections, in order.
+
+void summary_clouds(std::ostream& md, const std::vector<Subject>& subjects) {
+    md << "# Evaluation\n\n";
+    for (const Subject& s : subjects)
+        md << "- **" << s.label << "**: `" << s.path.string() << "`, " << s.cloud.points.size()
+           << " points, "
+           << (s.cloud.is_organised() ? "organised " + report_size_text(s.cloud.organised)
+                                      : std::string("unorganised"))
+           << "\n";
+}
+
+void summary_fit(std::ostream& md, const std::vector<Subject>& subjects,
+                 const std::vector<const Subject*>& all, const std::string& shape) {
+    md << "\n## " << shape << " fit\n\n"
+       << fit_description(shape) << "\n\n"
+       << item_table(all, &Subject::fit_items) << "\n";
+    for (const Subject& s : subjects)
+        md << "- " << s.label << ": " << s.fit_message << "\n";
+}
+
+void summary_truth(std::ostream& md, const Truth& truth, const std::vector<const Subject*>& all) {
+    md << "\n## Ground truth\n\n`" << truth.file.string()
+       << "`: per camera pixel, point minus true point (both on the pixel's ray).\n\n"
+       << item_table(all, &Subject::truth_items);
+}
+
+void summary_distance(std::ostream& md, const CloudDistance& distance,
+                      const std::vector<const Subject*>& all,
+                      const std::vector<Item>& compare_items) {
+    md << "\n## Cloud to cloud: " << all[0]->label << " - " << all[1]->label << "\n\n"
+       << (distance.per_pixel ? "Per camera pixel where both clouds have a point.\n\n"
+                              : "From each point of " + all[0]->label +
+                                    " to the nearest point of " + all[1]->label + ".\n\n")
+       << "| figure | value | unit |\n|---|---:|---|\n";
+    for (const Item& item : compare_items)
+        md << "| " << item.title << " | " << value_text(item) << " | " << item.unit << " |\n";
+}
+
+void summary_figure_list(std::ostream& md, const std::vector<Png>& pngs, const std::string& notes) {
+    md << "\n## Figures\n\n";
+    for (const Png& png : pngs)
+        md << "- `" << png.name << "`: " << png.caption << "\n";
+    md << notes;
+}
+
+int run_evaluate(const EvaluateArgs& args) {
+    const fs::path out = args.out;
+    check_evaluate_arguments(args);
+
+    std::vector<Subject> subjects = load_subjects(args);
+    std::vector<const Subject*> all;
+    for (const Subject& s : subjects)
+        all.push_back(&s);
+    const std::optional<CloudDistance> distance = compare_clouds(subjects, args.match);
     std::optional<Truth> truth;
     if (!args.truth.empty()) {
         truth = load_truth(args.truth);
@@ -452,156 +647,29 @@ int run_evaluate(const EvaluateArgs& args) {
         for (Subject& s : subjects)
             fit_subject(s, args.fit, args);
 
-    // ---- figures.csv
-    std::vector<Figure> figures;
-    for (const Subject& s : subjects) {
-        figures.push_back({s.prefix + ".points", static_cast<double>(s.cloud.points.size()), ""});
-        add_items(figures, s, s.fit_items);
-        add_items(figures, s, s.truth_items);
-    }
     std::vector<Item> compare_items;
-    if (distance) {
-        const CloudDistance& d = *distance;
-        compare_items.push_back(count("matched", "points matched", d.matched));
-        compare_items.push_back(count("only_cloud",
-                                      d.per_pixel
-                                          ? "pixels with a point of " + all[0]->label + " only"
-                                          : "points of " + all[0]->label + " without a match",
-                                      d.only_first));
-        if (d.per_pixel) {
-            compare_items.push_back(count(
-                "only_other", "pixels with a point of " + all[1]->label + " only", d.only_second));
-            compare_items.push_back(mm("dz_mean", "Z difference, mean", d.dz.mean));
-            compare_items.push_back(mm("dz_rms", "Z difference, RMS", d.dz.rms));
-            compare_items.push_back(
-                mm("dz_stddev", "Z difference, standard deviation", d.dz.stddev));
-        }
-        compare_items.push_back(mm("distance_rms", "3D distance, RMS", d.distance.rms));
-        compare_items.push_back(mm("distance_mean", "3D distance, mean", d.distance.mean));
-        compare_items.push_back(mm("distance_max", "3D distance, largest", d.distance.max));
-        for (const Item& item : compare_items)
-            figures.push_back({"compare." + item.key, item.value, item.unit});
-    }
+    if (distance)
+        compare_items = distance_items(*distance, all);
+    const std::vector<Figure> figures = evaluation_figures(subjects, compare_items);
 
-    // ---- figures (PNG), each limit shared by the clouds so they compare
     std::vector<Png> pngs;
     std::string notes;
-    auto shared_limit = [&](auto values_of) {
-        std::vector<double> values;
-        for (const Subject& s : subjects) {
-            const std::vector<double>& v = values_of(s);
-            values.insert(values.end(), v.begin(), v.end());
-        }
-        return symmetric_limit(values, 0.995);
-    };
-    if (!args.fit.empty()) {
-        const double limit = shared_limit(
-            [](const Subject& s) -> const std::vector<double>& { return s.used_residuals; });
-        std::vector<HistogramSeries> series;
-        for (const Subject& s : subjects)
-            series.push_back({s.label, s.used_residuals});
-        const std::string sign = args.fit == "plane"
-                                     ? "signed distance to the plane, + towards the camera (mm)"
-                                     : "radial residual, + outside (mm)";
-        pngs.push_back({"fit-histogram.png",
-                        histogram_figure(series, -limit, limit, sign, args.fit + " fit residuals"),
-                        "histogram of the " + args.fit + " fit residuals (used points)"});
-        for (const Subject& s : subjects) {
-            const std::string name =
-                s.prefix == "cloud" ? "fit-map.png" : "fit-map-" + s.prefix + ".png";
-            if (!s.cloud.is_organised()) {
-                notes +=
-                    "- no `" + name + "`: " + s.path.string() + " has no camera pixel indices\n";
-                continue;
-            }
-            pngs.push_back(
-                {name,
-                 signed_map_figure(values_image(s.cloud, s.residuals), limit,
-                                   s.label + ": " + args.fit + " fit residual, RMS " +
-                                       fixed_text(error_stats(s.used_residuals).rms, 4) + " mm"),
-                 s.label + ": " + args.fit + " fit residual per camera pixel"});
-        }
-    }
-    if (truth) {
-        const double limit = shared_limit(
-            [](const Subject& s) -> const std::vector<double>& { return s.truth->dz_values; });
-        std::vector<HistogramSeries> series;
-        for (const Subject& s : subjects)
-            series.push_back({s.label, s.truth->dz_values});
-        pngs.push_back({"truth-histogram.png",
-                        histogram_figure(series, -limit, limit, "Z error, point - truth (mm)",
-                                         "error against the ground truth"),
-                        "histogram of the Z error against the ground truth"});
-        for (const Subject& s : subjects) {
-            const std::string name =
-                s.prefix == "cloud" ? "truth-map.png" : "truth-map-" + s.prefix + ".png";
-            pngs.push_back({name,
-                            signed_map_figure(s.truth->dz_map, limit,
-                                              s.label +
-                                                  ": Z error against the ground truth, "
-                                                  "RMS " +
-                                                  fixed_text(s.truth->dz.rms, 4) + " mm"),
-                            s.label + ": Z error against the ground truth per camera pixel"});
-        }
-    }
-    if (distance) {
-        const std::string pair = all[0]->label + " - " + all[1]->label;
-        if (distance->per_pixel) {
-            const double limit = symmetric_limit(distance->values, 0.995);
-            pngs.push_back({"difference-histogram.png",
-                            histogram_figure({{pair, distance->values}}, -limit, limit,
-                                             "Z difference per pixel (mm)",
-                                             "cloud to cloud, same camera pixel"),
-                            "histogram of the Z difference " + pair + " per pixel"});
-            pngs.push_back({"difference-map.png",
-                            signed_map_figure(distance->dz_map, limit,
-                                              pair + ": Z difference, RMS 3D distance " +
-                                                  fixed_text(distance->distance.rms, 4) + " mm"),
-                            "Z difference " + pair + " per camera pixel"});
-        } else {
-            const double limit = symmetric_limit(distance->values, 0.995);
-            pngs.push_back({"difference-histogram.png",
-                            histogram_figure({{pair, distance->values}}, 0, limit,
-                                             "distance to the nearest point (mm)",
-                                             "cloud to cloud, nearest point"),
-                            "histogram of the nearest-point distances " + pair});
-        }
-    }
+    if (!args.fit.empty())
+        add_fit_pngs(pngs, notes, subjects, args.fit);
+    if (truth)
+        add_truth_pngs(pngs, subjects);
+    if (distance)
+        add_difference_pngs(pngs, *distance, all);
 
-    // ---- summary.md
     std::ostringstream md;
-    md << "# Evaluation\n\n";
-    for (const Subject& s : subjects)
-        md << "- **" << s.label << "**: `" << s.path.string() << "`, " << s.cloud.points.size()
-           << " points, "
-           << (s.cloud.is_organised() ? "organised " + report_size_text(s.cloud.organised)
-                                      : std::string("unorganised"))
-           << "\n";
-    if (!args.fit.empty()) {
-        md << "\n## " << args.fit << " fit\n\n"
-           << fit_description(args.fit) << "\n\n"
-           << item_table(all, &Subject::fit_items) << "\n";
-        for (const Subject& s : subjects)
-            md << "- " << s.label << ": " << s.fit_message << "\n";
-    }
-    if (truth) {
-        md << "\n## Ground truth\n\n`" << truth->file.string()
-           << "`: per camera pixel, point minus true point (both on the pixel's ray).\n\n"
-           << item_table(all, &Subject::truth_items);
-    }
-    if (distance) {
-        md << "\n## Cloud to cloud: " << all[0]->label << " - " << all[1]->label << "\n\n"
-           << (distance->per_pixel ? "Per camera pixel where both clouds have a point.\n\n"
-                                   : "From each point of " + all[0]->label +
-                                         " to the nearest point of " + all[1]->label + ".\n\n")
-           << "| figure | value | unit |\n|---|---:|---|\n";
-        for (const Item& item : compare_items)
-            md << "| " << item.title << " | " << value_text(item) << " | " << item.unit << " |\n";
-    }
-    md << "\n## Figures\n\n";
-    for (const Png& png : pngs)
-        md << "- `" << png.name << "`: " << png.caption << "\n";
-    md << notes;
+    summary_clouds(md, subjects);
+    if (!args.fit.empty())
+        summary_fit(md, subjects, all, args.fit);
+    if (truth)
+        summary_truth(md, *truth, all);
+    if (distance)
+        summary_distance(md, *distance, all, compare_items);
+    summary_figure_list(md, pngs, notes);
     const std::string summary = md.str();
     const std::string csv = figures_csv(figures);
 
@@ -618,12 +686,12 @@ int run_evaluate(const EvaluateArgs& args) {
 } // namespace
 
 Action add_evaluate_command(CLI::App& app) {
-    auto args = std::make_shared<EvaluateArgs>();
-    auto* cmd = app.add_subcommand(
-        "evaluate",
+    const auto [cmd, args, action] = add_command<EvaluateArgs>(
+        app, "evaluate",
         "Evaluate a reconstruction: shape fit figures (VDI/VDE 2634-2 style flatness, probing "
         "form and size, sphere spacing; cylinder), errors against a simulated capture's ground "
-        "truth, distances to a second reconstruction; writes a report folder");
+        "truth, distances to a second reconstruction; writes a report folder",
+        run_evaluate);
     cmd->add_option("cloud", args->cloud, "point cloud to evaluate (.ply)")->required();
     cmd->add_option("--fit", args->fit,
                     "fit a shape to all points of the cloud (and of --compare's): plane, sphere, "
@@ -658,7 +726,7 @@ Action add_evaluate_command(CLI::App& app) {
                     "report folder to write (must not exist, be empty, or hold an earlier "
                     "report, which is replaced)")
         ->required();
-    return [args] { return run_evaluate(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

@@ -54,16 +54,16 @@ int run_hybrid(const HybridArgs& args) {
 } // namespace
 
 Action add_hybrid_command(CLI::App& app) {
-    auto args = std::make_shared<HybridArgs>();
-    auto* cmd = app.add_subcommand(
-        "hybrid",
+    const auto [cmd, args, action] = add_command<HybridArgs>(
+        app, "hybrid",
         "Fit the hybrid model per camera pixel, from phase (projector column) to X, Y, Z, and "
         "write the coefficient table the scanner loads (.fpt). The session's board.yaml decides "
         "the procedure. kind checkerboard (one session of about 30 poses with fringes in x and y, "
         "the same as for `stereo`): each board is placed by the camera alone with --calib's "
         "camera model, the samples are where the pixels' rays meet it on its white parts, and "
         "the stereo model adds samples between the boards; kind plane (the paper's): flat "
-        "white boards reconstructed by SV with --calib and corrected onto their best planes");
+        "white boards reconstructed by SV with --calib and corrected onto their best planes",
+        run_hybrid);
     cmd->add_option("session", args->session, "session folder")->required();
     cmd->add_option("--calib", args->calib, "stereo calibration file")
         ->required()
@@ -93,8 +93,8 @@ Action add_hybrid_command(CLI::App& app) {
                     "poses a pixel needs for a model (at least 4)")
         ->capture_default_str()
         ->check(CLI::Range(4, 1000));
-    cmd->add_option("--threads", args->threads, "threads (0 = all cores)")->capture_default_str();
-    return [args] { return run_hybrid(*args); };
+    add_threads_option(*cmd, args->threads);
+    return action;
 }
 
 } // namespace fpp::calib

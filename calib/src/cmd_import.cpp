@@ -24,9 +24,13 @@ struct ImportArgs {
     std::string out;
     std::string projector;
     ImportOptions options;
+    CLI::Option* direction_option = nullptr; // to know whether --direction was given
 };
 
 int run_import(ImportArgs args) {
+    // OpenCV's Gray code always codes both axes.
+    if (args.tool == "opencv" && args.direction_option->count() == 0)
+        args.options.direction = "both";
     args.options.tool = parse_import_tool(args.tool);
     args.options.projector = parse_size_text(args.projector, "--projector");
     const CaptureManifest m = import_capture(args.frames, args.out, args.options);
@@ -39,13 +43,13 @@ int run_import(ImportArgs args) {
 } // namespace
 
 Action add_import_command(CLI::App& app) {
-    auto args = std::make_shared<ImportArgs>();
-    auto* cmd = app.add_subcommand(
-        "import",
+    const auto [cmd, args, action] = add_command<ImportArgs>(
+        app, "import",
         "make a capture set from another tool's camera frames (SLStudio, SLMaster, OpenCV "
         "structured_light): the frames are copied as they are (PNG, TIFF or BMP, in the order "
         "of the last number in their names) and capture.yaml describes the tool's patterns; "
-        "conventions and sources: firmware/core/formats/imports.md");
+        "conventions and sources: firmware/core/formats/imports.md",
+        run_import);
     cmd->add_option("tool", args->tool, "slstudio, slmaster or opencv")
         ->required()
         ->check(CLI::IsMember({"slstudio", "slmaster", "opencv"}));
@@ -59,10 +63,11 @@ Action add_import_command(CLI::App& app) {
                     "complementary, shift-gray; "
                     "opencv: graycode")
         ->required();
-    cmd->add_option("--direction", args->options.direction,
-                    "coded axis: x (columns; SLStudio 'horizontal', SLMaster horizontal = "
-                    "false), y, or both (x then y; OpenCV's Gray code is always both)")
-        ->capture_default_str();
+    args->direction_option =
+        cmd->add_option("--direction", args->options.direction,
+                        "coded axis: x (columns; SLStudio 'horizontal', SLMaster horizontal = "
+                        "false), y, or both (x then y; OpenCV's Gray code is always both)")
+            ->capture_default_str();
     cmd->add_option("--phases", args->options.slstudio_2x3_phases,
                     "slstudio 2x3: fringes across the projector (nPhases)")
         ->capture_default_str();
@@ -90,12 +95,7 @@ Action add_import_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--bit-depth", args->options.bit_depth,
                     "bits in use of 16-bit frames (9..16; default: found from the frames)");
-    return [args, cmd] {
-        // OpenCV's Gray code always codes both axes.
-        if (args->tool == "opencv" && cmd->count("--direction") == 0)
-            args->options.direction = "both";
-        return run_import(*args);
-    };
+    return action;
 }
 
 } // namespace fpp::calib

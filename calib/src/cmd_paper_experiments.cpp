@@ -11,6 +11,7 @@
 // written as a whole and must not exist. Progress on stderr; the targets and
 // whether each is met on stdout.
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 
 #include "fpp/calib/paper_experiments.hpp"
@@ -45,9 +46,8 @@ int run_paper(PaperArgs& args) {
 } // namespace
 
 Action add_paper_experiments_command(CLI::App& app) {
-    auto args = std::make_shared<PaperArgs>();
-    auto* cmd = app.add_subcommand(
-        "paper-experiments",
+    const auto [cmd, args, action] = add_command<PaperArgs>(
+        app, "paper-experiments",
         "Reproduce the paper's experiments on the virtual scanner and measure every calibration "
         "procedure against the truth: the paper's (a joint stereo calibration, hybrid tables "
         "from flat boards placed by SV, every model) and ours (one checkerboard session: "
@@ -55,7 +55,8 @@ Action add_paper_experiments_command(CLI::App& app) {
         "then the inclined plane, the 168 mm cylinder, a sphere, ball bars at seven places and "
         "the relief reconstructed by every method, with shape fits, errors against ground truth "
         "(with and without noise), reconstruction times and N x N window timing; writes the "
-        "calibrations, table-<method>.fpt, reports, the scans and DIR/report");
+        "calibrations, table-<method>.fpt, reports, the scans and DIR/report",
+        run_paper);
     cmd->add_option("--out", args->out, "folder to create (must not exist)")->required();
     cmd->add_option("--sv-calibration", args->sv_calibration,
                     "SV model: checkerboard (stereo calibration from a simulated session, the "
@@ -84,17 +85,16 @@ Action add_paper_experiments_command(CLI::App& app) {
                     "runs per timing (the best is kept)")
         ->capture_default_str()
         ->check(CLI::Range(1, 100));
-    cmd->add_option("--threads", args->options.threads,
-                    "threads for simulation, decoding and calibration (timings use one); "
-                    "0 = all cores")
-        ->capture_default_str()
+    add_threads_option(*cmd, args->options.threads)
+        ->description("worker threads for simulation, decoding and calibration (0 = all cores; "
+                      "the timings use one)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--rig", args->rig,
                     "rig YAML file (default: board/sim/paper-rig-lens-defects.yaml)")
         ->check(CLI::ExistingFile);
     cmd->add_flag("--keep-sessions", args->options.keep_sessions,
                   "keep the calibration sessions in DIR/sessions (large at full size)");
-    return [args] { return run_paper(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

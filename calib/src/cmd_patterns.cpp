@@ -111,13 +111,13 @@ int run_patterns(const PatternsArgs& args) {
 } // namespace
 
 Action add_patterns_command(CLI::App& app) {
-    auto args = std::make_shared<PatternsArgs>();
-    auto* cmd = app.add_subcommand(
-        "patterns",
+    const auto [cmd, args, action] = add_command<PatternsArgs>(
+        app, "patterns",
         "write the projector images of a sequence as numbered files (OUT/projector/pattern_NN) "
         "with a capture.yaml template naming the camera frames to save (frame_NN.png), so that "
         "a plain projector and camera can capture a set by hand: show each pattern full "
-        "screen, save the camera frame under its name in OUT, then fpp-calib decode OUT");
+        "screen, save the camera frame under its name in OUT, then fpp-calib decode OUT",
+        run_patterns);
     cmd->add_option("--sequence", args->sequence,
                     "a standard sequence name (gray-xy, ...) or a YAML file with a sequence: "
                     "list (firmware/core/formats/capture-set.md)")
@@ -133,7 +133,7 @@ Action add_patterns_command(CLI::App& app) {
                     "pre-compensate a projector of response (level/255)^gamma");
     cmd->add_option("--response", args->response,
                     "or pre-compensate a measured projector response (fpp-calib response)");
-    return [args] { return run_patterns(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

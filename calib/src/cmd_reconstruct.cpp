@@ -37,6 +37,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <variant>
 
@@ -115,14 +116,6 @@ bool sequence_codes(const Sequence& sequence, Axis axis) {
     });
 }
 
-void check_output_path(const fs::path& path, const char* option) {
-    const fs::path folder = path.parent_path();
-    if (!folder.empty() && !fs::is_directory(folder))
-        throw InputError(path, option, "the folder " + folder.string() + " does not exist");
-    if (fs::is_directory(path))
-        throw InputError(path, option, "is a folder");
-}
-
 struct CloudSummary {
     double z_min = 0, z_max = 0, z_p01 = 0, z_p99 = 0;
 };
@@ -150,14 +143,19 @@ CloudSummary summarise(const PointCloud& cloud) {
     return s;
 }
 
+// run_reconstruct's stages, in order.
 
-int run_reconstruct(const ReconstructArgs& args) {
-    check_decode_options(args.decode);
-    if (!args.second_capture.empty() || !args.pair_calibration.empty())
-        return run_reconstruct_pair(
-            {args.capture, args.second_capture,
-             args.pair_calibration.empty() ? args.calib : args.pair_calibration, args.table,
-             args.out, args.xyz, args.axes, args.decode});
+// What the arguments ask for, checked before anything is read.
+struct ReconstructRequest {
+    CoordinateFilterOptions smooth; // --smooth, --smooth-tolerance; --threads
+    fs::path out, xyz_out;
+    ReconstructAxes requested = ReconstructAxes::automatic;
+    CalibrationFormat format = CalibrationFormat::automatic;
+    bool use_table = false; // --table, else --calib
+    fs::path calib_path;    // the model's file
+};
+
+ReconstructRequest check_reconstruct_arguments(const ReconstructArgs& args) {
     CoordinateFilterOptions smooth = args.smooth;
     smooth.threads = args.decode.threads;
     try {
@@ -185,12 +183,23 @@ int run_reconstruct(const ReconstructArgs& args) {
                          "a coefficient table maps the projector column only (--axes x)");
 
     const fs::path calib_path = use_table ? fs::path(args.table) : fs::path(args.calib);
+    return {smooth, out, xyz_out, requested, format, use_table, calib_path};
+}
+
+// The model, read and checked against the capture: a coefficient table
+// (--table) or a stereo calibration (--calib), the other left empty.
+struct ReconstructModel {
     StereoCalibration calibration;
     CoefficientTable table;
-    std::cerr << "reading " << args.capture << "\n";
-    const CaptureSet capture = read_capture_set(args.capture);
-    const fs::path manifest_path = capture.folder / "capture.yaml";
-    if (use_table) {
+};
+
+ReconstructModel load_reconstruct_model(const ReconstructArgs& args,
+                                        const ReconstructRequest& request,
+                                        const CaptureSet& capture) {
+    const fs::path& calib_path = request.calib_path;
+    ReconstructModel model;
+    if (request.use_table) {
+        CoefficientTable& table = model.table;
         // Validated whole (header, every tile's CRC) and against the camera.
         table = load_table(calib_path, &capture.manifest.camera);
         if (table.info().phase_axis != Axis::x)
@@ -203,11 +212,17 @@ int run_reconstruct(const ReconstructArgs& args) {
         std::cerr << "table: " << to_string(table.info().model) << " model, camera "
                   << size_text(table.info().camera) << "\n";
     } else {
-        calibration = load_calibration(calib_path, format);
+        StereoCalibration& calibration = model.calibration;
+        calibration = load_calibration(calib_path, request.format);
         std::cerr << "calibration: " << calibration.origin << "\n";
         settle_sizes(calibration, calib_path, args, capture.manifest);
     }
+    return model;
+}
 
+// The capture codes the projector column, and the row when --axes xy asks for it.
+void check_capture_axes(const CaptureSet& capture, ReconstructAxes requested) {
+    const fs::path manifest_path = capture.folder / "capture.yaml";
     const bool has_x = sequence_codes(capture.manifest.sequence, Axis::x);
     const bool has_y = sequence_codes(capture.manifest.sequence, Axis::y);
     if (!has_x)
@@ -217,14 +232,21 @@ int run_reconstruct(const ReconstructArgs& args) {
         throw InputError(manifest_path, "sequence",
                          "--axes xy needs the projector row, but the capture has no phase block "
                          "along y (use --axes x)");
+}
 
-    Stopwatch decode_watch;
+// The capture decoded, its projector coordinates smoothed.
+struct DecodedScan {
     DecodeResult decoded;
-    try {
-        decoded = decode(capture, args.decode);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(manifest_path, "sequence", e.what());
-    }
+    DecodeStatistics decode_stats;
+    CoordinateFilterReport smoothing;
+    double decode_seconds = 0, smooth_seconds = 0;
+};
+
+// Nothing when the decode failed (the likely cause said on stderr).
+std::optional<DecodedScan> decode_and_smooth(const CaptureSet& capture, const ReconstructArgs& args,
+                                             const CoordinateFilterOptions& smooth) {
+    Stopwatch decode_watch;
+    DecodeResult decoded = decode(capture, args.decode); // InputError naming the field
     const double decode_seconds = decode_watch.seconds();
     // A failed decode gives no cloud: the likely cause instead (fpp/decode_diagnosis.hpp).
     const DecodeStatistics decode_stats = decode_statistics(decoded, frames_full_scale(capture));
@@ -232,7 +254,7 @@ int run_reconstruct(const ReconstructArgs& args) {
     if (diagnosis.failed) {
         std::cerr << "fpp-calib: error: " << capture.folder.string() << ": " << diagnosis.message
                   << "\nno point cloud written\n";
-        return kExitDecodeFailed;
+        return std::nullopt;
     }
     if (!diagnosis.message.empty())
         std::cerr << "fpp-calib: warning: " << diagnosis.message << "\n";
@@ -240,15 +262,27 @@ int run_reconstruct(const ReconstructArgs& args) {
     Image<float> scratch;
     const CoordinateFilterReport smoothing = smooth_coordinates(decoded, smooth, scratch);
     const double smooth_seconds = smooth_watch.seconds();
+    return DecodedScan{std::move(decoded), decode_stats, smoothing, decode_seconds, smooth_seconds};
+}
 
+// The cloud the model makes of the decoded coordinates.
+struct ModelledCloud {
+    PointCloud cloud;
+    SvStats stats;
+    TableApplyStats table_stats; // with a table
+    double prepare_seconds = 0, model_seconds = 0;
+};
+
+ModelledCloud apply_model(const ReconstructModel& model, bool use_table,
+                          const DecodeResult& decoded, ReconstructAxes requested, int threads) {
     PointCloud cloud;
     SvStats stats;
     TableApplyStats table_stats;
     double prepare_seconds = 0, model_seconds = 0;
     if (use_table) {
-        ThreadPool pool(args.decode.threads);
+        ThreadPool pool(threads);
         Stopwatch watch;
-        table_stats = apply_table(table, decoded.proj_x, cloud, &pool);
+        table_stats = apply_table(model.table, decoded.proj_x, cloud, &pool);
         model_seconds = watch.seconds();
         cloud.quality = decoded.modulation;
         cloud.intensity = decoded.mean;
@@ -256,39 +290,53 @@ int run_reconstruct(const ReconstructArgs& args) {
         stats.points = table_stats.points;
     } else {
         SvOptions sv;
-        sv.threads = args.decode.threads;
+        sv.threads = threads;
         Stopwatch prepare_watch;
-        const SvReconstructor reconstructor(calibration, sv);
+        const SvReconstructor reconstructor(model.calibration, sv);
         prepare_seconds = prepare_watch.seconds();
         Stopwatch sv_watch;
         stats = reconstructor.reconstruct(decoded, requested, cloud);
         model_seconds = sv_watch.seconds();
     }
+    return {std::move(cloud), stats, table_stats, prepare_seconds, model_seconds};
+}
 
-    if (stats.points == 0) {
-        std::cerr << "fpp-calib: error: " << capture.folder.string() << ": " << decode_stats.decoded
-                  << " pixels decoded but none gave a point ("
-                  << (use_table ? "no model " + std::to_string(table_stats.no_model) +
-                                      ", outside the calibrated phase range " +
-                                      std::to_string(table_stats.out_of_range) + " in " +
-                                      calib_path.string()
-                                : "outside the projector image " +
-                                      std::to_string(stats.outside_projector) +
-                                      ", other geometry " + std::to_string(stats.rejected) +
-                                      ", not converged " + std::to_string(stats.not_converged) +
-                                      " with " + calib_path.string())
-                  << "): is the calibration for this scanner? no point cloud written\n";
-        return kExitDecodeFailed;
-    }
+// Why no pixel gave a point (stderr).
+void report_no_points(const CaptureSet& capture, const DecodedScan& scan,
+                      const ReconstructRequest& request, const ModelledCloud& made) {
+    const bool use_table = request.use_table;
+    const fs::path& calib_path = request.calib_path;
+    const DecodeStatistics& decode_stats = scan.decode_stats;
+    const SvStats& stats = made.stats;
+    const TableApplyStats& table_stats = made.table_stats;
+    std::cerr << "fpp-calib: error: " << capture.folder.string() << ": " << decode_stats.decoded
+              << " pixels decoded but none gave a point ("
+              << (use_table
+                      ? "no model " + std::to_string(table_stats.no_model) +
+                            ", outside the calibrated phase range " +
+                            std::to_string(table_stats.out_of_range) + " in " + calib_path.string()
+                      : "outside the projector image " + std::to_string(stats.outside_projector) +
+                            ", other geometry " + std::to_string(stats.rejected) +
+                            ", not converged " + std::to_string(stats.not_converged) + " with " +
+                            calib_path.string())
+              << "): is the calibration for this scanner? no point cloud written\n";
+}
 
+// Writes the PLY (and the XYZ TIFF); the seconds it took.
+double write_reconstruction(const ReconstructArgs& args, const ReconstructRequest& request,
+                            const ReconstructModel& model, const ModelledCloud& made) {
+    const bool use_table = request.use_table;
+    const CoordinateFilterOptions& smooth = request.smooth;
+    const fs::path &out = request.out, &xyz_out = request.xyz_out;
+    const PointCloud& cloud = made.cloud;
     std::vector<std::string> comments = {
-        use_table
-            ? "fpp-calib reconstruct: hybrid model (" + std::string(to_string(table.info().model)) +
-                  " coefficient table), camera frame, mm"
-            : "fpp-calib reconstruct: stereo (SV) model, camera frame, mm",
+        use_table ? "fpp-calib reconstruct: hybrid model (" +
+                        std::string(to_string(model.table.info().model)) +
+                        " coefficient table), camera frame, mm"
+                  : "fpp-calib reconstruct: stereo (SV) model, camera frame, mm",
         "capture " + fs::path(args.capture).filename().string() +
-            (use_table ? ", table " : ", calibration ") + calib_path.filename().string() +
-            ", axes " + to_string(stats.axes),
+            (use_table ? ", table " : ", calibration ") + request.calib_path.filename().string() +
+            ", axes " + to_string(made.stats.axes),
         "quality: fringe modulation (DN); intensity: mean intensity (DN); pixel: row * "
         "organised_width + column"};
     Stopwatch write_watch;
@@ -304,8 +352,21 @@ int run_reconstruct(const ReconstructArgs& args) {
         if (!xyz_out.empty())
             write_tiff(xyz_out, cloud.xyz);
     });
-    const double write_seconds = write_watch.seconds();
+    return write_watch.seconds();
+}
 
+// What was reconstructed, how, and how long it took (stdout).
+std::string reconstruct_report(const ReconstructRequest& request, const CaptureSet& capture,
+                               const DecodedScan& scan, const ModelledCloud& made,
+                               double write_seconds) {
+    const bool use_table = request.use_table;
+    const CoordinateFilterOptions& smooth = request.smooth;
+    const DecodeResult& decoded = scan.decoded;
+    const DecodeStatistics& decode_stats = scan.decode_stats;
+    const CoordinateFilterReport& smoothing = scan.smoothing;
+    const PointCloud& cloud = made.cloud;
+    const SvStats& stats = made.stats;
+    const TableApplyStats& table_stats = made.table_stats;
     const CloudSummary z = summarise(cloud);
     const std::size_t pixels = cloud.xyz.pixel_count();
     std::ostringstream report;
@@ -349,30 +410,57 @@ int run_reconstruct(const ReconstructArgs& args) {
         report << "ray gap: RMS " << stats.rms_ray_gap_mm << " mm, max " << stats.max_ray_gap_mm
                << " mm\n";
     report << truth_comparison(cloud, capture);
-    report << "time: decode " << decode_seconds << " s, ";
+    report << "time: decode " << scan.decode_seconds << " s, ";
     if (smooth.radius > 0)
-        report << "smoothing " << smooth_seconds << " s, ";
+        report << "smoothing " << scan.smooth_seconds << " s, ";
     if (use_table)
-        report << "table " << model_seconds << " s, writing ";
+        report << "table " << made.model_seconds << " s, writing ";
     else
-        report << "camera rays " << prepare_seconds << " s, SV " << model_seconds << " s, writing ";
+        report << "camera rays " << made.prepare_seconds << " s, SV " << made.model_seconds
+               << " s, writing ";
     report << write_seconds << " s\n"
-           << "wrote " << out.string() << (xyz_out.empty() ? "" : " and " + xyz_out.string())
-           << "\n";
-    std::cout << report.str();
+           << "wrote " << request.out.string()
+           << (request.xyz_out.empty() ? "" : " and " + request.xyz_out.string()) << "\n";
+    return report.str();
+}
+
+int run_reconstruct(const ReconstructArgs& args) {
+    check_decode_options(args.decode);
+    if (!args.second_capture.empty() || !args.pair_calibration.empty())
+        return run_reconstruct_pair(
+            {args.capture, args.second_capture,
+             args.pair_calibration.empty() ? args.calib : args.pair_calibration, args.table,
+             args.out, args.xyz, args.axes, args.decode});
+    const ReconstructRequest request = check_reconstruct_arguments(args);
+    std::cerr << "reading " << args.capture << "\n";
+    const CaptureSet capture = read_capture_set(args.capture);
+    const ReconstructModel model = load_reconstruct_model(args, request, capture);
+    check_capture_axes(capture, request.requested);
+
+    const std::optional<DecodedScan> scan = decode_and_smooth(capture, args, request.smooth);
+    if (!scan)
+        return kExitDecodeFailed;
+    const ModelledCloud made = apply_model(model, request.use_table, scan->decoded,
+                                           request.requested, args.decode.threads);
+    if (made.stats.points == 0) {
+        report_no_points(capture, *scan, request, made);
+        return kExitDecodeFailed;
+    }
+    const double write_seconds = write_reconstruction(args, request, model, made);
+    std::cout << reconstruct_report(request, capture, *scan, made, write_seconds);
     return 0;
 }
 
 } // namespace
 
 Action add_reconstruct_command(CLI::App& app) {
-    auto args = std::make_shared<ReconstructArgs>();
-    args->smooth.radius = 0;
-    auto* cmd = app.add_subcommand(
-        "reconstruct",
+    const auto [cmd, args, action] = add_command<ReconstructArgs>(
+        app, "reconstruct",
         "Decode a capture set and reconstruct a point cloud with a stereo calibration (SV model, "
         "lens distortion compensated) or a hybrid coefficient table: binary PLY of the valid "
-        "points, optional XYZ TIFF");
+        "points, optional XYZ TIFF",
+        run_reconstruct);
+    args->smooth.radius = 0;
     cmd->add_option("capture", args->capture, "capture set folder (holding capture.yaml)")
         ->required();
     cmd->add_option("--calib", args->calib,
@@ -418,13 +506,12 @@ Action add_reconstruct_command(CLI::App& app) {
                     "px) are left out; 0 = 5 times the noise estimated from the scan")
         ->check(CLI::Range(0.0, 10000.0))
         ->capture_default_str();
-    cmd->add_option("--threads", args->decode.threads, "worker threads (0 = all cores)")
-        ->capture_default_str();
+    add_threads_option(*cmd, args->decode.threads);
     cmd->add_flag("--correct-phase-error", args->decode.correct_phase_error,
                   "remove, from the capture alone, the periodic phase error a non-linear "
                   "projector response leaves, before reconstructing (for captures whose "
                   "response was never measured)");
-    return [args] { return run_reconstruct(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

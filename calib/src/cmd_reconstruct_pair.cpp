@@ -32,14 +32,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void check_output(const fs::path& path, const char* option) {
-    const fs::path folder = path.parent_path();
-    if (!folder.empty() && !fs::is_directory(folder))
-        throw InputError(path, option, "the folder " + folder.string() + " does not exist");
-    if (fs::is_directory(path))
-        throw InputError(path, option, "is a folder");
-}
-
 // Sizes the calibration records must be the captures'; missing ones are taken
 // from the captures (with a note).
 void settle_sizes(CameraPairCalibration& pair, const fs::path& file, const CaptureSet& first,
@@ -69,21 +61,15 @@ void settle_sizes(CameraPairCalibration& pair, const fs::path& file, const Captu
 
 DecodeResult decode_capture(const CaptureSet& capture, const DecodeOptions& options) {
     const fs::path manifest = capture.folder / "capture.yaml";
-    DecodeResult decoded;
-    try {
-        decoded = decode(capture, options);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(manifest, "sequence", e.what());
-    }
+    const DecodeResult decoded = decode(capture, options); // InputError naming the field
     if (decoded.proj_x.empty())
         throw InputError(manifest, "sequence",
                          "codes no projector column (x): two-camera matching needs it");
     return decoded;
 }
 
-} // namespace
-
-int run_reconstruct_pair(const ReconstructPairArgs& args) {
+// The arguments, checked before anything is read.
+void check_pair_arguments(const ReconstructPairArgs& args) {
     args.decode.validate();
     if (!args.table.empty())
         throw InputError("command line", "--table",
@@ -97,12 +83,19 @@ int run_reconstruct_pair(const ReconstructPairArgs& args) {
         throw InputError("command line", "--second-capture",
                          "a camera-camera calibration needs the second camera's capture set");
     const fs::path out = args.out, xyz_out = args.xyz;
-    check_output(out, "--out");
+    check_output_path(out, "--out");
     if (!xyz_out.empty()) {
-        check_output(xyz_out, "--xyz");
+        check_output_path(xyz_out, "--xyz");
         if (fs::weakly_canonical(xyz_out) == fs::weakly_canonical(out))
             throw InputError(xyz_out, "--xyz", "same path as --out");
     }
+}
+
+} // namespace
+
+int run_reconstruct_pair(const ReconstructPairArgs& args) {
+    check_pair_arguments(args);
+    const fs::path out = args.out, xyz_out = args.xyz;
 
     const fs::path calibration_path = args.calibration;
     CameraPairCalibration pair = load_camera_pair(calibration_path);

@@ -6,6 +6,7 @@
 // projector_response.
 
 #include "calibration_outputs.hpp"
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "response_fit.hpp"
 
@@ -38,19 +39,19 @@ int run_response(const ResponseArgs& args) {
 } // namespace
 
 Action add_response_command(CLI::App& app) {
-    auto args = std::make_shared<ResponseArgs>();
-    auto* cmd = app.add_subcommand(
-        "response",
+    const auto [cmd, args, action] = add_command<ResponseArgs>(
+        app, "response",
         "Fit the projector's response (the light of each 8-bit drive level, black level removed, "
         "full light 1) from a ramp of grey levels on the board, and write it "
         "(fpp-projector-response/1) for the board file's projector_response: the scanner then "
-        "renders its patterns through its inverse");
+        "renders its patterns through its inverse",
+        run_response);
     cmd->add_option("ramp", args->input,
                     "a response ramp folder (ramp.yaml) or a calibration session holding one in "
                     "response/")
         ->required();
     cmd->add_option("--out", args->out, "response file to write (YAML)")->required();
-    return [args] { return run_response(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

@@ -1,5 +1,6 @@
 // fpp-calib scanner-pull --scanner URL --token-file FILE --session NAME --out DIR
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "scanner_connection.hpp"
 #include "scanner_pull.hpp"
@@ -24,16 +25,17 @@ int run_scanner_pull(const ScannerPullArgs& args) {
 } // namespace
 
 Action add_scanner_pull_command(CLI::App& app) {
-    auto args = std::make_shared<ScannerPullArgs>();
-    auto* cmd = app.add_subcommand(
-        "scanner-pull", "Download a calibration session recorded on a scanner (GET "
-                        "/api/v1/sessions/NAME/session.tar) into a new session folder for "
-                        "`calibrate`: board.yaml and one folder per pose");
+    const auto [cmd, args, action] = add_command<ScannerPullArgs>(
+        app, "scanner-pull",
+        "Download a calibration session recorded on a scanner (GET "
+        "/api/v1/sessions/NAME/session.tar) into a new session folder for "
+        "`calibrate`: board.yaml and one folder per pose",
+        run_scanner_pull);
     add_scanner_connection_options(*cmd, args->connection);
     cmd->add_option("--session", args->session, "the session's name on the scanner")->required();
     cmd->add_option("--out", args->out, "the session folder to create (must not exist)")
         ->required();
-    return [args] { return run_scanner_pull(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

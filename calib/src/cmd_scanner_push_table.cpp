@@ -1,5 +1,6 @@
 // fpp-calib scanner-push-table --scanner URL --token-file FILE TABLE.fpt
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "scanner_connection.hpp"
 
@@ -78,18 +79,18 @@ int run_scanner_push_table(const ScannerPushTableArgs& args) {
 } // namespace
 
 Action add_scanner_push_table_command(CLI::App& app) {
-    auto args = std::make_shared<ScannerPushTableArgs>();
-    auto* cmd = app.add_subcommand(
-        "scanner-push-table",
+    const auto [cmd, args, action] = add_command<ScannerPushTableArgs>(
+        app, "scanner-push-table",
         "Install a coefficient table (.fpt, from `calibrate` or `hybrid`) on a scanner (PUT "
         "/api/v1/table): the scanner checks it against its camera and display, keeps the "
         "previous one beside it and uses the new one from its next scan; a table it refuses "
-        "changes nothing");
+        "changes nothing",
+        run_scanner_push_table);
     add_scanner_connection_options(*cmd, args->connection);
     cmd->add_option("table", args->table, "the table file (.fpt)")
         ->required()
         ->check(CLI::ExistingFile);
-    return [args] { return run_scanner_push_table(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

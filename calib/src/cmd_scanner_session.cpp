@@ -173,12 +173,12 @@ int run_scanner_session(const ScannerSessionArgs& args) {
 } // namespace
 
 Action add_scanner_session_command(CLI::App& app) {
-    auto args = std::make_shared<ScannerSessionArgs>();
-    auto* cmd = app.add_subcommand(
-        "scanner-session",
+    const auto [cmd, args, action] = add_command<ScannerSessionArgs>(
+        app, "scanner-session",
         "Record a calibration session on a scanner over its HTTP API (one capture-mode scan "
         "per pose, each after Enter is pressed, the board placed), then download it as a "
-        "session folder for `calibrate`, as scanner-pull does");
+        "session folder for `calibrate`, as scanner-pull does",
+        run_scanner_session);
     add_scanner_connection_options(*cmd, args->connection);
     cmd->add_option("--name", args->name,
                     "the session's name on the scanner (1 to 64 of A-Z a-z 0-9 . _ -)")
@@ -200,7 +200,7 @@ Action add_scanner_session_command(CLI::App& app) {
     cmd->add_option("--pose-timeout", args->pose_timeout_s,
                     "seconds a pose's scan may take before the command gives up")
         ->capture_default_str();
-    return [args] { return run_scanner_session(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

@@ -45,9 +45,9 @@ int run_simulate(const SimulateArgs& args) {
 } // namespace
 
 Action add_simulate_command(CLI::App& app) {
-    auto args = std::make_shared<SimulateArgs>();
-    auto* cmd = app.add_subcommand(
-        "simulate", "Render a capture set with ground truth on the virtual scanner");
+    const auto [cmd, args, action] = add_command<SimulateArgs>(
+        app, "simulate", "Render a capture set with ground truth on the virtual scanner",
+        run_simulate);
     cmd->add_option("--rig", args->rig, "rig YAML file (board/sim/*.yaml)")
         ->capture_default_str()
         ->check(CLI::ExistingFile);
@@ -64,7 +64,7 @@ Action add_simulate_command(CLI::App& app) {
         ->check(CLI::Range(1, 8));
     cmd->add_flag("--no-effects", args->no_effects,
                   "switch off every effect outside the stereo model, and noise");
-    return [args] { return run_simulate(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

@@ -92,16 +92,16 @@ int run_simulate_session(const SimulateSessionArgs& args) {
 } // namespace
 
 Action add_simulate_session_command(CLI::App& app) {
-    auto args = std::make_shared<SimulateSessionArgs>();
-    auto* cmd = app.add_subcommand(
-        "simulate-session",
+    const auto [cmd, args, action] = add_command<SimulateSessionArgs>(
+        app, "simulate-session",
         "Render a calibration session on the virtual scanner: board.yaml, one capture set per "
         "board pose (pose-01, ...) and the projector's response ramp at the first pose "
         "(response/), poses spread through the calibration volume (400-560 mm, tilts "
         "up to ~28 deg), each fully visible to camera and projector. Checkerboard: 11 x 8 inner "
         "corners of 15 mm in the middle of a 420 x 375 mm white board (one session for the "
         "stereo calibration and the hybrid table); plane: a white board filling the field (the "
-        "paper's hybrid session)");
+        "paper's hybrid session)",
+        run_simulate_session);
     cmd->add_option("--kind", args->kind,
                     "checkerboard (stereo calibration and hybrid table) or plane (the paper's "
                     "hybrid session)")
@@ -124,7 +124,7 @@ Action add_simulate_session_command(CLI::App& app) {
     cmd->add_option("--read-noise", args->read_noise, "override the rig's read noise (DN)");
     cmd->add_flag("--no-effects", args->no_effects,
                   "switch off every effect outside the stereo model, and noise");
-    return [args] { return run_simulate_session(*args); };
+    return action;
 }
 
 } // namespace fpp::calib

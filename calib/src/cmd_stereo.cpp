@@ -87,15 +87,15 @@ int run_stereo(const StereoArgs& args) {
 } // namespace
 
 Action add_stereo_command(CLI::App& app) {
-    auto args = std::make_shared<StereoArgs>();
-    auto* cmd = app.add_subcommand(
-        "stereo",
+    const auto [cmd, args, action] = add_command<StereoArgs>(
+        app, "stereo",
         "Stereo-calibrate camera and projector from a session folder (board.yaml with kind "
         "checkerboard and one capture set per pose, phase in x and y): corners on the white frame "
         "(or the phase frames), their projector coordinates from the absolute phase, then a "
         "bundle adjustment with skew and dense correction grids: by default the camera alone from "
         "its corners (so the boards are placed by the camera), then the projector from the "
-        "corners and dense samples of the boards' white parts");
+        "corners and dense samples of the boards' white parts",
+        run_stereo);
     cmd->add_option("session", args->session, "session folder")->required();
     cmd->add_option("--out", args->out, "calibration file to write (YAML)")->required();
     cmd->add_option(
@@ -131,9 +131,8 @@ Action add_stereo_command(CLI::App& app) {
     cmd->add_option("--projector-grid", args->projector_grid,
                     "the same for the projector")
         ->capture_default_str();
-    cmd->add_option("--threads", args->threads, "decoder threads (0 = all cores)")
-        ->capture_default_str();
-    return [args] { return run_stereo(*args); };
+    add_threads_option(*cmd, args->threads);
+    return action;
 }
 
 } // namespace fpp::calib

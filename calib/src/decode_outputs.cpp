@@ -49,11 +49,15 @@ std::string fixed(double v, int digits) {
 void check_decode_options(const DecodeOptions& options) {
     try {
         options.validate();
-    } catch (const std::invalid_argument& e) {
-        const std::string what = e.what();
-        const char* option = what.find("min_modulation") != std::string::npos ? "--min-modulation"
-                             : what.find("threads") != std::string::npos       ? "--threads"
-                                                                               : "decode options";
+    } catch (const InputError& e) { // the field of DecodeOptions: name the option instead
+        const std::string& field = e.field();
+        const std::string option = field == "min_modulation" ? "--min-modulation"
+                                   : field == "threads"      ? "--threads"
+                                                             : "decode options: " + field;
+        std::string what = e.what();
+        const std::string prefix = e.file().string() + ": " + field + ": ";
+        if (what.starts_with(prefix))
+            what.erase(0, prefix.size());
         throw InputError("command line", option, what);
     }
 }

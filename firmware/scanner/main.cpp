@@ -13,7 +13,9 @@
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/scanner_service.hpp"
 #include "fpp/scanner/settings_file.hpp"
+#if FPP_SCANNER_SIM
 #include "fpp/scanner/sim_board.hpp"
+#endif
 
 #include <CLI/CLI.hpp>
 
@@ -91,7 +93,8 @@ void apply_settings_file(fpp::scanner::BoardConfig& board, fpp::drivers::Camera&
 void remove_interrupted_writes_at_start(const fpp::scanner::BoardConfig& board,
                                         const std::optional<std::filesystem::path>& table_path,
                                         const fpp::scanner::Logger& log) {
-    std::vector<std::string> removed = fpp::scanner::remove_interrupted_scans(board.store.directory);
+    std::vector<std::string> removed =
+        fpp::scanner::remove_interrupted_scans(board.store.directory);
     for (const auto& file : {table_path, board.settings_file})
         if (file)
             for (const auto& name : fpp::remove_interrupted_writes(
@@ -110,6 +113,15 @@ void remove_interrupted_writes_at_start(const fpp::scanner::BoardConfig& board,
 int run(const Options& o, const fpp::scanner::Logger& log) {
     using namespace fpp::scanner;
     BoardConfig board = read_board_config(o.board);
+#if !FPP_SCANNER_SIM
+    // The device binary (FPP_SCANNER_SIM OFF) has no virtual scanner: a sim
+    // board is refused before anything is touched.
+    if (board.sim)
+        throw fpp::InputError(board.file, "sim",
+                              "this fpp-scanner was built without the virtual scanner "
+                              "(FPP_SCANNER_SIM=OFF), so it runs hardware boards only (a board "
+                              "file without a sim section)");
+#endif
     apply_options(o, board);
     const ScanMode mode = o.mode == "capture" ? ScanMode::capture : ScanMode::scan;
     const int scans = o.scans > 0 ? o.scans : (o.once ? 1 : 0);
@@ -129,12 +141,19 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
     }
     // A board file with a sim section is the virtual scanner; without one
     // the hardware. Devices that cannot be opened throw DeviceError.
-    std::unique_ptr<SimBoard> sim;
     std::unique_ptr<HardwareBoard> hardware;
+    std::optional<Devices> opened;
+    std::string session_board_yaml; // a simulated session board's own
+#if FPP_SCANNER_SIM
+    std::unique_ptr<SimBoard> sim;
     if (board.sim) {
         sim = std::make_unique<SimBoard>(board, log);
         sim->limit_records(SimBoard::kDaemonRecordLimit);
-    } else {
+        opened.emplace(sim->devices());
+        session_board_yaml = sim->session_board_yaml();
+    } else
+#endif
+    {
         hardware = std::make_unique<HardwareBoard>(board);
         // As a service the scanner waits for a camera that does not answer
         // yet (LED in error); --once and --scans fail at once.
@@ -146,8 +165,9 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
             log.info("stopped while waiting for the camera");
             return 0;
         }
+        opened.emplace(hardware->devices());
     }
-    Devices devices = sim ? sim->devices() : hardware->devices();
+    Devices devices = *opened;
     apply_settings_file(board, devices.camera);
     // Lines and display are released by the destructors, on every path.
     try {
@@ -171,8 +191,8 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
                 std::fflush(stdout);
             }
         } else {
-            const ServiceOptions options{table_path, board.settings_file,
-                                         sim ? sim->session_board_yaml() : "", sim != nullptr};
+            const ServiceOptions options{table_path, board.settings_file, session_board_yaml,
+                                         board.sim.has_value()};
             if (serving) {
                 NetworkFace face(board, scanner, devices, log, options);
                 face.run(mode, g_stop);

@@ -7,11 +7,14 @@
 # verify, exposure at most 2.0, the API's port the only one it may bind) and
 # its user and udev rule, and maintainer scripts that do not enable anything
 # and make the API's token once (run with DPKG_ROOT in a scratch root, the
-# commands that would touch this machine replaced by stubs).
-# Usage: check_deb.sh BUILD_DIR DEB_ARCH
+# commands that would touch this machine replaced by stubs). The sim boards
+# and their rigs are shipped only with a binary that has the virtual scanner
+# (FPP_SCANNER_SIM ON: with-sim); the device build (without-sim) has none.
+# Usage: check_deb.sh BUILD_DIR DEB_ARCH [with-sim|without-sim]
 set -euo pipefail
 build="$1"
 arch="$2"
+sim="${3:-with-sim}"
 source_dir="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
@@ -35,10 +38,21 @@ contents="$(dpkg-deb -c "$deb")"
 for path in ./usr/bin/fpp-scanner ./etc/fpp-scanner/board.yaml \
             ./lib/systemd/system/fpp-scanner.service ./usr/lib/sysusers.d/fpp-scanner.conf \
             ./lib/udev/rules.d/60-fpp-scanner-gpio.rules \
-            ./usr/share/fpp-scanner/boards/rpi5.yaml ./usr/share/fpp-scanner/boards/rock5b.yaml \
-            ./usr/share/fpp-scanner/boards/sim.yaml ./usr/share/fpp-scanner/boards/sim/paper-rig-effects.yaml; do
+            ./usr/share/fpp-scanner/boards/rpi5.yaml ./usr/share/fpp-scanner/boards/rock5b.yaml; do
   grep -q " $path$" <<< "$contents" || fail "$path not in the package"
 done
+sim_boards="./usr/share/fpp-scanner/boards/sim.yaml ./usr/share/fpp-scanner/boards/sim/paper-rig-effects.yaml"
+case "$sim" in
+  with-sim)
+    for path in $sim_boards; do
+      grep -q " $path$" <<< "$contents" || fail "$path not in the package"
+    done ;;
+  without-sim)
+    grep -q " ./usr/share/fpp-scanner/boards/sim" <<< "$contents" &&
+      fail "sim boards in the package of a binary without the virtual scanner"
+    echo "no sim boards (fpp-scanner built without the virtual scanner)" ;;
+  *) fail "third argument: with-sim or without-sim, not '$sim'" ;;
+esac
 grep -q "fpp-calib" <<< "$contents" && fail "the host tool does not belong on the device"
 # The page, file for file as in the source tree, where the daemon looks for
 # it (<bindir>/../share/fpp-scanner/web).

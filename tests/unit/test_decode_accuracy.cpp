@@ -1,4 +1,5 @@
 #include "fpp/decode_accuracy.hpp"
+#include "fpp/error.hpp"
 #include "fpp/false_colour.hpp"
 
 #include <gtest/gtest.h>
@@ -36,9 +37,9 @@ TEST(DecodeAccuracy, SeparatesUnwrappingErrorsFromNoise) {
 TEST(DecodeAccuracy, RejectsMismatchedImages) {
     fpp::Image<float> truth(10, 10, 2);
     fpp::Image<float> decoded(9, 10, 1);
-    EXPECT_THROW(fpp::compare_to_truth(decoded, truth, 0, 20.0), std::invalid_argument);
+    EXPECT_THROW(fpp::compare_to_truth(decoded, truth, 0, 20.0), fpp::InputError);
     fpp::Image<float> same(10, 10, 1);
-    EXPECT_THROW(fpp::compare_to_truth(same, truth, 2, 20.0), std::invalid_argument);
+    EXPECT_THROW(fpp::compare_to_truth(same, truth, 2, 20.0), fpp::InputError);
 }
 
 TEST(FalseColour, NaNIsBlackAndRampEndsDiffer) {

@@ -7,6 +7,7 @@
 
 #include "fpp/decode_diagnosis.hpp"
 #include "fpp/decode_report.hpp"
+#include "fpp/error.hpp"
 #include "fpp/patterns.hpp"
 #include "fpp/sequences.hpp"
 
@@ -192,8 +193,8 @@ TEST(DecodeStatistics, WithoutDarkPixelsTheFloorIsOnePercentOfFullScale) {
     EXPECT_DOUBLE_EQ(s.lit_floor, 40.95);
     EXPECT_EQ(s.lit, 2000u);
     EXPECT_EQ(s.decoded, 2000u);
-    EXPECT_THROW(fpp::decode_statistics(r, 0.0), std::invalid_argument);
-    EXPECT_THROW(fpp::decode_statistics(DecodeResult{}, 255.0), std::invalid_argument);
+    EXPECT_THROW(fpp::decode_statistics(r, 0.0), fpp::InputError);
+    EXPECT_THROW(fpp::decode_statistics(DecodeResult{}, 255.0), fpp::InputError);
 }
 
 TEST(DecodeStatistics, FusedResultCountsPixelsLitInAnyPass) {

@@ -238,8 +238,19 @@ std::string method_of(const fpp::Sequence& sequence) {
 std::string refusal(const fpp::Sequence& sequence) {
     try {
         fpp::detail::make_plan(sequence, {64, 40}, {1280, 800});
-    } catch (const std::invalid_argument& e) {
+    } catch (const fpp::InputError& e) {
         return e.what();
+    }
+    return "accepted";
+}
+
+// The file and field of a refusal, for a plan made for `origin`.
+std::string refused_field(const fpp::Sequence& sequence, const std::string& origin,
+                          fpp::Size projector = {1280, 800}) {
+    try {
+        fpp::detail::make_plan(sequence, {64, 40}, projector, origin);
+    } catch (const fpp::InputError& e) {
+        return e.file().string() + " | " + e.field();
     }
     return "accepted";
 }
@@ -305,6 +316,39 @@ TEST(DecodePlanFamilies, RefusalsNameTheBlockAndReason) {
     levels.levels = 4;
     EXPECT_NE(refusal({fpp::WhiteBlock{}, fpp::BlackBlock{}, levels}).find("at most 65536"),
               std::string::npos);
+}
+
+// A refusal names the manifest the plan is for (else the decoder) and the
+// field as the capture-set reader does: the block's place in the sequence.
+TEST(DecodePlanFamilies, RefusalsNameTheManifestAndTheField) {
+    const std::string manifest = "scans/plane/capture.yaml";
+    fpp::PhaseBlock two_plus_one = phase_block(1280, 4);
+    two_plus_one.shifting = fpp::PhaseShifting::two_plus_one;
+    EXPECT_EQ(refused_field({fpp::WhiteBlock{}, two_plus_one}, manifest),
+              manifest + " | sequence[1].steps");
+    fpp::GrayBlock wrapping = gray_block(40, 5);
+    wrapping.complementary = true;
+    wrapping.wrap = true;
+    EXPECT_EQ(refused_field({phase_block(40, 4), wrapping}, manifest),
+              manifest + " | sequence[1].wrap");
+    EXPECT_EQ(refused_field({phase_block(20, 8), phase_block(20, 4)}, manifest),
+              manifest + " | sequence[1].period");
+    EXPECT_EQ(refused_field({phase_block(20, 8), phase_block(22, 8)}, manifest),
+              manifest + " | sequence");
+    EXPECT_EQ(refused_field({phase_block(1280, 4)}, manifest, {0, 800}), manifest + " | projector");
+    try {
+        fpp::detail::make_plan({phase_block(20, 8)}, {64, 40}, {1280, 800});
+        ADD_FAILURE() << "accepted a phase block without a cue";
+    } catch (const fpp::InputError& e) {
+        EXPECT_EQ(e.file(), std::filesystem::path(fpp::kDecoderOrigin));
+        EXPECT_EQ(e.field(), "sequence[0].period");
+        EXPECT_EQ(
+            std::string(e.what()).rfind("decoder: sequence[0].period: cannot decode sequence: "
+                                        "the phase block on axis x",
+                                        0),
+            0u)
+            << e.what();
+    }
 }
 
 } // namespace

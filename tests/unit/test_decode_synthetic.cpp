@@ -732,21 +732,30 @@ TEST(DecodeApi, PushRejectsBadFrames) {
         fpp::StreamingDecoder d(set.manifest.sequence, s.camera, s.projector);
         Frame wrong_size;
         wrong_size.u8 = Image<std::uint8_t>(s.camera.width - 1, s.camera.height);
-        EXPECT_THROW(d.push(wrong_size), std::invalid_argument);
+        EXPECT_THROW(d.push(wrong_size), fpp::InputError);
         Frame twelve = set.frames[0];
         twelve.bit_depth = 12;
-        EXPECT_THROW(d.push(twelve), std::invalid_argument);
+        EXPECT_THROW(d.push(twelve), fpp::InputError);
         Frame empty;
-        EXPECT_THROW(d.push(empty), std::invalid_argument);
+        EXPECT_THROW(d.push(empty), fpp::InputError);
         Frame two_channels;
         two_channels.u8 = Image<std::uint8_t>(s.camera, 2);
-        EXPECT_THROW(d.push(two_channels), std::invalid_argument);
+        EXPECT_THROW(d.push(two_channels), fpp::InputError);
         EXPECT_EQ(d.frames_received(), 0);
         d.push(set.frames[0]);
         Frame deep;
         deep.bit_depth = 16;
         deep.u16 = Image<std::uint16_t>(s.camera);
-        EXPECT_THROW(d.push(deep), std::invalid_argument);
+        try {
+            d.push(deep);
+            ADD_FAILURE() << "accepted a 16-bit frame after an 8-bit one";
+        } catch (const fpp::InputError& e) { // no file: the decoder, and the frame's field
+            EXPECT_EQ(e.file(), std::filesystem::path(fpp::kDecoderOrigin));
+            EXPECT_EQ(e.field(), "frames[1]");
+            EXPECT_NE(std::string(e.what()).find("differs from the first frame's 8"),
+                      std::string::npos)
+                << e.what();
+        }
         EXPECT_EQ(d.frames_received(), 1);
         EXPECT_EQ(d.frames_expected(), static_cast<int>(set.frames.size()));
         EXPECT_THROW(d.finish(), std::logic_error);
@@ -755,7 +764,7 @@ TEST(DecodeApi, PushRejectsBadFrames) {
         fpp::StreamingDecoder d(set.manifest.sequence, s.camera, s.projector);
         for (const auto& f : set.frames)
             d.push(f);
-        EXPECT_THROW(d.push(set.frames[0]), std::invalid_argument);
+        EXPECT_THROW(d.push(set.frames[0]), fpp::InputError);
         const DecodeResult r = d.finish();
         EXPECT_FALSE(r.proj_x.empty());
         EXPECT_THROW(d.finish(), std::logic_error);
@@ -764,10 +773,17 @@ TEST(DecodeApi, PushRejectsBadFrames) {
     {
         CaptureSet missing = set;
         missing.frames.pop_back();
-        EXPECT_THROW(fpp::decode(missing), std::invalid_argument);
+        EXPECT_THROW(fpp::decode(missing), fpp::InputError);
         CaptureSet mixed = set;
         mixed.frames[3] = Frame{16, {}, Image<std::uint16_t>(s.camera)};
-        EXPECT_THROW(fpp::decode(mixed), std::invalid_argument);
+        mixed.folder = "scans/plane";
+        try {
+            (void)fpp::decode(mixed);
+            ADD_FAILURE() << "accepted frames of mixed bit depths";
+        } catch (const fpp::InputError& e) { // the capture's manifest, and the frame
+            EXPECT_EQ(e.file(), std::filesystem::path("scans/plane/capture.yaml"));
+            EXPECT_EQ(e.field(), "frames[3]");
+        }
     }
 }
 
@@ -787,7 +803,7 @@ TEST(DecodeApi, OptionsValidation) {
     auto bad = [](auto mutate) {
         DecodeOptions o;
         mutate(o);
-        EXPECT_THROW(o.validate(), std::invalid_argument);
+        EXPECT_THROW(o.validate(), fpp::InputError);
     };
     bad([](DecodeOptions& o) { o.min_modulation = -0.01; });
     bad([](DecodeOptions& o) { o.min_modulation = 1.0; });
@@ -805,15 +821,22 @@ TEST(DecodeApi, OptionsValidation) {
         o.saturation = 2.0;
         o.validate();
         FAIL() << "no exception";
-    } catch (const std::invalid_argument& e) {
+    } catch (const fpp::InputError& e) {
         EXPECT_NE(std::string(e.what()).find("saturation"), std::string::npos);
+        EXPECT_EQ(e.file(), std::filesystem::path(fpp::kDecodeOptionsOrigin));
+        EXPECT_EQ(e.field(), "saturation");
+    }
+    {
+        DecodeOptions o; // phase_error's own check, as the decoder's InputError
+        o.phase_error.harmonics = 0;
+        EXPECT_THROW(o.validate(), fpp::InputError);
     }
     DecodeOptions o;
     o.threads = -3;
     const Synth s = Synth::standard();
     EXPECT_THROW(fpp::StreamingDecoder(small_sequence(), s.camera, s.projector, o),
-                 std::invalid_argument);
-    EXPECT_THROW(fpp::decode(s.capture(small_sequence()), o), std::invalid_argument);
+                 fpp::InputError);
+    EXPECT_THROW(fpp::decode(s.capture(small_sequence()), o), fpp::InputError);
 }
 
 TEST(DecodeApi, UndecodableSequencesThrow) {
@@ -822,8 +845,9 @@ TEST(DecodeApi, UndecodableSequencesThrow) {
         try {
             fpp::StreamingDecoder d(seq, cam, proj);
             ADD_FAILURE() << "accepted a sequence that should fail with: " << fragment;
-        } catch (const std::invalid_argument& e) {
+        } catch (const fpp::InputError& e) {
             EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+            EXPECT_EQ(e.file(), std::filesystem::path(fpp::kDecoderOrigin));
         }
     };
     rejects({fpp::WhiteBlock{}, fpp::BlackBlock{}}, "no phase block");

@@ -300,9 +300,9 @@ TEST(PhaseErrorCorrection, RefusesBadOptionsAndBlocks) {
                  std::invalid_argument);
     EXPECT_THROW(fpp::estimate_phase_error(m.decoded, fpp::Image<std::uint8_t>(10, 10), b),
                  std::invalid_argument);
-    fpp::DecodeOptions d;
+    fpp::DecodeOptions d; // the decoder's options name the field as an InputError
     d.phase_error.harmonics = 99;
-    EXPECT_THROW(d.validate(), std::invalid_argument);
+    EXPECT_THROW(d.validate(), fpp::InputError);
 }
 
 // ---------------------------------------------------------------------------

@@ -22,3 +22,10 @@ require_arm64_scanner() {
   [ -x "$scanner" ] || skip "no cross-built $scanner (cmake --workflow --preset aarch64)"
   readelf -h "$scanner" | grep -q 'Machine:.*AArch64' || skip "$scanner is not an AArch64 build"
 }
+# The name, in build folder $1, of the scanner that runs sim boards:
+# fpp-scanner, or fpp-scanner-sim where fpp-scanner is the device binary
+# built without the virtual scanner (FPP_SCANNER_SIM OFF, preset aarch64;
+# toolchain/vm/run-vm.sh --build puts both in the guest's /fpp/bin).
+sim_scanner_name() {
+  if [ -x "$1/firmware/scanner/fpp-scanner-sim" ]; then echo fpp-scanner-sim; else echo fpp-scanner; fi
+}

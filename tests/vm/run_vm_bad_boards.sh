@@ -5,6 +5,10 @@
 # GPIO chip that do not exist.
 # Each must stop fpp-scanner at start with exit 1 and an error naming what is
 # wrong; then the good board must still scan (nothing was left claimed).
+# These boards simulate the camera (sim.camera_only): where fpp-scanner is
+# the device binary without the virtual scanner (preset aarch64) they run
+# on fpp-scanner-sim, and fpp-scanner itself must refuse the good board
+# (exit 1, the board file named) before it claims anything.
 # Usage: tests/vm/run_vm_bad_boards.sh [AARCH64_BUILD]
 # Exit status: 0 passed, 1 failed, 77 skipped (as tests/vm/run_vm_scan.sh).
 set -euo pipefail
@@ -34,7 +38,9 @@ variant no-such-mode 'mode: 1280x800' 'mode: 1234x567'
 variant no-such-card 'card: auto' 'card: /dev/dri/card7'
 variant no-such-connector 'connector: auto' 'connector: HDMI-A-9'
 variant no-such-chip '  chip: gpiochip0' '  chip: gpiochip7'
-cat > "$files/bad-boards.sh" << 'GUEST'
+scanner=$(sim_scanner_name "$build")
+echo "scanner=$scanner" > "$files/bad-boards.sh"
+cat >> "$files/bad-boards.sh" << 'GUEST'
 # In the guest: each case's exit status and first error line, then the good
 # board's capture scan.
 run() { # NAME [holder command...]
@@ -45,7 +51,7 @@ run() { # NAME [holder command...]
     i=0
     while ! gpioinfo gpiochip0 | grep -q '"gpioset"' && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
   fi
-  fpp-scanner --board "$name.yaml" --once --mode capture --store /out/scans-$name \
+  $scanner --board "$name.yaml" --once --mode capture --store /out/scans-$name \
     > /dev/null 2> /out/$name.log
   echo "$name $? $(grep -m 1 '^error: ' /out/$name.log)" >> /out/results.txt
   if [ -n "${holder:-}" ]; then kill $holder; wait $holder 2> /dev/null; holder=; fi
@@ -56,7 +62,11 @@ run no-such-mode
 run no-such-card
 run no-such-connector
 run no-such-chip
-fpp-scanner --board good.yaml --once --mode capture --store /out/scans-good > /dev/null 2> /out/good.log
+if [ "$scanner" != fpp-scanner ]; then
+  fpp-scanner --board good.yaml --once --mode capture --store /out/scans-device > /dev/null 2> /out/device.log
+  echo "device $? $(grep -m 1 '^error: ' /out/device.log)" >> /out/results.txt
+fi
+$scanner --board good.yaml --once --mode capture --store /out/scans-good > /dev/null 2> /out/good.log
 echo "good $?" >> /out/results.txt
 GUEST
 status=0
@@ -85,5 +95,7 @@ expect no-such-mode "1234x567"
 expect no-such-card "/dev/dri/card7"
 expect no-such-connector "HDMI-A-9"
 expect no-such-chip "gpiochip7"
+[ "$scanner" = fpp-scanner ] ||
+  expect device "good.yaml: sim: " "built without the virtual scanner"
 grep -qx "good 0" "$results" || { cat "$work/out/good.log"; fail "the good board did not scan after the failures"; }
 echo "run_vm_bad_boards: PASSED"

@@ -16,11 +16,11 @@ set -euo pipefail
 source_dir=$(cd "$(dirname "$0")/../.." && pwd)
 host="$1"
 build="${2:-$source_dir/build/aarch64}"
-scanner="$host/firmware/scanner/fpp-scanner"
 calib="$host/calib/fpp-calib"
 test_name=run_vm_board_scan
 # shellcheck source=tests/vm/common.sh
 source "$source_dir/tests/vm/common.sh"
+scanner="$host/firmware/scanner/$(sim_scanner_name "$host")"
 { [ -x "$scanner" ] && [ -x "$calib" ]; } || skip "no host tools in $host"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-board.XXXXXX")

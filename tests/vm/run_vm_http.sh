@@ -42,15 +42,17 @@ done
 [ ${#positional[@]} -ge 1 ] || { echo "usage: $0 HOST_BUILD [AARCH64_BUILD] [--keep DIR]" >&2; exit 2; }
 host="${positional[0]}"
 [ ${#positional[@]} -lt 2 ] || build="${positional[1]}"
-scanner="$host/firmware/scanner/fpp-scanner"
 calib="$host/calib/fpp-calib"
 test_name=run_vm_http
 # shellcheck source=tests/vm/common.sh
 source "$source_dir/tests/vm/common.sh"
+scanner="$host/firmware/scanner/$(sim_scanner_name "$host")"
 require_vm
 require_arm64_scanner "$build"
-readelf -d "$build/firmware/scanner/fpp-scanner" | grep -q 'libmicrohttpd' ||
-  skip "$build/firmware/scanner/fpp-scanner has no HTTP API (rebuild: cmake --workflow --preset aarch64)"
+# The guest's scanner runs the sim board: fpp-scanner-sim beside a device build's.
+guest_scanner=$(sim_scanner_name "$build")
+readelf -d "$build/firmware/scanner/$guest_scanner" | grep -q 'libmicrohttpd' ||
+  skip "$build/firmware/scanner/$guest_scanner has no HTTP API (rebuild: cmake --workflow --preset aarch64)"
 { [ -x "$scanner" ] && [ -x "$calib" ]; } || skip "no host tools in $host"
 command -v curl > /dev/null || skip "curl not installed"
 three=/usr/share/javascript/three
@@ -130,7 +132,7 @@ EOF
   --tree "$web=/fpp/share/fpp-scanner/web" --tree "$three=$three" \
   --tree "$work/etc=/etc/fpp-scanner" --tree "$work/state=/var/lib/fpp-scanner" \
   --collect /var/lib/fpp-scanner \
-  -- sh until-stopped.sh fpp-scanner --board board.yaml > "$work/run-vm.out" 2> "$work/run-vm.err" &
+  -- sh until-stopped.sh "$guest_scanner" --board board.yaml > "$work/run-vm.out" 2> "$work/run-vm.err" &
 vm_pid=$!
 show_console() { echo "--- guest console:"; grep -v '^fpp-vm-init: gpio line' "$out/console.log" || true; }
 listening=""

@@ -68,7 +68,11 @@ else
   cp -rL "$(dirname "$board")/." "$files/"
   board_name=$(basename "$board")
 fi
-scanner_args=(fpp-scanner --board "$board_name" --mode "$mode" --store /out/scans)
+# A hardware board runs on the device binary; a sim board on the scanner
+# with the virtual scanner (fpp-scanner-sim beside a device build's).
+scanner=fpp-scanner
+! grep -q '^sim:' "$files/$board_name" || scanner=$(sim_scanner_name "$build")
+scanner_args=("$scanner" --board "$board_name" --mode "$mode" --store /out/scans)
 if [ -n "$table" ]; then
   cp "$table" "$files/table.fpt"
   scanner_args+=(--table table.fpt)
@@ -116,7 +120,7 @@ case "$status" in
   0) ;;
   124) show_console; fail "the VM did not finish within $timeout_s s" ;;
   125) show_console; fail "the VM could not run the scanner" ;;
-  *) show_console; fail "fpp-scanner exited with status $status in the guest" ;;
+  *) show_console; fail "$scanner exited with status $status in the guest" ;;
 esac
 
 # Exactly one scan folder, complete.

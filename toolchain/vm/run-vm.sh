@@ -15,7 +15,9 @@
 #                    forwarded ports from the host's 127.0.0.1
 #
 # Usage: run-vm.sh [options] -- COMMAND [ARG...]
-#   --build DIR       cross build folder: adds DIR/firmware/scanner/fpp-scanner
+#   --build DIR       cross build folder: adds DIR/firmware/scanner/fpp-scanner,
+#                     and fpp-scanner-sim when there (the same with the virtual
+#                     scanner, for sim boards: a device build's has none)
 #   --bin FILE        another arm64 executable for /fpp/bin (on PATH); repeatable
 #   --lib-dir DIR     searched first for their shared libraries (e.g. the cross
 #                     compiler's /usr/aarch64-linux-gnu/lib for libasan); repeatable
@@ -103,6 +105,7 @@ if [ -n "$build" ]; then
   scanner="$build/firmware/scanner/fpp-scanner"
   [ -x "$scanner" ] || { echo "run-vm: $scanner not found (build the cross build first)" >&2; exit 125; }
   bins=("$scanner" "${bins[@]}")
+  [ ! -x "$scanner-sim" ] || bins=("$scanner-sim" "${bins[@]}")
 fi
 [ "$fake_camera" -eq 0 ] || bins+=("$cache/root/usr/bin/arv-fake-gv-camera-0.8")
 

@@ -217,9 +217,11 @@ Vec3 euler_deg_from_rotation(const Mat3& R) {
     return {a * 180 / kPi, b * 180 / kPi, c * 180 / kPi};
 }
 
-std::string calibration_summary(const SessionResult& r, const HeldOutCheck* held_out) {
-    const StereoCalibration& c = r.stereo.calibration;
-    std::ostringstream s;
+namespace {
+
+// summary.md's sections, in order.
+
+void session_section(std::ostream& s, const SessionResult& r) {
     s << "# Stereo calibration\n\n";
     s << "Session: `" << r.folder.string() << "`  \n";
     s << "Board: " << r.board.inner_columns << " x " << r.board.inner_rows << " inner corners, "
@@ -232,7 +234,10 @@ std::string calibration_summary(const SessionResult& r, const HeldOutCheck* held
     s << "Poses: " << r.poses.size() << " found, " << usable
       << " usable; projector coordinates of the corners by `" << to_string(r.method) << "`; skew "
       << (r.stereo.skew_estimated ? "estimated" : "fixed at 0") << "\n\n";
+}
 
+void reprojection_section(std::ostream& s, const SessionResult& r) {
+    const StereoCalibration& c = r.stereo.calibration;
     s << "## Reprojection error\n\n| | camera RMS (px) | projector RMS (px) |\n|---|---:|---:|\n";
     s << "| OpenCV initialisation (per device, skew 0) | " << fmt(r.stereo.initial_camera_rms, 4)
       << " | " << fmt(r.stereo.initial_projector_rms, 4) << " |\n";
@@ -269,7 +274,10 @@ std::string calibration_summary(const SessionResult& r, const HeldOutCheck* held
           << ", projector residual RMS " << fmt(r.stereo.dense_rms, 4) << " px.\n";
     }
     s << "\n";
+}
 
+void poses_section(std::ostream& s, const SessionResult& r) {
+    const StereoCalibration& c = r.stereo.calibration;
     s << "## Poses\n\n| pose | finder | texture | projector corners | camera RMS (px) | projector "
          "RMS (px) | "
          "status |\n|---|---|---|---:|---:|---:|---|\n";
@@ -297,7 +305,12 @@ std::string calibration_summary(const SessionResult& r, const HeldOutCheck* held
             s << "used";
         s << " |\n";
     }
+}
 
+// The intrinsics, then camera to projector.
+void parameters_section(std::ostream& s, const SessionResult& r) {
+    const StereoCalibration& c = r.stereo.calibration;
+    const bool skew_on = r.stereo.skew_estimated;
     s << "\n## Intrinsics\n\n"
       << lens_rows(c.camera, r.stereo.camera_sigma, c.projector, r.stereo.projector_sigma);
     if (r.other_skew) {
@@ -319,64 +332,81 @@ std::string calibration_summary(const SessionResult& r, const HeldOutCheck* held
       << ", " << fmt(centre[2], 2) << " mm (baseline "
       << fmt(std::sqrt(centre[0] * centre[0] + centre[1] * centre[1] + centre[2] * centre[2]), 2)
       << " mm)\n";
+}
 
+// Only for sessions with ground truth (simulated).
+void corner_truth_section(std::ostream& s, const SessionResult& r) {
     bool truth = false;
     for (const SessionPose& p : r.poses)
         truth = truth || p.truth_rms[0] >= 0;
-    if (truth) {
-        s << "\n## Projector corner methods against ground truth\n\n"
-             "RMS distance (projector px) between each method's projector coordinate of a corner "
-             "and the "
-             "simulator's truth_proj at the detected camera corner.\n\n"
-             "| pose | poly | bilinear | homography |\n|---|---:|---:|---:|\n";
-        std::array<double, kCornerMethods> sum{};
-        std::array<int, kCornerMethods> count{};
-        for (const SessionPose& p : r.poses) {
-            if (p.truth_rms[0] < 0)
-                continue;
-            s << "| " << p.name;
-            for (int m = 0; m < kCornerMethods; ++m) {
-                const double v = p.truth_rms[static_cast<std::size_t>(m)];
-                s << " | " << fmt(v, 4);
-                if (v >= 0) {
-                    sum[static_cast<std::size_t>(m)] += v * v * p.truth_points;
-                    count[static_cast<std::size_t>(m)] += p.truth_points;
-                }
+    if (!truth)
+        return;
+    s << "\n## Projector corner methods against ground truth\n\n"
+         "RMS distance (projector px) between each method's projector coordinate of a corner "
+         "and the "
+         "simulator's truth_proj at the detected camera corner.\n\n"
+         "| pose | poly | bilinear | homography |\n|---|---:|---:|---:|\n";
+    std::array<double, kCornerMethods> sum{};
+    std::array<int, kCornerMethods> count{};
+    for (const SessionPose& p : r.poses) {
+        if (p.truth_rms[0] < 0)
+            continue;
+        s << "| " << p.name;
+        for (int m = 0; m < kCornerMethods; ++m) {
+            const double v = p.truth_rms[static_cast<std::size_t>(m)];
+            s << " | " << fmt(v, 4);
+            if (v >= 0) {
+                sum[static_cast<std::size_t>(m)] += v * v * p.truth_points;
+                count[static_cast<std::size_t>(m)] += p.truth_points;
             }
-            s << " |\n";
         }
-        s << "| all";
-        for (int m = 0; m < kCornerMethods; ++m)
-            s << " | **"
-              << fmt(count[static_cast<std::size_t>(m)]
-                         ? std::sqrt(sum[static_cast<std::size_t>(m)] /
-                                     count[static_cast<std::size_t>(m)])
-                         : -1,
-                     4)
-              << "**";
         s << " |\n";
     }
+    s << "| all";
+    for (int m = 0; m < kCornerMethods; ++m)
+        s << " | **"
+          << fmt(count[static_cast<std::size_t>(m)] ? std::sqrt(sum[static_cast<std::size_t>(m)] /
+                                                                count[static_cast<std::size_t>(m)])
+                                                    : -1,
+                 4)
+          << "**";
+    s << " |\n";
+}
 
-    if (held_out) {
-        s << "\n## Held-out poses\n\nEach pose left out in turn, the pair calibrated from the "
-             "others, the left-out board's corners measured by SV (x and y) and compared with "
-             "the board: rigid fit RMS (3D, mm), scale error, and the error of every "
-             "corner-to-corner length at least half the board's diagonal.\n\n"
-             "| pose | corners | distance (mm) | fit RMS (mm) | scale error (ppm) | length error "
-             "RMS (mm) | largest (mm) |\n|---|---:|---:|---:|---:|---:|---:|\n";
-        for (const HeldOutPose& p : held_out->poses)
-            s << "| " << p.name << " | " << p.corners << " | " << fmt(p.distance_mm, 1) << " | "
-              << fmt(p.fit_rms_mm, 4) << " | " << fmt(1e6 * p.scale_error, 1) << " | "
-              << fmt(p.length_rms_mm, 4) << " | " << fmt(p.length_max_mm, 4) << " |\n";
-        s << "| all | | | **" << fmt(held_out->fit_rms_mm, 4) << "** | "
-          << fmt(1e6 * held_out->scale_error_rms, 1) << " (RMS) | **"
-          << fmt(held_out->length_rms_mm, 4) << "** | **" << fmt(held_out->length_max_mm, 4)
-          << "** |\n";
-    }
+void held_out_section(std::ostream& s, const HeldOutCheck& held_out) {
+    s << "\n## Held-out poses\n\nEach pose left out in turn, the pair calibrated from the "
+         "others, the left-out board's corners measured by SV (x and y) and compared with "
+         "the board: rigid fit RMS (3D, mm), scale error, and the error of every "
+         "corner-to-corner length at least half the board's diagonal.\n\n"
+         "| pose | corners | distance (mm) | fit RMS (mm) | scale error (ppm) | length error "
+         "RMS (mm) | largest (mm) |\n|---|---:|---:|---:|---:|---:|---:|\n";
+    for (const HeldOutPose& p : held_out.poses)
+        s << "| " << p.name << " | " << p.corners << " | " << fmt(p.distance_mm, 1) << " | "
+          << fmt(p.fit_rms_mm, 4) << " | " << fmt(1e6 * p.scale_error, 1) << " | "
+          << fmt(p.length_rms_mm, 4) << " | " << fmt(p.length_max_mm, 4) << " |\n";
+    s << "| all | | | **" << fmt(held_out.fit_rms_mm, 4) << "** | "
+      << fmt(1e6 * held_out.scale_error_rms, 1) << " (RMS) | **" << fmt(held_out.length_rms_mm, 4)
+      << "** | **" << fmt(held_out.length_max_mm, 4) << "** |\n";
+}
 
+void timing_section(std::ostream& s, const SessionResult& r) {
     s << "\n## Timing\n\ndecoding " << fmt(r.seconds_decode, 2) << " s, corners "
       << fmt(r.seconds_corners, 2) << " s, calibration " << fmt(r.seconds_calibration, 2)
       << " s, total " << fmt(r.seconds_total, 2) << " s\n";
+}
+
+} // namespace
+
+std::string calibration_summary(const SessionResult& r, const HeldOutCheck* held_out) {
+    std::ostringstream s;
+    session_section(s, r);
+    reprojection_section(s, r);
+    poses_section(s, r);
+    parameters_section(s, r);
+    corner_truth_section(s, r);
+    if (held_out)
+        held_out_section(s, *held_out);
+    timing_section(s, r);
     return s.str();
 }
 

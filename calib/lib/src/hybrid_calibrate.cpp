@@ -382,13 +382,7 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
         const CaptureSet capture = next.get();
         if (k + 1 < folder.poses.size())
             next = std::async(std::launch::async, read_pose, folder.poses[k + 1]);
-        DecodeResult decoded;
-        try {
-            decoded = decode(capture, options.decode);
-        } catch (const std::invalid_argument& e) {
-            throw InputError(pose.folder / "capture.yaml", "sequence",
-                             std::string("cannot be decoded: ") + e.what());
-        }
+        const DecodeResult decoded = decode(capture, options.decode); // InputError naming the field
         sv.reconstruct(decoded, ReconstructAxes::x, cloud);
         PlaneFitStats stats;
         BoardPlane plane;

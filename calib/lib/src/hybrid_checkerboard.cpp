@@ -176,14 +176,9 @@ BoardView read_board_view(const fs::path& folder, const PoseContext& context, Ti
     StageTimer reading(time, "reading");
     const CaptureSet capture = read_x_capture(folder);
     reading.stop();
-    DecodeResult decoded;
-    try {
-        StageTimer decoding(time, "decoding");
-        decoded = decode(capture, context.options.decode);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(folder / "capture.yaml", "sequence",
-                         std::string("cannot be decoded: ") + e.what());
-    }
+    StageTimer decoding(time, "decoding");
+    const DecodeResult decoded = decode(capture, context.options.decode); // InputError naming the field
+    decoding.stop();
     StageTimer corner_stage(time, "corners");
     const CheckerboardCorners corners =
         find_checkerboard(corner_textures(capture, decoded), context.columns, context.rows);

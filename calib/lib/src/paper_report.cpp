@@ -136,13 +136,21 @@ std::size_t Record::default_method() const {
     return 0;
 }
 
-std::vector<PaperTarget> evaluate_targets(const Record& r) {
-    std::vector<PaperTarget> targets;
-    const auto target = [&](const std::string& key, const std::string& description, bool met,
-                            const std::string& detail) {
+namespace {
+
+// Adds a target to `targets`.
+struct TargetList {
+    std::vector<PaperTarget>& targets;
+    void operator()(const std::string& key, const std::string& description, bool met,
+                    const std::string& detail) const {
         targets.push_back({key, description, met, detail});
-    };
-    const std::size_t sv = r.find("sv-paper");
+    }
+};
+
+// The default method's: its absolute accuracy, diameters, ball bar and
+// calibration time.
+void add_default_method_targets(std::vector<PaperTarget>& targets, const Record& r) {
+    const TargetList target{targets};
     const std::size_t exact = r.find("exact");
     const std::size_t best = r.default_method();
     const std::size_t paper_rational = r.find("paper-rational");
@@ -210,8 +218,12 @@ std::vector<PaperTarget> evaluate_targets(const Record& r) {
                fixed_text(seconds, 1) + " s (stereo " + fixed_text(r.our_stereo.seconds, 1) +
                    " s, hybrid " + fixed_text(r.seconds_boards_hybrid, 1) + " s)");
     }
+}
 
-    // The paper's relations, for its own procedure's tables.
+// The paper's relations, for its own procedure's tables.
+void add_paper_relation_targets(std::vector<PaperTarget>& targets, const Record& r) {
+    const TargetList target{targets};
+    const std::size_t sv = r.find("sv-paper");
     for (std::size_t m = 0; m < r.methods.size(); ++m) {
         const Method& method = r.methods[m];
         if (method.procedure != Procedure::paper || !method.is_table())
@@ -260,14 +272,24 @@ std::vector<PaperTarget> evaluate_targets(const Record& r) {
                        "x against the paper's plane iteration)");
         }
     }
+}
+
+} // namespace
+
+std::vector<PaperTarget> evaluate_targets(const Record& r) {
+    std::vector<PaperTarget> targets;
+    add_default_method_targets(targets, r);
+    add_paper_relation_targets(targets, r);
     return targets;
 }
 
-std::string summary_markdown(const Record& r, const std::vector<PaperTarget>& targets) {
-    std::ostringstream md;
+namespace {
+
+// summary.md's sections, in order.
+
+void introduction_section(std::ostream& md, const Record& r) {
     const PaperExperimentOptions& o = r.options;
     const std::size_t best = r.default_method();
-    const std::size_t exact = r.find("exact");
     md << "# The paper's experiments on the virtual scanner\n\n";
     md << "Rig `" << r.rig.name << "` with its effects, camera " << r.rig.camera_size.width
        << " x " << r.rig.camera_size.height << " (binning " << o.binning << "), seed " << o.seed
@@ -295,111 +317,127 @@ std::string summary_markdown(const Record& r, const std::vector<PaperTarget>& ta
        << kEdgeMarginPx
        << " px inside the edge of that region (silhouette pixels mix the surface's phase with "
           "their neighbours').\n\n";
+}
 
-    md << "## Errors against the truth\n\n";
+void noise_free_errors_table(std::ostream& md, const Record& r) {
+    const std::size_t best = r.default_method();
     md << "Noise-free scans (each method's own error), Z error RMS / mean (bias), mm:\n\n";
-    {
-        std::vector<std::string> head = with_absolute_scans(r, {"method", "procedure"});
-        head.insert(head.end(), {"ball bar, largest SD error", "plane shape RMS"});
-        header(md, head);
-        for (std::size_t m = 0; m < r.methods.size(); ++m) {
-            std::vector<std::string> cells{method_cell(r, m, best),
-                                           procedure_title(r.methods[m].procedure)};
-            add_absolute_errors(r, m, &ScanSummary::truth_clean, cells);
-            cells.push_back(mm(largest_spacing_error(r, m, false)));
-            const ScanSummary* plane = r.scan("plane");
-            cells.push_back(plane ? mm(plane->shape_clean[m].rms) : "-");
-            row(md, cells);
-        }
+    std::vector<std::string> head = with_absolute_scans(r, {"method", "procedure"});
+    head.insert(head.end(), {"ball bar, largest SD error", "plane shape RMS"});
+    header(md, head);
+    for (std::size_t m = 0; m < r.methods.size(); ++m) {
+        std::vector<std::string> cells{method_cell(r, m, best),
+                                       procedure_title(r.methods[m].procedure)};
+        add_absolute_errors(r, m, &ScanSummary::truth_clean, cells);
+        cells.push_back(mm(largest_spacing_error(r, m, false)));
+        const ScanSummary* plane = r.scan("plane");
+        cells.push_back(plane ? mm(plane->shape_clean[m].rms) : "-");
+        row(md, cells);
     }
-    {
-        // The camera frame's turn: reported beside the errors above, which
-        // keep it (frame_turn.hpp).
-        const double turn = std::max(r.paper_turn.angle_rad, r.our_turn.angle_rad);
-        md << "\nEach calibration's camera frame against the rig's, measured from the camera's "
-              "rays alone: ours turned by "
-           << fixed_text(1000 * r.our_turn.angle_rad, 3) << " mrad (rays then "
-           << fixed_text(1e6 * r.our_turn.ray_rms_rad, 1) << " urad RMS apart), the paper's by "
-           << fixed_text(1000 * r.paper_turn.angle_rad, 3) << " mrad. A camera defect outside the "
-              "calibration's model can move the image as a turn of the camera does; no board "
-              "tells the two apart, and the calibration holds the rig turned about the camera "
-              "centre with its shapes and lengths intact.";
-        if (turn > kReportedTurnRad) {
-            md << " The same noise-free errors with each calibration's points turned back by "
-                  "its frame's turn (beside the errors above, not instead of them), Z error RMS "
-                  "/ mean, mm:\n\n";
-            header(md, with_absolute_scans(r, {"method"}));
-            for (std::size_t m = 0; m < r.methods.size(); ++m) {
-                std::vector<std::string> cells{method_cell(r, m, best)};
-                add_absolute_errors(r, m, &ScanSummary::turned_clean, cells);
-                row(md, cells);
-            }
-        } else {
-            md << " Here the turns are too small to matter.\n";
-        }
-    }
-    md << "\nWith the rig's noise (one scan each), Z error RMS / mean, mm; diameters and the "
-          "ball bar fitted to the noisy points:\n\n";
-    {
-        std::vector<std::string> head = with_absolute_scans(r, {"method"});
-        head.insert(head.end(), {"cylinder diameter error", "sphere diameter error",
-                                 "ball bar, largest SD error", "ball, largest size error"});
-        header(md, head);
+}
+
+// The camera frame's turn: reported beside the errors above, which keep it
+// (frame_turn.hpp).
+void frame_turn_paragraph(std::ostream& md, const Record& r) {
+    const std::size_t best = r.default_method();
+    const double turn = std::max(r.paper_turn.angle_rad, r.our_turn.angle_rad);
+    md << "\nEach calibration's camera frame against the rig's, measured from the camera's "
+          "rays alone: ours turned by "
+       << fixed_text(1000 * r.our_turn.angle_rad, 3) << " mrad (rays then "
+       << fixed_text(1e6 * r.our_turn.ray_rms_rad, 1) << " urad RMS apart), the paper's by "
+       << fixed_text(1000 * r.paper_turn.angle_rad, 3)
+       << " mrad. A camera defect outside the "
+          "calibration's model can move the image as a turn of the camera does; no board "
+          "tells the two apart, and the calibration holds the rig turned about the camera "
+          "centre with its shapes and lengths intact.";
+    if (turn > kReportedTurnRad) {
+        md << " The same noise-free errors with each calibration's points turned back by "
+              "its frame's turn (beside the errors above, not instead of them), Z error RMS "
+              "/ mean, mm:\n\n";
+        header(md, with_absolute_scans(r, {"method"}));
         for (std::size_t m = 0; m < r.methods.size(); ++m) {
             std::vector<std::string> cells{method_cell(r, m, best)};
-            add_absolute_errors(r, m, &ScanSummary::truth_noisy, cells);
-            for (const char* key : {"cylinder", "sphere"}) {
-                const ScanSummary* s = r.scan(key);
-                cells.push_back(s && !s->diameter_error.empty() ? mm(s->diameter_error[m]) : "-");
-            }
-            cells.push_back(mm(largest_spacing_error(r, m, true)));
-            cells.push_back(mm(largest_size_error(r, m)));
+            add_absolute_errors(r, m, &ScanSummary::turned_clean, cells);
             row(md, cells);
         }
+    } else {
+        md << " Here the turns are too small to matter.\n";
     }
+}
+
+void noisy_errors_table(std::ostream& md, const Record& r) {
+    const std::size_t best = r.default_method();
+    md << "\nWith the rig's noise (one scan each), Z error RMS / mean, mm; diameters and the "
+          "ball bar fitted to the noisy points:\n\n";
+    std::vector<std::string> head = with_absolute_scans(r, {"method"});
+    head.insert(head.end(), {"cylinder diameter error", "sphere diameter error",
+                             "ball bar, largest SD error", "ball, largest size error"});
+    header(md, head);
+    for (std::size_t m = 0; m < r.methods.size(); ++m) {
+        std::vector<std::string> cells{method_cell(r, m, best)};
+        add_absolute_errors(r, m, &ScanSummary::truth_noisy, cells);
+        for (const char* key : {"cylinder", "sphere"}) {
+            const ScanSummary* s = r.scan(key);
+            cells.push_back(s && !s->diameter_error.empty() ? mm(s->diameter_error[m]) : "-");
+        }
+        cells.push_back(mm(largest_spacing_error(r, m, true)));
+        cells.push_back(mm(largest_size_error(r, m)));
+        row(md, cells);
+    }
+}
+
+void truth_errors_section(std::ostream& md, const Record& r) {
+    md << "## Errors against the truth\n\n";
+    noise_free_errors_table(md, r);
+    frame_turn_paragraph(md, r);
+    noisy_errors_table(md, r);
     md << "\nThe `exact` row is the floor: the error of each scan's own noise and decoding. "
           "Where a target with noise is not met by `"
-       << r.methods[best].key
+       << r.methods[r.default_method()].key
        << "` but the floor is close to it, the scan's noise, not the calibration, is what is "
           "left.\n\n";
+}
 
+void paper_figures_section(std::ostream& md, const Record& r) {
+    const std::size_t best = r.default_method();
     md << "## The paper's figures beside ours\n\n";
-    {
-        const std::size_t paper_sv = r.find("sv-paper"), poly = r.find("paper-polynomial"),
-                          rational = r.find("paper-rational");
-        header(md, {"figure", "paper SV", "paper hybrid", "our SV of the paper's procedure",
-                    "its rational table", "its polynomial table", "ours (" + r.methods[best].key + ")"});
-        const auto fit = [&](const char* key, std::size_t m) {
-            const ScanSummary* s = r.scan(key);
-            return s && m < s->fit_rms.size() ? mm(s->fit_rms[m]) : std::string("-");
-        };
-        row(md, {"plane-fit RMS, inclined plane (mm)", mm(kPaperPlaneSv, 3),
-                 mm(kPaperPlaneHybrid, 3), fit("plane", paper_sv), fit("plane", rational),
-                 fit("plane", poly), fit("plane", best)});
-        row(md, {"cylinder-fit RMS (mm)", mm(kPaperCylinderSv, 3), mm(kPaperCylinderHybrid, 3),
-                 fit("cylinder", paper_sv), fit("cylinder", rational), fit("cylinder", poly),
-                 fit("cylinder", best)});
-        const ReliefSummary& relief = r.relief;
-        const auto time = [&](std::size_t m) {
-            return m < relief.seconds.size() ? seconds_text(relief.seconds[m]) : std::string("-");
-        };
-        row(md, {"relief reconstruction time (one thread)", seconds_text(kPaperReliefSvSeconds),
-                 seconds_text(kPaperReliefHybridSeconds), time(paper_sv), time(rational),
-                 time(poly), time(best)});
-        const auto distance = [&](std::size_t m) {
-            for (std::size_t k = 0; k < relief.compared_methods.size(); ++k)
-                if (relief.compared_methods[k] == m)
-                    return mm(relief.distance_rms[k]);
-            return std::string("-");
-        };
-        row(md, {"relief: RMS distance SV vs hybrid (mm)", "-", mm(kPaperReliefDistance, 3), "-",
-                 distance(rational), distance(poly), "-"});
-        md << "\nThe paper's times are of its implementation on its authors' PC; ours of this "
-              "build on this machine. SV uses our Newton solver; the paper's plane iteration "
-              "took "
-           << seconds_text(relief.seconds_sv_plane_iteration) << ".\n\n";
-    }
+    const std::size_t paper_sv = r.find("sv-paper"), poly = r.find("paper-polynomial"),
+                      rational = r.find("paper-rational");
+    header(md,
+           {"figure", "paper SV", "paper hybrid", "our SV of the paper's procedure",
+            "its rational table", "its polynomial table", "ours (" + r.methods[best].key + ")"});
+    const auto fit = [&](const char* key, std::size_t m) {
+        const ScanSummary* s = r.scan(key);
+        return s && m < s->fit_rms.size() ? mm(s->fit_rms[m]) : std::string("-");
+    };
+    row(md,
+        {"plane-fit RMS, inclined plane (mm)", mm(kPaperPlaneSv, 3), mm(kPaperPlaneHybrid, 3),
+         fit("plane", paper_sv), fit("plane", rational), fit("plane", poly), fit("plane", best)});
+    row(md, {"cylinder-fit RMS (mm)", mm(kPaperCylinderSv, 3), mm(kPaperCylinderHybrid, 3),
+             fit("cylinder", paper_sv), fit("cylinder", rational), fit("cylinder", poly),
+             fit("cylinder", best)});
+    const ReliefSummary& relief = r.relief;
+    const auto time = [&](std::size_t m) {
+        return m < relief.seconds.size() ? seconds_text(relief.seconds[m]) : std::string("-");
+    };
+    row(md, {"relief reconstruction time (one thread)", seconds_text(kPaperReliefSvSeconds),
+             seconds_text(kPaperReliefHybridSeconds), time(paper_sv), time(rational), time(poly),
+             time(best)});
+    const auto distance = [&](std::size_t m) {
+        for (std::size_t k = 0; k < relief.compared_methods.size(); ++k)
+            if (relief.compared_methods[k] == m)
+                return mm(relief.distance_rms[k]);
+        return std::string("-");
+    };
+    row(md, {"relief: RMS distance SV vs hybrid (mm)", "-", mm(kPaperReliefDistance, 3), "-",
+             distance(rational), distance(poly), "-"});
+    md << "\nThe paper's times are of its implementation on its authors' PC; ours of this "
+          "build on this machine. SV uses our Newton solver; the paper's plane iteration "
+          "took "
+       << seconds_text(relief.seconds_sv_plane_iteration) << ".\n\n";
+}
 
+void calibration_section(std::ostream& md, const Record& r) {
     md << "## Calibration\n\n";
     header(md, {"stereo calibration", "procedure", "poses", "camera RMS (px)", "projector RMS (px)",
                 "dense samples RMS (px)", "correction grids, largest (px)", "time"});
@@ -430,115 +468,136 @@ std::string summary_markdown(const Record& r, const std::vector<PaperTarget>& ta
     md << "\nOur procedure from its session: stereo " << seconds_text(r.our_stereo.seconds)
        << ", hybrid (all three models) " << seconds_text(r.seconds_boards_hybrid)
        << ". Tables: `table-<method>.fpt`; reports: `hybrid-report-<method>/`.\n\n";
+}
 
-    for (const ScanSummary& s : r.scans) {
-        md << "## " << s.title << "\n\n";
-        if (s.key == "relief")
-            md << "Relief scaled by " << fixed_text(r.relief.scale, 3) << ", seen by "
-               << r.relief.pixels_seen << " lit camera pixels.\n\n";
-        md << "Pixels with a true surface: " << s.truth_pixels
-           << "; compared (a point from every method, " << kEdgeMarginPx
-           << " px inside the edge): " << s.common << ".\n\n";
-        const bool fitted = s.fit != FitKind::none;
-        const bool round = s.fit == FitKind::cylinder || s.fit == FitKind::sphere;
-        std::vector<std::string> head{"method", "points"};
+void scan_section(std::ostream& md, const Record& r, const ScanSummary& s) {
+    md << "## " << s.title << "\n\n";
+    if (s.key == "relief")
+        md << "Relief scaled by " << fixed_text(r.relief.scale, 3) << ", seen by "
+           << r.relief.pixels_seen << " lit camera pixels.\n\n";
+    md << "Pixels with a true surface: " << s.truth_pixels
+       << "; compared (a point from every method, " << kEdgeMarginPx
+       << " px inside the edge): " << s.common << ".\n\n";
+    const bool fitted = s.fit != FitKind::none;
+    const bool round = s.fit == FitKind::cylinder || s.fit == FitKind::sphere;
+    std::vector<std::string> head{"method", "points"};
+    if (fitted)
+        head.insert(head.end(), {"fit RMS (mm)", "fit RMS, noise-free (mm)"});
+    if (round)
+        head.insert(head.end(), {"diameter (mm)", "diameter error (mm)"});
+    head.insert(head.end(),
+                {"Z error RMS (mm)", "Z error RMS, noise-free (mm)", "mean (bias), noise-free (mm)",
+                 "shape RMS, noise-free (mm)", "3D distance RMS, noise-free (mm)"});
+    header(md, head);
+    for (std::size_t m = 0; m < r.methods.size(); ++m) {
+        std::vector<std::string> cells{r.methods[m].key, std::to_string(s.points[m])};
         if (fitted)
-            head.insert(head.end(), {"fit RMS (mm)", "fit RMS, noise-free (mm)"});
+            cells.insert(cells.end(), {mm(s.fit_rms[m]), mm(s.fit_rms_clean[m])});
         if (round)
-            head.insert(head.end(), {"diameter (mm)", "diameter error (mm)"});
-        head.insert(head.end(),
-                    {"Z error RMS (mm)", "Z error RMS, noise-free (mm)",
-                     "mean (bias), noise-free (mm)", "shape RMS, noise-free (mm)",
-                     "3D distance RMS, noise-free (mm)"});
-        header(md, head);
-        for (std::size_t m = 0; m < r.methods.size(); ++m) {
-            std::vector<std::string> cells{r.methods[m].key, std::to_string(s.points[m])};
-            if (fitted)
-                cells.insert(cells.end(), {mm(s.fit_rms[m]), mm(s.fit_rms_clean[m])});
-            if (round)
-                cells.insert(cells.end(), {mm(s.diameter[m], 3), mm(s.diameter_error[m])});
-            cells.insert(cells.end(), {mm(s.truth_noisy[m].rms), mm(s.truth_clean[m].rms),
-                                       mm(s.truth_clean[m].mean), mm(s.shape_clean[m].rms),
-                                       mm(s.distance_clean[m].rms)});
-            row(md, cells);
-        }
-        if (!s.fit_note.empty())
-            md << "\n" << s.fit_note << "\n";
-        md << "\nFigures: ";
-        if (fitted)
-            md << "`" << s.key << "-fit-histogram.png`, `" << s.key << "-fit-map-<method>.png`, ";
-        md << "`truth-" << s.key << "-<method>.png` (noise-free Z error maps).\n\n";
+            cells.insert(cells.end(), {mm(s.diameter[m], 3), mm(s.diameter_error[m])});
+        cells.insert(cells.end(),
+                     {mm(s.truth_noisy[m].rms), mm(s.truth_clean[m].rms), mm(s.truth_clean[m].mean),
+                      mm(s.shape_clean[m].rms), mm(s.distance_clean[m].rms)});
+        row(md, cells);
     }
+    if (!s.fit_note.empty())
+        md << "\n" << s.fit_note << "\n";
+    md << "\nFigures: ";
+    if (fitted)
+        md << "`" << s.key << "-fit-histogram.png`, `" << s.key << "-fit-map-<method>.png`, ";
+    md << "`truth-" << s.key << "-<method>.png` (noise-free Z error maps).\n\n";
+}
 
-    if (!r.ball_bars.empty()) {
-        md << "## Ball bar (ours): two " << fixed_text(kBallDiameter, 0) << " mm spheres "
-           << fixed_text(kBallBarLength, 0)
-           << " mm apart at seven places and directions\n\n"
-              "Sphere-spacing error (VDI/VDE 2634-2 SD: measured minus true centre distance, "
-              "mm), with noise / noise-free:\n\n";
-        std::vector<std::string> head{"centre (mm)", "direction"};
-        std::vector<std::size_t> shown;
-        for (std::size_t m = 0; m < r.methods.size(); ++m)
-            if (m == exact || m == best || r.methods[m].key == "sv-paper" ||
-                r.methods[m].key == "paper-rational" || r.methods[m].key == "sv" ||
-                r.methods[m].key == "planes-rational") {
-                shown.push_back(m);
-                head.push_back(r.methods[m].key);
-            }
-        header(md, head);
-        for (const BallBarPosition& b : r.ball_bars) {
-            std::vector<std::string> cells{
-                fixed_text(b.centre[0], 0) + ", " + fixed_text(b.centre[1], 0) + ", " +
-                    fixed_text(b.centre[2], 0),
-                fixed_text(b.axis[0], 2) + ", " + fixed_text(b.axis[1], 2) + ", " +
-                    fixed_text(b.axis[2], 2)};
-            for (const std::size_t m : shown)
-                cells.push_back(mm(b.spacing_error[m]) + " / " + mm(b.spacing_error_clean[m]));
-            row(md, cells);
+void ball_bar_section(std::ostream& md, const Record& r) {
+    const std::size_t best = r.default_method();
+    const std::size_t exact = r.find("exact");
+    md << "## Ball bar (ours): two " << fixed_text(kBallDiameter, 0) << " mm spheres "
+       << fixed_text(kBallBarLength, 0)
+       << " mm apart at seven places and directions\n\n"
+          "Sphere-spacing error (VDI/VDE 2634-2 SD: measured minus true centre distance, "
+          "mm), with noise / noise-free:\n\n";
+    std::vector<std::string> head{"centre (mm)", "direction"};
+    std::vector<std::size_t> shown;
+    for (std::size_t m = 0; m < r.methods.size(); ++m)
+        if (m == exact || m == best || r.methods[m].key == "sv-paper" ||
+            r.methods[m].key == "paper-rational" || r.methods[m].key == "sv" ||
+            r.methods[m].key == "planes-rational") {
+            shown.push_back(m);
+            head.push_back(r.methods[m].key);
         }
-        md << "\nEvery method's figures: `figures.csv` (`ball_bar.<place>.<method>.*`).\n\n";
+    header(md, head);
+    for (const BallBarPosition& b : r.ball_bars) {
+        std::vector<std::string> cells{fixed_text(b.centre[0], 0) + ", " +
+                                           fixed_text(b.centre[1], 0) + ", " +
+                                           fixed_text(b.centre[2], 0),
+                                       fixed_text(b.axis[0], 2) + ", " + fixed_text(b.axis[1], 2) +
+                                           ", " + fixed_text(b.axis[2], 2)};
+        for (const std::size_t m : shown)
+            cells.push_back(mm(b.spacing_error[m]) + " / " + mm(b.spacing_error_clean[m]));
+        row(md, cells);
     }
+    md << "\nEvery method's figures: `figures.csv` (`ball_bar.<place>.<method>.*`).\n\n";
+}
 
-    if (!r.relief.compared_methods.empty()) {
-        md << "## Experiment 3: the paper's SV against its tables on the relief\n\n";
-        header(md, {"SV vs", "pixels", "RMS 3D distance (mm)", "RMS Z difference (mm)",
-                    "time, one thread", "speed-up over SV"});
-        const std::size_t sv = r.find("sv-paper");
-        for (std::size_t k = 0; k < r.relief.compared_methods.size(); ++k) {
-            const std::size_t m = r.relief.compared_methods[k];
-            row(md, {r.methods[m].key, std::to_string(r.relief.matched[k]),
-                     mm(r.relief.distance_rms[k]), mm(r.relief.dz_rms[k]),
-                     seconds_text(r.relief.seconds[m]),
-                     fixed_text(r.relief.seconds[sv] / r.relief.seconds[m], 1) + "x"});
-        }
-        md << "\n";
+void relief_comparison_section(std::ostream& md, const Record& r) {
+    md << "## Experiment 3: the paper's SV against its tables on the relief\n\n";
+    header(md, {"SV vs", "pixels", "RMS 3D distance (mm)", "RMS Z difference (mm)",
+                "time, one thread", "speed-up over SV"});
+    const std::size_t sv = r.find("sv-paper");
+    for (std::size_t k = 0; k < r.relief.compared_methods.size(); ++k) {
+        const std::size_t m = r.relief.compared_methods[k];
+        row(md,
+            {r.methods[m].key, std::to_string(r.relief.matched[k]), mm(r.relief.distance_rms[k]),
+             mm(r.relief.dz_rms[k]), seconds_text(r.relief.seconds[m]),
+             fixed_text(r.relief.seconds[sv] / r.relief.seconds[m], 1) + "x"});
     }
+    md << "\n";
+}
 
+void windows_section(std::ostream& md, const Record& r) {
     md << "## Experiment 4: N x N windows of the plane scan\n\n";
     md << "SV runs on the cropped camera (principal point shifted), the kernel on the "
           "cropped table; both give the full image's points to "
        << fixed_text(r.windows.crop_max_difference_mm * 1e3, 3) << " um ("
        << r.windows.crop_mismatched << " pixels with a point in one only).\n\n";
-    {
-        std::vector<std::string> head{"N", "SV points"};
-        for (const std::size_t m : r.windows.methods)
-            head.push_back(r.methods[m].key);
-        header(md, head);
-        for (std::size_t w = 0; w < r.windows.sizes.size(); ++w) {
-            std::vector<std::string> cells{std::to_string(r.windows.sizes[w]),
-                                           std::to_string(r.windows.points[w])};
-            for (std::size_t k = 0; k < r.windows.methods.size(); ++k)
-                cells.push_back(seconds_text(r.windows.seconds[k][w]));
-            row(md, cells);
-        }
+    std::vector<std::string> head{"N", "SV points"};
+    for (const std::size_t m : r.windows.methods)
+        head.push_back(r.methods[m].key);
+    header(md, head);
+    for (std::size_t w = 0; w < r.windows.sizes.size(); ++w) {
+        std::vector<std::string> cells{std::to_string(r.windows.sizes[w]),
+                                       std::to_string(r.windows.points[w])};
+        for (std::size_t k = 0; k < r.windows.methods.size(); ++k)
+            cells.push_back(seconds_text(r.windows.seconds[k][w]));
+        row(md, cells);
     }
     md << "\nFigure: `windows-timing.png`.\n\n";
+}
 
+void targets_section(std::ostream& md, const std::vector<PaperTarget>& targets) {
     md << "## Targets\n\n";
     header(md, {"target", "met", "numbers"});
     for (const PaperTarget& t : targets)
         row(md, {t.description, t.met ? "yes" : "**no**", t.detail});
     md << "\nAll figures: `figures.csv` (name,value,unit).\n";
+}
+
+} // namespace
+
+std::string summary_markdown(const Record& r, const std::vector<PaperTarget>& targets) {
+    std::ostringstream md;
+    introduction_section(md, r);
+    truth_errors_section(md, r);
+    paper_figures_section(md, r);
+    calibration_section(md, r);
+    for (const ScanSummary& s : r.scans)
+        scan_section(md, r, s);
+    if (!r.ball_bars.empty())
+        ball_bar_section(md, r);
+    if (!r.relief.compared_methods.empty())
+        relief_comparison_section(md, r);
+    windows_section(md, r);
+    targets_section(md, targets);
     return md.str();
 }
 

@@ -77,15 +77,9 @@ void process_pose(int index, const fs::path& folder, const PoseContext& context,
     StageTimer reading(time, "reading");
     const CaptureSet capture = read_capture_set(folder);
     reading.stop();
-    DecodeResult decoded;
-    try {
-        StageTimer decoding(time, "decoding");
-        decoded = decode(capture, options.decode);
-        pose.decode_seconds = decoding.stop();
-    } catch (const std::invalid_argument& e) {
-        throw InputError(folder / "capture.yaml", "sequence",
-                         std::string("cannot be decoded: ") + e.what());
-    }
+    StageTimer decoding(time, "decoding");
+    const DecodeResult decoded = decode(capture, options.decode); // InputError naming the field
+    pose.decode_seconds = decoding.stop();
 
     StageTimer corners(time, "corners");
     const std::vector<CornerTexture> textures = corner_textures(capture, decoded);
@@ -169,6 +163,82 @@ void process_pose(int index, const fs::path& folder, const PoseContext& context,
     }
 }
 
+// calibrate_session's last stages.
+
+// The usable poses' observations in result.observations (result.calibrated:
+// their indices in result.poses); a session with fewer than 3 is refused,
+// naming why each pose was skipped.
+void keep_usable_poses(const fs::path& session, const std::vector<Vec3>& board_points,
+                       std::vector<PoseObservations>& per_pose, SessionResult& result) {
+    std::string skipped;
+    std::vector<PoseObservations> used_observations;
+    for (std::size_t p = 0; p < result.poses.size(); ++p) {
+        const SessionPose& pose = result.poses[p];
+        if (!pose.usable) {
+            skipped += "\n  " + pose.name + ": " + pose.skip_reason;
+            continue;
+        }
+        PoseObservations& o = per_pose[p];
+        o.name = pose.name;
+        o.board = board_points;
+        o.camera = pose.corners.points;
+        o.projector = pose.projector[static_cast<std::size_t>(result.method)].points;
+        used_observations.push_back(std::move(o));
+        result.calibrated.push_back(static_cast<int>(p));
+    }
+    result.observations = std::move(used_observations);
+    const std::vector<PoseObservations>& observations = result.observations;
+    if (observations.size() < 3)
+        throw InputError(session, "",
+                         "only " + std::to_string(observations.size()) + " of " +
+                             std::to_string(result.poses.size()) +
+                             " poses are usable; stereo calibration needs at least 3" + skipped);
+}
+
+// The stereo calibration of the kept poses, and with options.compare_skew
+// the other skew setting's alongside (for the report).
+void calibrate_kept_poses(const StereoSessionOptions& options, SessionResult& result) {
+    const auto say = [&](const std::string& s) {
+        if (options.progress)
+            options.progress(s);
+    };
+    const std::vector<PoseObservations>& observations = result.observations;
+    const auto t_cal = std::chrono::steady_clock::now();
+    StereoOptions stereo = options.stereo;
+    stereo.progress = options.progress;
+    say("calibrating from " + std::to_string(observations.size()) + " poses");
+    StageTimer initialisation(result.time_split, "OpenCV initialisation");
+    const StereoStart start = initialise_stereo(observations, result.camera_size,
+                                                result.projector_size, options.progress);
+    initialisation.stop();
+    // The other skew setting's calibration (for the report) on its own
+    // thread meanwhile, from the same start: the two share no other state.
+    std::future<StereoResult> other_skew;
+    if (options.compare_skew) {
+        StereoOptions other = stereo;
+        other.skew = !stereo.skew;
+        other.progress = nullptr;
+        say(std::string("for comparison, alongside: calibrating with skew ") +
+            (other.skew ? "estimated" : "fixed at 0"));
+        other_skew =
+            std::async(std::launch::async, [&observations, &start, camera = result.camera_size,
+                                            projector = result.projector_size, other] {
+                return stereo_calibrate(observations, camera, projector, other, start);
+            });
+    }
+    result.stereo =
+        stereo_calibrate(observations, result.camera_size, result.projector_size, stereo, start);
+    result.time_split.add(result.stereo.time_split);
+    if (other_skew.valid()) {
+        StageTimer waiting(result.time_split, "waiting for the other skew's calibration");
+        result.other_skew = other_skew.get();
+        waiting.stop();
+        for (const auto& [stage, seconds] : result.other_skew->time_split.stages())
+            result.time_split.add(stage + " (other skew, report)", seconds);
+    }
+    result.seconds_calibration = since(t_cal);
+}
+
 } // namespace
 
 std::vector<Vec3> checkerboard_points(int columns, int rows, double square_size) {
@@ -233,64 +303,8 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
             result.seconds_corners += result.poses[std::size_t(p)].corner_seconds;
         });
 
-    std::string skipped;
-    std::vector<PoseObservations> used_observations;
-    for (std::size_t p = 0; p < result.poses.size(); ++p) {
-        const SessionPose& pose = result.poses[p];
-        if (!pose.usable) {
-            skipped += "\n  " + pose.name + ": " + pose.skip_reason;
-            continue;
-        }
-        PoseObservations& o = per_pose[p];
-        o.name = pose.name;
-        o.board = board_points;
-        o.camera = pose.corners.points;
-        o.projector = pose.projector[static_cast<std::size_t>(result.method)].points;
-        used_observations.push_back(std::move(o));
-        result.calibrated.push_back(static_cast<int>(p));
-    }
-    result.observations = std::move(used_observations);
-    const std::vector<PoseObservations>& observations = result.observations;
-    if (observations.size() < 3)
-        throw InputError(session, "",
-                         "only " + std::to_string(observations.size()) + " of " +
-                             std::to_string(result.poses.size()) +
-                             " poses are usable; stereo calibration needs at least 3" + skipped);
-
-    const auto t_cal = std::chrono::steady_clock::now();
-    StereoOptions stereo = options.stereo;
-    stereo.progress = options.progress;
-    say("calibrating from " + std::to_string(observations.size()) + " poses");
-    StageTimer initialisation(result.time_split, "OpenCV initialisation");
-    const StereoStart start = initialise_stereo(observations, result.camera_size,
-                                                result.projector_size, options.progress);
-    initialisation.stop();
-    // The other skew setting's calibration (for the report) on its own
-    // thread meanwhile, from the same start: the two share no other state.
-    std::future<StereoResult> other_skew;
-    if (options.compare_skew) {
-        StereoOptions other = stereo;
-        other.skew = !stereo.skew;
-        other.progress = nullptr;
-        say(std::string("for comparison, alongside: calibrating with skew ") +
-            (other.skew ? "estimated" : "fixed at 0"));
-        other_skew =
-            std::async(std::launch::async, [&observations, &start, camera = result.camera_size,
-                                            projector = result.projector_size, other] {
-                return stereo_calibrate(observations, camera, projector, other, start);
-            });
-    }
-    result.stereo =
-        stereo_calibrate(observations, result.camera_size, result.projector_size, stereo, start);
-    result.time_split.add(result.stereo.time_split);
-    if (other_skew.valid()) {
-        StageTimer waiting(result.time_split, "waiting for the other skew's calibration");
-        result.other_skew = other_skew.get();
-        waiting.stop();
-        for (const auto& [stage, seconds] : result.other_skew->time_split.stages())
-            result.time_split.add(stage + " (other skew, report)", seconds);
-    }
-    result.seconds_calibration = since(t_cal);
+    keep_usable_poses(session, board_points, per_pose, result);
+    calibrate_kept_poses(options, result);
     result.stereo.calibration.origin = "fpp-calib stereo " + session.string();
     result.stereo.calibration.board_square_size = result.board.square_size;
     result.seconds_total = since(t_start);

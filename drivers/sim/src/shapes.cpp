@@ -489,15 +489,14 @@ Vec3 Relief::surface_point(double x, double y) const {
     return pose_.to_camera({x, y, -height_at(x, y)});
 }
 
-bool Relief::intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, Hit& hit) const {
-    // Ray in local coordinates (x, y, w), w = -z_local = height direction.
+Relief::LocalRay Relief::local_ray(const Vec3& o, const Vec3& d) const {
     const Vec3 ex = column(pose_.R, 0), ey = column(pose_.R, 1), ez = column(pose_.R, 2);
     const Vec3 rel = sub(o, pose_.centre);
-    const double ox = dot(rel, ex), oy = dot(rel, ey), ow = -dot(rel, ez);
-    const double dx = dot(d, ex), dy = dot(d, ey), dw = -dot(d, ez);
+    return {dot(rel, ex), dot(rel, ey), -dot(rel, ez), dot(d, ex), dot(d, ey), -dot(d, ez)};
+}
 
-    // Clip to the box |x| <= W/2, |y| <= H/2, w in [h_min, h_max] (slab method).
-    double t0 = tmin, t1 = tmax;
+bool Relief::clip_to_box(const LocalRay& r, double& t0, double& t1) const {
+    // The box |x| <= W/2, |y| <= H/2, w in [h_min, h_max] (slab method).
     auto slab = [&](double origin, double dir, double lo, double hi) {
         if (std::fabs(dir) < 1e-300)
             return origin >= lo && origin <= hi;
@@ -508,133 +507,129 @@ bool Relief::intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, H
         t1 = std::min(t1, b);
         return t0 <= t1;
     };
-    if (!slab(ox, dx, -half_width_, half_width_) || !slab(oy, dy, -half_height_, half_height_) ||
-        !slab(ow, dw, h_min_, h_max_))
-        return false;
+    return slab(r.ox, r.dx, -half_width_, half_width_) &&
+           slab(r.oy, r.dy, -half_height_, half_height_) && slab(r.ow, r.dw, h_min_, h_max_);
+}
 
-    // f(t) = w(t) - h(x(t), y(t)). Walk the cells the ray crosses: a cell
-    // whose height range the ray stays above (or below, if it started below)
-    // cannot hold a crossing; elsewhere |f'| <= |dw| + L_cell |d_xy|, so a
-    // step of |f| / rate cannot pass the first root.
+double Relief::height_gap(const LocalRay& r, const ScaledBump* begin, const ScaledBump* end,
+                          double t) {
+    return r.ow + t * r.dw -
+           eval_range(begin, end, r.ox + t * r.dx, r.oy + t * r.dy, nullptr, nullptr);
+}
+
+double Relief::cell_exit(const LocalRay& r, double at, double t1, int& cx, int& cy) const {
+    const double x = r.ox + at * r.dx, y = r.oy + at * r.dy;
+    cx = std::clamp(static_cast<int>(std::floor((x + half_width_) / cell_w_)), 0, cells_x_ - 1);
+    cy = std::clamp(static_cast<int>(std::floor((y + half_height_) / cell_h_)), 0, cells_y_ - 1);
+    double te = t1;
+    if (r.dx > 0)
+        te = std::min(te, (-half_width_ + (cx + 1) * cell_w_ - r.ox) / r.dx);
+    if (r.dx < 0)
+        te = std::min(te, (-half_width_ + cx * cell_w_ - r.ox) / r.dx);
+    if (r.dy > 0)
+        te = std::min(te, (-half_height_ + (cy + 1) * cell_h_ - r.oy) / r.dy);
+    if (r.dy < 0)
+        te = std::min(te, (-half_height_ + cy * cell_h_ - r.oy) / r.dy);
+    // Guarantee progress when the point sits on a cell border.
+    return std::max(te, at + 1e-9 * (1 + std::fabs(at)));
+}
+
+bool Relief::bracket_crossing(const LocalRay& r, double t, double ft, double t1,
+                              Bracket& out) const {
+    // Walk the cells the ray crosses: a cell whose height range the ray stays
+    // above (or below, if it started below) cannot hold a crossing; elsewhere
+    // |f'| <= |dw| + L_cell |d_xy|, so a step of |f| / rate cannot pass the
+    // first root.
     const ScaledBump* bb = scaled_.data(); // bumps of the current cell
     const ScaledBump* be = scaled_.data() + scaled_.size();
-    auto f = [&](double t) {
-        return ow + t * dw - eval_range(bb, be, ox + t * dx, oy + t * dy, nullptr, nullptr);
-    };
-    const double dxy = std::sqrt(dx * dx + dy * dy);
+    const double dxy = std::sqrt(r.dx * r.dx + r.dy * r.dy);
     constexpr double kMinStep = 1e-3; // mm; a crossing inside one such step is bracketed
-    double t = t0;
-    double ft = f(t);
-    if (ft == 0) {
-        if (!(t > tmin))
-            t = std::nextafter(t, t1);
-    } else {
-        const bool positive = ft > 0;
-        double a = t, fa = ft, b = t, fb = ft;
-        bool bracketed = false;
-        bool ft_known = true;
-        // Ray parameter where the ray leaves the cell containing parameter t.
-        auto cell_exit = [&](double at, int& cx, int& cy) {
-            const double x = ox + at * dx, y = oy + at * dy;
-            cx = std::clamp(static_cast<int>(std::floor((x + half_width_) / cell_w_)), 0,
-                            cells_x_ - 1);
-            cy = std::clamp(static_cast<int>(std::floor((y + half_height_) / cell_h_)), 0,
-                            cells_y_ - 1);
-            double te = t1;
-            if (dx > 0)
-                te = std::min(te, (-half_width_ + (cx + 1) * cell_w_ - ox) / dx);
-            if (dx < 0)
-                te = std::min(te, (-half_width_ + cx * cell_w_ - ox) / dx);
-            if (dy > 0)
-                te = std::min(te, (-half_height_ + (cy + 1) * cell_h_ - oy) / dy);
-            if (dy < 0)
-                te = std::min(te, (-half_height_ + cy * cell_h_ - oy) / dy);
-            // Guarantee progress when the point sits on a cell border.
-            return std::max(te, at + 1e-9 * (1 + std::fabs(at)));
-        };
-        for (long iter = 0; iter < 4000000 && t < t1 && !bracketed; ++iter) {
-            int cx = 0, cy = 0;
-            const double te = std::min(cell_exit(t, cx, cy), t1);
-            const std::size_t ci = static_cast<std::size_t>(cy) * cells_x_ + cx;
-            const Cell& c = cells_[ci];
-            const double wa = ow + t * dw, wb = ow + te * dw;
-            if (positive ? std::min(wa, wb) > c.h_max : std::max(wa, wb) < c.h_min) {
-                t = te; // no crossing in this cell
-                ft_known = false;
-                continue;
-            }
-            bb = cell_bumps_.data() + cell_offset_[ci];
-            be = cell_bumps_.data() + cell_offset_[ci + 1];
-            if (!ft_known) {
-                ft = f(t);
-                ft_known = true;
-                if ((ft > 0) != positive || ft == 0) { // only at a cell border, by rounding
-                    a = b = t;
-                    fa = fb = ft;
-                    bracketed = true;
-                    break;
-                }
-            }
-            const double rate = std::fabs(dw) + c.slope * dxy;
-            while (t < te) {
-                const double step = std::max(std::fabs(ft) / rate, kMinStep);
-                const double tn = std::min(t + step, te);
-                const double fn = f(tn);
-                if ((fn > 0) != positive || fn == 0) {
-                    a = t;
-                    fa = ft;
-                    b = tn;
-                    fb = fn;
-                    bracketed = true;
-                    break;
-                }
-                t = tn;
-                ft = fn;
+    const bool positive = ft > 0;
+    bool ft_known = true;
+    for (long iter = 0; iter < 4000000 && t < t1; ++iter) {
+        int cx = 0, cy = 0;
+        const double te = std::min(cell_exit(r, t, t1, cx, cy), t1);
+        const std::size_t ci = static_cast<std::size_t>(cy) * cells_x_ + cx;
+        const Cell& c = cells_[ci];
+        const double wa = r.ow + t * r.dw, wb = r.ow + te * r.dw;
+        if (positive ? std::min(wa, wb) > c.h_max : std::max(wa, wb) < c.h_min) {
+            t = te; // no crossing in this cell
+            ft_known = false;
+            continue;
+        }
+        bb = cell_bumps_.data() + cell_offset_[ci];
+        be = cell_bumps_.data() + cell_offset_[ci + 1];
+        if (!ft_known) {
+            ft = height_gap(r, bb, be, t);
+            ft_known = true;
+            if ((ft > 0) != positive || ft == 0) { // only at a cell border, by rounding
+                out = {t, ft, t, ft, bb, be};
+                return true;
             }
         }
-        if (!bracketed)
-            return false;
-        // Safeguarded Newton: keep the bracket [a, b], fall back to bisection.
-        t = 0.5 * (a + b);
-        for (int iter = 0; iter < 200; ++iter) {
-            if (fb == 0) {
-                t = b;
-                break;
-            }
-            double gx = 0, gy = 0;
-            const double x = ox + t * dx, y = oy + t * dy;
-            const double ftt = ow + t * dw - eval_range(bb, be, x, y, &gx, &gy);
-            if (ftt == 0)
-                break;
-            if ((ftt > 0) == (fa > 0)) {
-                a = t;
-                fa = ftt;
-            } else {
-                b = t;
-                fb = ftt;
-            }
-            if (b - a <= 1e-10) {
-                t = 0.5 * (a + b);
-                break;
-            }
-            const double df = dw - gx * dx - gy * dy;
-            double tn = df != 0 ? t - ftt / df : 0.5 * (a + b);
-            if (!(tn > a && tn < b))
-                tn = 0.5 * (a + b);
-            if (std::fabs(tn - t) <= 1e-11) {
-                t = tn;
-                break;
+        const double rate = std::fabs(r.dw) + c.slope * dxy;
+        while (t < te) {
+            const double step = std::max(std::fabs(ft) / rate, kMinStep);
+            const double tn = std::min(t + step, te);
+            const double fn = height_gap(r, bb, be, tn);
+            if ((fn > 0) != positive || fn == 0) {
+                out = {t, ft, tn, fn, bb, be};
+                return true;
             }
             t = tn;
+            ft = fn;
         }
-        if (!(t > tmin && t < tmax))
-            return false;
     }
-    const double x = ox + t * dx, y = oy + t * dy;
+    return false;
+}
+
+double Relief::refine_crossing(const LocalRay& r, Bracket br) {
+    // Keep the bracket [a, b], fall back to bisection.
+    double a = br.a, fa = br.fa, b = br.b, fb = br.fb;
+    double t = 0.5 * (a + b);
+    for (int iter = 0; iter < 200; ++iter) {
+        if (fb == 0) {
+            t = b;
+            break;
+        }
+        double gx = 0, gy = 0;
+        const double x = r.ox + t * r.dx, y = r.oy + t * r.dy;
+        const double ftt =
+            r.ow + t * r.dw - eval_range(br.bumps_begin, br.bumps_end, x, y, &gx, &gy);
+        if (ftt == 0)
+            break;
+        if ((ftt > 0) == (fa > 0)) {
+            a = t;
+            fa = ftt;
+        } else {
+            b = t;
+            fb = ftt;
+        }
+        if (b - a <= 1e-10) {
+            t = 0.5 * (a + b);
+            break;
+        }
+        const double df = r.dw - gx * r.dx - gy * r.dy;
+        double tn = df != 0 ? t - ftt / df : 0.5 * (a + b);
+        if (!(tn > a && tn < b))
+            tn = 0.5 * (a + b);
+        if (std::fabs(tn - t) <= 1e-11) {
+            t = tn;
+            break;
+        }
+        t = tn;
+    }
+    return t;
+}
+
+bool Relief::surface_hit(const Vec3& o, const Vec3& d, const LocalRay& r, double t,
+                         Hit& hit) const {
+    const double x = r.ox + t * r.dx, y = r.oy + t * r.dy;
     double gx = 0, gy = 0;
     eval(x, y, &gx, &gy);
     if (std::fabs(x) > half_width_ || std::fabs(y) > half_height_)
         return false;
+    const Vec3 ex = column(pose_.R, 0), ey = column(pose_.R, 1), ez = column(pose_.R, 2);
     hit.t = t;
     hit.point = add(o, scale(d, t));
     // Surface s(x, y) = x ex + y ey + h ew with ew = -ez; normal ~ -gx ex - gy ey + ew.
@@ -642,6 +637,27 @@ bool Relief::intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, H
     hit.albedo = albedo_;
     face_ray(hit, d);
     return true;
+}
+
+bool Relief::intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, Hit& hit) const {
+    const LocalRay r = local_ray(o, d);
+    double t0 = tmin, t1 = tmax;
+    if (!clip_to_box(r, t0, t1))
+        return false;
+    double t = t0;
+    const double ft = height_gap(r, scaled_.data(), scaled_.data() + scaled_.size(), t);
+    if (ft == 0) {
+        if (!(t > tmin))
+            t = std::nextafter(t, t1);
+    } else {
+        Bracket bracket{};
+        if (!bracket_crossing(r, t, ft, t1, bracket))
+            return false;
+        t = refine_crossing(r, bracket);
+        if (!(t > tmin && t < tmax))
+            return false;
+    }
+    return surface_hit(o, d, r, t, hit);
 }
 
 // ---- Scene ---------------------------------------------------------------

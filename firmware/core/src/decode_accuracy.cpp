@@ -1,8 +1,9 @@
 #include "fpp/decode_accuracy.hpp"
 
+#include "fpp/error.hpp"
+
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 #include <vector>
 
 namespace fpp {
@@ -11,7 +12,9 @@ AxisAccuracy compare_to_truth(const Image<float>& decoded, const Image<float>& t
                               double period) {
     if (decoded.size() != truth.size() || channel < 0 || channel >= truth.channels() ||
         decoded.channels() != 1)
-        throw std::invalid_argument("compare_to_truth: decoded and truth images do not match");
+        throw InputError("compare_to_truth",
+                         channel < 0 || channel >= truth.channels() ? "channel" : "truth",
+                         "decoded and truth images do not match");
 
     AxisAccuracy acc;
     std::vector<float> abs_errors;

@@ -6,6 +6,8 @@
 #include "unwrap_spatial.hpp"
 #include "unwrap_temporal.hpp"
 
+#include "fpp/error.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -72,9 +74,8 @@ DecodeEngine::DecodeEngine(Plan plan, const DecodeOptions& options, Mode mode,
 
     for (int a = 0; a < 2; ++a)
         if (plan_.axes[a].phases.size() > static_cast<std::size_t>(kMaxBlocksPerAxis))
-            throw std::invalid_argument(
-                "cannot decode sequence: more than 16 phase blocks on axis " +
-                std::string(a == 0 ? "x" : "y"));
+            refuse_sequence(plan_, "sequence",
+                            "more than 16 phase blocks on axis " + std::string(a == 0 ? "x" : "y"));
 
     allocate_result(recycled);
     const int report_axis = plan_.axes[0].coded ? 0 : 1;
@@ -341,25 +342,28 @@ void DecodeEngine::restart(DecodeResult* recycled) {
 }
 
 void DecodeEngine::check_frame(const Frame& frame, int index) const {
+    // Named as the capture-set reader names a frame: field "frames[i]".
+    const std::string field = "frames[" + std::to_string(index) + "]";
     const std::string where = "frame " + std::to_string(index) + ": ";
+    auto refuse = [&](const std::string& what) {
+        throw InputError(plan_.origin, field, where + what);
+    };
     if (frame.bit_depth != 8 && frame.bit_depth != 16)
-        throw std::invalid_argument(where + "bit depth must be 8 or 16, got " +
-                                    std::to_string(frame.bit_depth));
+        refuse("bit depth must be 8 or 16, got " + std::to_string(frame.bit_depth));
     const bool eight = frame.bit_depth == 8;
     const int channels = eight ? frame.u8.channels() : frame.u16.channels();
     const bool empty = eight ? frame.u8.empty() : frame.u16.empty();
     if (empty)
-        throw std::invalid_argument(where + "no pixel data for its bit depth");
+        refuse("no pixel data for its bit depth");
     if (channels != 1)
-        throw std::invalid_argument(where + "must have one channel");
+        refuse("must have one channel");
     if (frame.size() != plan_.camera)
-        throw std::invalid_argument(
-            where + "size " + std::to_string(frame.size().width) + "x" +
-            std::to_string(frame.size().height) + " differs from the camera size " +
-            std::to_string(plan_.camera.width) + "x" + std::to_string(plan_.camera.height));
+        refuse("size " + std::to_string(frame.size().width) + "x" +
+               std::to_string(frame.size().height) + " differs from the camera size " +
+               std::to_string(plan_.camera.width) + "x" + std::to_string(plan_.camera.height));
     if (depth_ != 0 && frame.bit_depth != depth_)
-        throw std::invalid_argument(where + "bit depth " + std::to_string(frame.bit_depth) +
-                                    " differs from the first frame's " + std::to_string(depth_));
+        refuse("bit depth " + std::to_string(frame.bit_depth) + " differs from the first frame's " +
+               std::to_string(depth_));
 }
 
 void DecodeEngine::set_depth(const Frame& first) {
@@ -695,8 +699,9 @@ void DecodeEngine::push(const Frame& frame) {
     if (finished_)
         throw std::logic_error("push() after finish()");
     if (received_ >= plan_.frame_count)
-        throw std::invalid_argument("push(): the sequence has only " +
-                                    std::to_string(plan_.frame_count) + " frames");
+        throw InputError(plan_.origin, "frames",
+                         "push(): the sequence has only " + std::to_string(plan_.frame_count) +
+                             " frames");
     check_frame(frame, received_);
     if (depth_ == 0) {
         set_depth(frame);
@@ -764,9 +769,9 @@ DecodeResult DecodeEngine::run_batch(const std::vector<Frame>& frames) {
     if (finished_)
         throw std::logic_error("run_batch() called twice");
     if (static_cast<int>(frames.size()) != plan_.frame_count)
-        throw std::invalid_argument("the capture has " + std::to_string(frames.size()) +
-                                    " frames but its sequence needs " +
-                                    std::to_string(plan_.frame_count));
+        throw InputError(plan_.origin, "frames",
+                         "the capture has " + std::to_string(frames.size()) +
+                             " frames but its sequence needs " + std::to_string(plan_.frame_count));
     for (std::size_t f = 0; f < frames.size(); ++f) {
         check_frame(frames[f], static_cast<int>(f));
         if (depth_ == 0)

@@ -4,11 +4,14 @@
 // the streaming decoder execute the same steps in the same order, which is
 // what makes them bit-identical.
 
+#include "fpp/decoder.hpp"
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
 
 #include <cstdint>
+#include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace fpp::detail {
@@ -21,6 +24,7 @@ enum class PhaseKind { standard, two_plus_one, modulated, micro };
 struct PhaseInfo {
     PhaseBlock block; // micro: period = periods[0], steps = 3
     PhaseKind kind = PhaseKind::standard;
+    int sequence_index = 0; // the block's index in the sequence (error messages)
     int first_frame = 0;
     int frames = 0;           // frames the block occupies
     int axis = 0;             // 0 = x, 1 = y
@@ -54,6 +58,7 @@ enum class GrayThreshold { white_black, inverse, phase_mean };
 
 struct GrayInfo {
     GrayBlock block;
+    int sequence_index = 0; // the block's index in the sequence (error messages)
     int first_frame = 0;
     int axis = 0;
     int planes = 0; // bits (+1 if complementary)
@@ -112,6 +117,7 @@ inline bool doubt_against_levels(const GrayInfo& g, std::uint16_t flag) {
 
 struct CenterlineInfo {
     CenterlineBlock block;
+    int sequence_index = 0; // the block's index in the sequence (error messages)
     int frame = 0;
     int axis = 0;
     int phase = -1; // the phase block it makes absolute (and thresholds against)
@@ -184,10 +190,31 @@ struct Plan {
     bool needs_full_storage = false; // a stage looks at neighbouring pixels
     bool uses_white_black = false;
     bool uses_levels = false; // white and black kept (n-ary digits, code-only contrast)
+    std::filesystem::path origin; // the file InputErrors name (see make_plan)
 };
 
-// Throws std::invalid_argument with a message naming the block and the reason
-// when the sequence cannot be decoded.
-Plan make_plan(const Sequence& sequence, Size camera, Size projector);
+// The field name of sequence block `index` (and its `key`), as the
+// capture-set reader names it.
+std::string sequence_field(int index, std::string_view key = {});
+
+// Throws InputError(plan.origin, field, "cannot decode sequence: " + what).
+[[noreturn]] void refuse_sequence(const Plan& plan, const std::string& field,
+                                  const std::string& what);
+
+// Code value -> step table of a Gray block over `extent` projector pixels.
+void build_step_table(GrayInfo& g, double extent);
+
+// Plans one axis (decode_plan_axis.cpp).
+void plan_axis(Plan& plan, int axis);
+
+// Throws fpp::InputError(origin, field, "cannot decode sequence: ...") when
+// the sequence cannot be decoded: the field names the block as the
+// capture-set reader does ("sequence[2].period", "sequence[2]"; "sequence"
+// for the sequence as a whole; "camera", "projector" for the sizes), the
+// message the block and the reason. `origin` is the manifest the sequence
+// came from (decode(): the capture's capture.yaml), else kDecoderOrigin
+// (decoder.hpp).
+Plan make_plan(const Sequence& sequence, Size camera, Size projector,
+               const std::filesystem::path& origin = kDecoderOrigin);
 
 } // namespace fpp::detail

@@ -1,9 +1,11 @@
 #include "fpp/decode_report.hpp"
 
+#include "fpp/error.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace fpp {
@@ -134,9 +136,9 @@ void count_pixels(const Image<std::uint8_t>& mask, Lit&& lit, DecodeStatistics& 
 
 void check_arguments(const DecodeResult& result, double full_scale) {
     if (!(full_scale > 0))
-        throw std::invalid_argument("decode_statistics: full scale must be > 0 DN");
+        throw InputError("decode_statistics", "full_scale", "full scale must be > 0 DN");
     if (result.mask.empty())
-        throw std::invalid_argument("decode_statistics: the decode result has no mask");
+        throw InputError("decode_statistics", "mask", "the decode result has no mask");
 }
 
 } // namespace
@@ -166,9 +168,11 @@ DecodeStatistics fused_decode_statistics(const DecodeResult& fused,
                                          double full_scale) {
     check_arguments(fused, full_scale);
     std::vector<DecodeStatistics> each;
-    for (const DecodeResult* pass : passes) {
+    for (std::size_t i = 0; i < passes.size(); ++i) {
+        const DecodeResult* pass = passes[i];
         if (pass == nullptr || pass->mask.size() != fused.mask.size())
-            throw std::invalid_argument("fused_decode_statistics: a pass of another size");
+            throw InputError("fused_decode_statistics", "passes[" + std::to_string(i) + "]",
+                             "a pass of another size");
         each.push_back(decode_statistics(*pass, full_scale));
     }
     DecodeStatistics s;

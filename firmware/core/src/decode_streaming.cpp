@@ -3,6 +3,7 @@
 #include "decode_engine.hpp"
 #include "decode_plan.hpp"
 #include "fpp/decoder.hpp"
+#include "fpp/error.hpp"
 #include "fpp/parallel.hpp"
 
 #include <cmath>
@@ -15,8 +16,8 @@ namespace fpp {
 
 void DecodeOptions::validate() const {
     auto reject = [](const char* field, const std::string& rule, double value) {
-        throw std::invalid_argument(std::string("DecodeOptions::") + field + " must be " + rule +
-                                    ", got " + std::to_string(value));
+        throw InputError(kDecodeOptionsOrigin, field,
+                         "must be " + rule + ", got " + std::to_string(value));
     };
     if (!(std::isfinite(min_modulation) && min_modulation >= 0 && min_modulation < 1))
         reject("min_modulation", "in [0, 1)", min_modulation);
@@ -27,10 +28,20 @@ void DecodeOptions::validate() const {
         reject("max_unwrap_disagreement", "in (0, 0.5]", max_unwrap_disagreement);
     if (threads < 0 || threads > 1024)
         reject("threads", "in [0, 1024]", threads);
-    phase_error.validate();
+    try {
+        phase_error.validate();
+    } catch (const std::invalid_argument& e) { // "PhaseErrorOptions::<field> must be ..."
+        throw InputError(kDecodeOptionsOrigin, "phase_error", e.what());
+    }
 }
 
 namespace {
+
+// The manifest a capture's errors name: its capture.yaml ("capture.yaml"
+// for a set that was never read from a folder).
+std::filesystem::path manifest_of(const CaptureSet& capture) {
+    return capture.folder / "capture.yaml";
+}
 
 const DecodeOptions& validated(const DecodeOptions& options) {
     options.validate();
@@ -80,7 +91,7 @@ struct StreamingDecoder::Impl {
           engine(std::move(plan), o, detail::DecodeEngine::Mode::streaming, recycled) {}
     Impl(const Sequence& sequence, Size camera, Size projector, const DecodeOptions& o,
          DecodeResult* recycled)
-        : Impl(detail::make_plan(sequence, camera, projector), o, recycled) {}
+        : Impl(detail::make_plan(sequence, camera, projector, kDecoderOrigin), o, recycled) {}
 };
 
 StreamingDecoder::StreamingDecoder(const Sequence& sequence, Size camera, Size projector,
@@ -126,7 +137,7 @@ DecodeResult StreamingDecoder::finish() {
 DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options) {
     options.validate();
     detail::Plan plan = detail::make_plan(capture.manifest.sequence, capture.manifest.camera,
-                                          capture.manifest.projector);
+                                          capture.manifest.projector, manifest_of(capture));
     const FinestBlocks finest(plan);
     detail::DecodeEngine engine(std::move(plan), options, detail::DecodeEngine::Mode::batch);
     DecodeResult result = engine.run_batch(capture.frames);
@@ -137,7 +148,7 @@ DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options) {
 void decode(const CaptureSet& capture, DecodeResult& result, const DecodeOptions& options) {
     options.validate();
     detail::Plan plan = detail::make_plan(capture.manifest.sequence, capture.manifest.camera,
-                                          capture.manifest.projector);
+                                          capture.manifest.projector, manifest_of(capture));
     const FinestBlocks finest(plan);
     detail::DecodeEngine engine(std::move(plan), options, detail::DecodeEngine::Mode::batch,
                                 &result);

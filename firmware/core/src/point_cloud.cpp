@@ -335,41 +335,59 @@ double load_value(const char* p, PlyType t) {
     return 0;
 }
 
-} // namespace
+struct PlyProperty {
+    std::string name;
+    PlyType type;
+    std::size_t offset; // in the vertex record
+};
 
-PlyPoints read_ply(const std::filesystem::path& path) {
-    const std::string bytes = yaml_fields::read_text_file(path); // binary-safe
+// What the header says of the vertex element.
+struct PlyHeader {
+    std::vector<PlyProperty> props;
+    std::size_t vertex_count = 0;
+    std::size_t record = 0; // bytes per vertex
+    std::size_t body = 0;   // offset of the first vertex in the file
+};
 
-    // Header: lines up to and including "end_header".
-    std::size_t pos = 0;
-    auto next_line = [&](std::string& line) {
-        const std::size_t end = bytes.find('\n', pos);
+// Header lines, one at a time, up to and including "end_header".
+class PlyHeaderLines {
+public:
+    PlyHeaderLines(const std::string& bytes, const std::filesystem::path& path)
+        : bytes_(bytes), path_(path) {}
+
+    void next(std::string& line) {
+        const std::size_t end = bytes_.find('\n', pos_);
         if (end == std::string::npos)
-            throw InputError(path, "header", "no end_header line");
-        line = bytes.substr(pos, end - pos);
+            throw InputError(path_, "header", "no end_header line");
+        line = bytes_.substr(pos_, end - pos_);
         if (!line.empty() && line.back() == '\r')
             line.pop_back();
-        pos = end + 1;
-    };
+        pos_ = end + 1;
+    }
+    std::size_t position() const { return pos_; }
+
+private:
+    const std::string& bytes_;
+    const std::filesystem::path& path_;
+    std::size_t pos_ = 0;
+};
+
+// Reads the header: the vertex element's properties and count, comments and
+// the organised size (into `points`); checks the format.
+PlyHeader read_ply_header(const std::string& bytes, const std::filesystem::path& path,
+                          PlyPoints& points) {
+    PlyHeaderLines lines(bytes, path);
     std::string line;
-    next_line(line);
+    lines.next(line);
     if (line != "ply")
         throw InputError(path, "header", "not a PLY file (first line is not 'ply')");
 
-    struct Property {
-        std::string name;
-        PlyType type;
-        std::size_t offset;
-    };
-    PlyPoints points;
-    std::vector<Property> props;
-    std::size_t vertex_count = 0;
-    std::size_t record = 0;
+    PlyHeader header;
     int element_index = -1;
     bool format_seen = false;
     long long organised_w = -1, organised_h = -1;
     for (;;) {
-        next_line(line);
+        lines.next(line);
         std::istringstream words(line);
         std::string keyword;
         words >> keyword;
@@ -402,7 +420,7 @@ PlyPoints read_ply(const std::filesystem::path& path) {
                     throw InputError(path, "element", "the first element must be 'vertex'");
                 if (count < 0 || words.fail())
                     throw InputError(path, "element vertex", "bad vertex count");
-                vertex_count = static_cast<std::size_t>(count);
+                header.vertex_count = static_cast<std::size_t>(count);
             }
         } else if (keyword == "property") {
             if (element_index < 0)
@@ -416,8 +434,8 @@ PlyPoints read_ply(const std::filesystem::path& path) {
             PlyType type{};
             if (!parse_type(type_name, type) || name.empty())
                 throw InputError(path, "property", "bad property line '" + line + "'");
-            props.push_back({name, type, record});
-            record += type_bytes(type);
+            header.props.push_back({name, type, header.record});
+            header.record += type_bytes(type);
         } else {
             throw InputError(path, "header", "unknown header line '" + line + "'");
         }
@@ -429,15 +447,22 @@ PlyPoints read_ply(const std::filesystem::path& path) {
     if (organised_w > 0 && organised_h > 0 && organised_w <= std::numeric_limits<int>::max() &&
         organised_h <= std::numeric_limits<int>::max())
         points.organised = {static_cast<int>(organised_w), static_cast<int>(organised_h)};
+    header.body = lines.position();
+    return header;
+}
 
-    const Property* px = nullptr;
-    const Property* py = nullptr;
-    const Property* pz = nullptr;
-    const Property* pq = nullptr;
-    const Property* pi = nullptr;
-    const Property* ps = nullptr;
-    const Property* pp = nullptr;
-    for (const auto& p : props) {
+// Reads the vertices after the header: x, y, z and whichever of quality,
+// intensity, sigma_z and pixel the header lists.
+void read_ply_body(const std::string& bytes, const PlyHeader& header,
+                   const std::filesystem::path& path, PlyPoints& points) {
+    const PlyProperty* px = nullptr;
+    const PlyProperty* py = nullptr;
+    const PlyProperty* pz = nullptr;
+    const PlyProperty* pq = nullptr;
+    const PlyProperty* pi = nullptr;
+    const PlyProperty* ps = nullptr;
+    const PlyProperty* pp = nullptr;
+    for (const auto& p : header.props) {
         if (p.name == "x")
             px = &p;
         if (p.name == "y")
@@ -453,9 +478,11 @@ PlyPoints read_ply(const std::filesystem::path& path) {
         if (p.name == "pixel")
             pp = &p;
     }
+    const std::size_t vertex_count = header.vertex_count;
+    const std::size_t record = header.record;
     if (!px || !py || !pz)
         throw InputError(path, "element vertex", "no x, y, z properties");
-    if (record == 0 || (bytes.size() - pos) / record < vertex_count)
+    if (record == 0 || (bytes.size() - header.body) / record < vertex_count)
         throw InputError(path, "element vertex",
                          "truncated: " + std::to_string(vertex_count) + " vertices of " +
                              std::to_string(record) + " bytes need more than the file holds");
@@ -471,7 +498,7 @@ PlyPoints read_ply(const std::filesystem::path& path) {
         points.sigma_z.resize(vertex_count);
     if (pp)
         points.pixel.resize(vertex_count);
-    const char* base = bytes.data() + pos;
+    const char* base = bytes.data() + header.body;
     for (std::size_t i = 0; i < vertex_count; ++i, base += record) {
         points.x[i] = static_cast<float>(load_value(base + px->offset, px->type));
         points.y[i] = static_cast<float>(load_value(base + py->offset, py->type));
@@ -490,6 +517,15 @@ PlyPoints read_ply(const std::filesystem::path& path) {
             points.pixel[i] = static_cast<std::uint32_t>(v);
         }
     }
+}
+
+} // namespace
+
+PlyPoints read_ply(const std::filesystem::path& path) {
+    const std::string bytes = yaml_fields::read_text_file(path); // binary-safe
+    PlyPoints points;
+    const PlyHeader header = read_ply_header(bytes, path, points);
+    read_ply_body(bytes, header, path, points);
     return points;
 }
 

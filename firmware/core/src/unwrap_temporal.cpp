@@ -305,11 +305,14 @@ FPP_KERNEL void code_only(int n, const std::uint16_t* __restrict code, const Gra
         std::uint32_t index = read;
         std::uint32_t flags = base_flags(modulation[x], sat[x], c);
         if constexpr (Carries) {
-            // run: the doubtful digits 0..j (d's lowest run of ones).
-            const std::uint32_t run = (d ^ (d + 1u)) >> 1;
+            // run: digits 0..j, j the most significant doubtful one.
+            std::uint32_t run = d | (d >> 1u);
+            run |= run >> 2u;
+            run |= run >> 4u;
+            run |= run >> 8u;
             const std::uint32_t top = (run + 1u) >> 1;
             index = run == 0u ? read : count + ((read & ~run) | top);
-            flags |= (((d & ~run) != 0u) | (run > g.max_carry_run)) ? kLow : 0u;
+            flags |= run > g.max_carry_run ? kLow : 0u;
         } else {
             flags |= (d & (d - 1u)) != 0u ? kLow : 0u;
         }

@@ -94,11 +94,13 @@ void unwrap_gray_row(int n, const PhaseRow& phase, const std::uint16_t* code,
 // flagged inconsistent; low `modulation` (DN) is low modulation. `doubt` holds
 // a flag per doubtful plane. Gray and n-ary codes: two or more doubtful
 // planes are low modulation (one is a code edge). With resolve_carries
-// (natural binary, `doubt` holds the planes' code weights): doubtful digits
-// exactly 0..j are taken as unknown and the pixel as lying on the one edge
-// inside their cell where they all change (..0111 | ..1000, the cell's
-// centre), code_coordinate[count + upper value]; other doubt patterns, or a
-// run longer than max_carry_run (2^(j+1) - 1), are low modulation. That is
+// (natural binary, `doubt` holds the planes' code weights): with j the most
+// significant doubtful digit, digits 0..j are taken as unknown (the sure ones
+// below j too: a carry edge changes them all, and a finest digit blurred to
+// grey reads as sure at chance) and the pixel as lying on the one edge inside
+// their cell where they all change (..0111 | ..1000, the cell's centre),
+// code_coordinate[count + upper value]; a run longer than max_carry_run
+// (2^(j+1) - 1) is low modulation. That is
 // the best estimate both where the pixel straddles a carry edge and where
 // the finest digits are unreadable (a least significant plane blurred to
 // grey): see test_decode_families.cpp.

@@ -27,6 +27,8 @@ struct AxisAccuracy {
 
 // `truth` is the 2-channel projector truth image; `channel` 0 = x, 1 = y.
 // `period` is the finest fringe period on that axis (projector pixels).
+// Throws InputError("compare_to_truth", "truth" or "channel", ...) when the
+// images' sizes differ, `decoded` is not 1-channel or `truth` has no `channel`.
 AxisAccuracy compare_to_truth(const Image<float>& decoded, const Image<float>& truth, int channel,
                               double period);
 

@@ -59,7 +59,8 @@ struct DecodeStatistics {
 };
 
 // Counts `result` by the rules above. `full_scale`: the frames' full scale in
-// DN (Frame::max_value(): 255, 4095, 65535). Throws std::invalid_argument when
+// DN (Frame::max_value(): 255, 4095, 65535). Throws
+// InputError("decode_statistics", "full_scale" or "mask", ...) when
 // full_scale is not > 0 or the result's mask is empty. A result without a
 // modulation image counts every pixel as lit (floor 0).
 DecodeStatistics decode_statistics(const DecodeResult& result, double full_scale);
@@ -68,7 +69,9 @@ DecodeStatistics decode_statistics(const DecodeResult& result, double full_scale
 // (fpp/exposure_fusion.hpp), whose undecoded pixels carry no modulation: a
 // pixel is lit when it is lit in any pass (each pass with its own floor),
 // decoded when the fused result is, and otherwise counted by the fused flags
-// (every pass's flags ORed). The floor reported is the first pass's.
+// (every pass's flags ORed). The floor reported is the first pass's. Throws
+// as decode_statistics does, and InputError("fused_decode_statistics",
+// "passes[i]", ...) for a pass that is null or of another size.
 DecodeStatistics fused_decode_statistics(const DecodeResult& fused,
                                          const std::vector<const DecodeResult*>& passes,
                                          double full_scale);

@@ -60,7 +60,13 @@
 // without a usable cue, a gray block with too few digits, a code-only block
 // without inverse or white/black frames, more than one gray or centerline
 // block on an axis, ...) makes the constructor / decode() throw
-// std::invalid_argument naming the block and the reason.
+// fpp::InputError (fpp/error.hpp) naming the block and the reason: its file
+// is the capture's manifest (decode(): capture.folder / "capture.yaml") or
+// kDecoderOrigin (StreamingDecoder, which reads no file); its field names
+// the block as the capture-set reader does, "sequence[2].period" (or
+// "sequence[2]" for the block as a whole, "sequence" for the sequence,
+// "camera" / "projector" for a size); its message begins "cannot decode
+// sequence: ".
 //
 // Coordinates outside the projector (beyond one pixel of margin) are flagged
 // kDecodeOutOfRange; code and phase that disagree (or an unused code value, an
@@ -77,6 +83,7 @@
 // ((white + black) / 2, or (I + I_inverse) / 2 of the first plane).
 
 #include "fpp/capture_set.hpp"
+#include "fpp/error.hpp"
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
 #include "fpp/phase_error_correction.hpp"
@@ -86,6 +93,11 @@
 #include <string>
 
 namespace fpp {
+
+// The "file" of the InputErrors of the streaming decoder (which has no
+// manifest) and of DecodeOptions::validate().
+inline constexpr const char* kDecoderOrigin = "decoder";
+inline constexpr const char* kDecodeOptionsOrigin = "decode options";
 
 struct DecodeOptions {
     // A pixel is valid only if the modulation B of every phase block it uses is
@@ -120,7 +132,9 @@ struct DecodeOptions {
     bool correct_phase_error = false;
     PhaseErrorOptions phase_error; // its settings (validated with the rest)
 
-    // Throws std::invalid_argument naming the field if a value is out of range.
+    // Throws InputError(kDecodeOptionsOrigin, field, "must be ...") naming the
+    // field ("min_modulation", "threads", ...; "phase_error" for a value of
+    // phase_error, the message naming it) if a value is out of range.
     void validate() const;
 };
 
@@ -163,10 +177,11 @@ public:
     StreamingDecoder(StreamingDecoder&&) noexcept;
     StreamingDecoder& operator=(StreamingDecoder&&) noexcept;
 
-    // Feeds the next frame in capture order. Throws std::invalid_argument on a
-    // frame of the wrong size, a bit depth differing from the first frame, or
-    // more frames than the sequence has. The frame is not referenced after
-    // push() returns (frames needed later are copied).
+    // Feeds the next frame in capture order. Throws InputError(kDecoderOrigin,
+    // "frames[i]", ...) on a frame of the wrong size, a bit depth differing
+    // from the first frame, or (field "frames") more frames than the sequence
+    // has. The frame is not referenced after push() returns (frames needed
+    // later are copied).
     void push(const Frame& frame);
     int frames_received() const;
     int frames_expected() const;
@@ -188,7 +203,10 @@ private:
 // Batch form: the whole capture set at once. Works through the image in
 // cache-sized spans of pixels, each taken through every frame and the
 // unwrapping at once, so each input sample is read once and each output
-// written once.
+// written once. Refusals are InputErrors: of the options as
+// DecodeOptions::validate() throws them; of the sequence (as above) and of the
+// frames (field "frames[i]", or "frames" for the wrong number of frames)
+// naming capture.folder / "capture.yaml".
 DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options = {});
 // Same, writing into `result` and reusing its images' memory when their size
 // fits (bit-identical output to the form above; no page faults or zero-fill

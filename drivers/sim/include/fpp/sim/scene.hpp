@@ -193,6 +193,32 @@ class Relief : public Shape {
     };
     static double eval_range(const ScaledBump* begin, const ScaledBump* end, double x, double y,
                              double* gx, double* gy);
+    // intersect()'s stages. A ray in local coordinates (x, y, w), w = -z_local
+    // (the height direction); along it f(t) = w(t) - h(x(t), y(t)).
+    struct LocalRay {
+        double ox, oy, ow, dx, dy, dw;
+    };
+    // The first sign change of f, in [a, b], with the bumps of its cell.
+    struct Bracket {
+        double a, fa, b, fb;
+        const ScaledBump* bumps_begin;
+        const ScaledBump* bumps_end;
+    };
+    LocalRay local_ray(const Vec3& o, const Vec3& d) const;
+    // Narrows [t0, t1] to the ray's stretch inside the bounding box; false if none.
+    bool clip_to_box(const LocalRay& r, double& t0, double& t1) const;
+    // f(t) over the bumps [begin, end).
+    static double height_gap(const LocalRay& r, const ScaledBump* begin, const ScaledBump* end,
+                             double t);
+    // Ray parameter (at most t1) where the ray leaves the cell holding
+    // parameter `at`, which goes to (cx, cy).
+    double cell_exit(const LocalRay& r, double at, double t1, int& cx, int& cy) const;
+    // Walks the cells from t (f(t) = ft, not 0) to t1; false if f keeps its sign.
+    bool bracket_crossing(const LocalRay& r, double t, double ft, double t1, Bracket& out) const;
+    // The root inside a bracket (safeguarded Newton).
+    static double refine_crossing(const LocalRay& r, Bracket br);
+    // The hit at parameter t; false outside the rectangle.
+    bool surface_hit(const Vec3& o, const Vec3& d, const LocalRay& r, double t, Hit& hit) const;
     std::vector<ScaledBump> scaled_;
     // Per cell, the bumps whose support overlaps it (the others are exactly
     // 0 there): cell i owns cell_bumps_[cell_offset_[i] .. cell_offset_[i+1]).
