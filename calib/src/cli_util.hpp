@@ -18,8 +18,7 @@ namespace fpp::calib {
 
 // A subcommand as its add_*_command declares it: the CLI11 subcommand, the
 // arguments its options fill in, and the action run on them once parsed.
-template <class Args>
-struct Command {
+template <class Args> struct Command {
     CLI::App* cmd;
     std::shared_ptr<Args> args;
     Action action;

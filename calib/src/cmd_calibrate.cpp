@@ -48,12 +48,11 @@ int run_calibrate(const CalibrateArgs& args) {
     check_report_folder(args.stereo_report, "calibration");
     check_report_folder(args.hybrid_report, "hybrid calibration");
     // The ramp first: a bad one stops the command before the long work.
-    const std::filesystem::path ramp =
-        std::filesystem::path(args.session) / kSessionResponseFolder;
+    const std::filesystem::path ramp = std::filesystem::path(args.session) / kSessionResponseFolder;
     std::optional<ProjectorResponse> response;
-    const std::filesystem::path response_file =
-        args.response.empty() ? out.parent_path() / kProjectorResponseFile
-                              : std::filesystem::path(args.response);
+    const std::filesystem::path response_file = args.response.empty()
+                                                    ? out.parent_path() / kProjectorResponseFile
+                                                    : std::filesystem::path(args.response);
     if (std::filesystem::is_directory(ramp)) {
         check_output_file(response_file, "--response names the response file to write");
         std::cerr << "== projector response\n";
@@ -119,7 +118,8 @@ Action add_calibrate_command(CLI::App& app) {
     cmd->add_option("--model", args->model, "table model (as `hybrid --model`)")
         ->capture_default_str()
         ->check(CLI::IsMember({"rational", "ray", "polynomial"}));
-    cmd->add_option("--samples", args->samples, "what the table is fitted to (as `hybrid --samples`)")
+    cmd->add_option("--samples", args->samples,
+                    "what the table is fitted to (as `hybrid --samples`)")
         ->capture_default_str()
         ->check(CLI::IsMember({"boards+model", "boards", "model"}));
     cmd->add_option("--min-poses", args->min_poses, "poses a pixel needs for a model (at least 4)")

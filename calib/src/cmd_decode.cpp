@@ -32,7 +32,8 @@ struct DecodeArgs {
 int run_decode(const DecodeArgs& args) {
     check_decode_options(args.options);
     std::cerr << "reading " << args.capture << "\n";
-    const CaptureSet capture = read_capture_set(args.capture); // validates before anything is written
+    const CaptureSet capture =
+        read_capture_set(args.capture); // validates before anything is written
     Stopwatch watch;
     // A sequence the decoder cannot decode: InputError naming capture.yaml's field.
     const DecodeResult result = decode(capture, args.options);

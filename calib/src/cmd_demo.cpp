@@ -24,7 +24,8 @@ constexpr const char* kDemoMarker = ".fpp-demo";
 
 struct DemoArgs {
     std::string out = "demo-out";
-    std::string rig = (std::filesystem::path(FPP_BOARD_DIR) / "sim" / "paper-rig-effects.yaml").string();
+    std::string rig =
+        (std::filesystem::path(FPP_BOARD_DIR) / "sim" / "paper-rig-effects.yaml").string();
     std::string scene = "composite";
     std::string sequence = "gray-xy";
     std::uint64_t seed = 1;
@@ -51,8 +52,8 @@ int run_demo(const DemoArgs& args) {
     const Sequence sequence = sequence_from_argument(args.sequence, rig.projector_size);
     prepare_output(out);
 
-    std::cerr << "[1/3] simulating " << frame_count(sequence) << " frames of scene '"
-              << args.scene << "' on rig '" << rig.name << "'\n";
+    std::cerr << "[1/3] simulating " << frame_count(sequence) << " frames of scene '" << args.scene
+              << "' on rig '" << rig.name << "'\n";
     Stopwatch sim_watch;
     const sim::SimulatedCapture simulated = sim::simulate(rig, scene, sequence, args.seed);
     sim::write_simulated_capture(out / "capture", simulated);
@@ -88,9 +89,12 @@ Action add_demo_command(CLI::App& app) {
         "error against ground truth",
         run_demo);
     cmd->add_option("--out", args->out, "output folder")->capture_default_str();
-    cmd->add_option("--rig", args->rig, "rig YAML file")->capture_default_str()->check(CLI::ExistingFile);
+    cmd->add_option("--rig", args->rig, "rig YAML file")
+        ->capture_default_str()
+        ->check(CLI::ExistingFile);
     cmd->add_option("--scene", args->scene, "scene name or YAML file")->capture_default_str();
-    cmd->add_option("--sequence", args->sequence, "sequence name or YAML file")->capture_default_str();
+    cmd->add_option("--sequence", args->sequence, "sequence name or YAML file")
+        ->capture_default_str();
     cmd->add_option("--seed", args->seed, "noise seed")->capture_default_str();
     return action;
 }

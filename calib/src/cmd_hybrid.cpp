@@ -89,8 +89,7 @@ Action add_hybrid_command(CLI::App& app) {
                     "(model)")
         ->capture_default_str()
         ->check(CLI::IsMember({"boards+model", "boards", "model"}));
-    cmd->add_option("--min-poses", args->min_poses,
-                    "poses a pixel needs for a model (at least 4)")
+    cmd->add_option("--min-poses", args->min_poses, "poses a pixel needs for a model (at least 4)")
         ->capture_default_str()
         ->check(CLI::Range(4, 1000));
     add_threads_option(*cmd, args->threads);

@@ -58,7 +58,7 @@ struct ReconstructArgs {
     std::string camera_size;    // "WxH", for calibrations without sizes
     std::string projector_size; // "WxH"
     DecodeOptions decode;
-    CoordinateFilterOptions smooth; // radius set to 0 (off) unless --smooth
+    CoordinateFilterOptions smooth;               // radius set to 0 (off) unless --smooth
     std::string second_capture, pair_calibration; // two cameras: cmd_reconstruct_pair.cpp
 };
 
@@ -384,12 +384,11 @@ std::string reconstruct_report(const ReconstructRequest& request, const CaptureS
     }
     for (const auto* c : {&decoded.phase_correction_x, &decoded.phase_correction_y})
         if (c->attempted)
-            report << "phase-error correction ("
-                   << (c == &decoded.phase_correction_x ? "x" : "y") << "): " << describe(*c)
-                   << "\n";
-    report << "decoded: " << decode_stats.decoded << " of " << decode_stats.lit
-           << " lit pixels (" << 100.0 * decode_stats.coverage_of_lit() << " %); "
-           << decode_stats.floor_rule() << "\n";
+            report << "phase-error correction (" << (c == &decoded.phase_correction_x ? "x" : "y")
+                   << "): " << describe(*c) << "\n";
+    report << "decoded: " << decode_stats.decoded << " of " << decode_stats.lit << " lit pixels ("
+           << 100.0 * decode_stats.coverage_of_lit() << " %); " << decode_stats.floor_rule()
+           << "\n";
     report << "points: " << stats.points << " of " << pixels << " pixels ("
            << 100.0 * double(stats.points) / double(pixels) << " %); ";
     if (use_table)

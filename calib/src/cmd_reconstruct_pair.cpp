@@ -58,7 +58,6 @@ void settle_sizes(CameraPairCalibration& pair, const fs::path& file, const Captu
     }
 }
 
-
 DecodeResult decode_capture(const CaptureSet& capture, const DecodeOptions& options) {
     const fs::path manifest = capture.folder / "capture.yaml";
     const DecodeResult decoded = decode(capture, options); // InputError naming the field

@@ -43,12 +43,11 @@ ResponseRamp simulate_response_ramp(const sim::Rig& rig, const sim::SessionOptio
             renderer.render(ramp_pattern(ramp.levels[k], rig.projector_size),
                             sim::Renderer::frame_seed(seed, static_cast<int>(k))));
     // The rig's truth, so that `fpp-calib response` can report the fit's error.
-    ramp.metadata_yaml = "simulated: true\nrig: " + yaml_fields::format_string(rig.name) +
-                         "\nprojector_gamma: " +
-                         yaml_fields::format_real(rig.projector_optics.gamma) +
-                         "\nprojector_black_level: " +
-                         yaml_fields::format_real(rig.projector_optics.black_level) +
-                         "\nsession_pose: 1\nseed: " + std::to_string(seed);
+    ramp.metadata_yaml =
+        "simulated: true\nrig: " + yaml_fields::format_string(rig.name) +
+        "\nprojector_gamma: " + yaml_fields::format_real(rig.projector_optics.gamma) +
+        "\nprojector_black_level: " + yaml_fields::format_real(rig.projector_optics.black_level) +
+        "\nsession_pose: 1\nseed: " + std::to_string(seed);
     return ramp;
 }
 
@@ -83,8 +82,7 @@ int run_simulate_session(const SimulateSessionArgs& args) {
         write_response_ramp(temp / kSessionResponseFolder, ramp);
     });
     std::cerr << "  projector response ramp (" << ramp.levels.size()
-              << " grey levels at the first pose) written to " << kSessionResponseFolder
-              << "/\n";
+              << " grey levels at the first pose) written to " << kSessionResponseFolder << "/\n";
     std::cout << "wrote " << args.out << " (" << args.poses << " poses, " << watch.seconds()
               << " s)\n";
     return 0;

@@ -13,9 +13,9 @@
 #include "fpp/error.hpp"
 
 #include <cstdio>
-#include <optional>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 namespace fpp::calib {
 
@@ -43,8 +43,10 @@ GridSize parse_grid(const std::string& text, const char* option) {
     char x = 0, extra = 0;
     if (std::sscanf(text.c_str(), "%d%c%d%c", &columns, &x, &rows, &extra) != 3 || x != 'x' ||
         columns < 0 || rows < 0)
-        throw std::invalid_argument(std::string(option) + ": expected COLUMNSxROWS, e.g. 12x9, "
-                                    "or none; got '" + text + "'");
+        throw std::invalid_argument(std::string(option) +
+                                    ": expected COLUMNSxROWS, e.g. 12x9, "
+                                    "or none; got '" +
+                                    text + "'");
     return {columns, rows};
 }
 
@@ -128,8 +130,7 @@ Action add_stereo_command(CLI::App& app) {
                     "displacement field over the image for lens defects the lens model lacks; "
                     "none for no grid")
         ->capture_default_str();
-    cmd->add_option("--projector-grid", args->projector_grid,
-                    "the same for the projector")
+    cmd->add_option("--projector-grid", args->projector_grid, "the same for the projector")
         ->capture_default_str();
     add_threads_option(*cmd, args->threads);
     return action;

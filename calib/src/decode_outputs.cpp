@@ -32,8 +32,10 @@ std::pair<float, float> robust_range(const Image<float>& values) {
     finite.reserve(values.pixel_count() / 16 + 1);
     const auto& v = values.storage();
     for (std::size_t i = 0; i < v.size(); i += 16)
-        if (std::isfinite(v[i])) finite.push_back(v[i]);
-    if (finite.empty()) return {0.0f, 1.0f};
+        if (std::isfinite(v[i]))
+            finite.push_back(v[i]);
+    if (finite.empty())
+        return {0.0f, 1.0f};
     std::sort(finite.begin(), finite.end());
     return {finite[finite.size() / 100], finite[finite.size() * 99 / 100]};
 }
@@ -77,7 +79,8 @@ void write_decode_images(const std::filesystem::path& folder, const DecodeResult
     }
     write_tiff(folder / "modulation.tiff", result.modulation);
     const auto [lo, hi] = robust_range(result.modulation);
-    write_png(folder / "modulation.png", false_colour(result.modulation, 0.0f, std::max(hi, lo + 1.0f)));
+    write_png(folder / "modulation.png",
+              false_colour(result.modulation, 0.0f, std::max(hi, lo + 1.0f)));
 
     Image<std::uint8_t> mask(result.camera, 1, 0);
     for (std::size_t i = 0; i < mask.pixel_count(); ++i)
@@ -118,17 +121,18 @@ std::string decode_summary(const DecodeResult& result, const CaptureSet& capture
     std::ostringstream md;
     md << "# Decode of " << capture.folder.filename().string() << "\n\n";
     md << "- camera " << m.camera.width << " x " << m.camera.height << ", projector "
-       << m.projector.width << " x " << m.projector.height << ", " << m.frames.size()
-       << " frames, " << (capture.frames.empty() ? 0 : capture.frames.front().bit_depth)
-       << "-bit\n";
+       << m.projector.width << " x " << m.projector.height << ", " << m.frames.size() << " frames, "
+       << (capture.frames.empty() ? 0 : capture.frames.front().bit_depth) << "-bit\n";
     std::size_t valid = 0;
     for (std::size_t i = 0; i < result.mask.pixel_count(); ++i)
         valid += (result.mask.data()[i] & kDecodeValid) != 0;
     md << "- decoded pixels: " << valid << " of " << result.mask.pixel_count() << " ("
        << fixed(100.0 * double(valid) / double(result.mask.pixel_count()), 2) << " %)\n";
     md << "- decode time: " << fixed(decode_seconds * 1000.0, 1) << " ms\n";
-    if (!result.method_x.empty()) md << "- x unwrapped by: " << result.method_x << "\n";
-    if (!result.method_y.empty()) md << "- y unwrapped by: " << result.method_y << "\n";
+    if (!result.method_x.empty())
+        md << "- x unwrapped by: " << result.method_x << "\n";
+    if (!result.method_y.empty())
+        md << "- y unwrapped by: " << result.method_y << "\n";
     for (const auto* c : {&result.phase_correction_x, &result.phase_correction_y})
         if (c->attempted)
             md << "- phase-error correction (" << (c == &result.phase_correction_x ? "x" : "y")
@@ -141,8 +145,7 @@ std::string decode_summary(const DecodeResult& result, const CaptureSet& capture
                   "(coverage of the pixels lit above):\n\n| change | coverage of lit |\n"
                   "|---|---|\n";
             for (const auto& t : diagnosis.trials)
-                md << "| " << t.change << " | " << fixed(100.0 * t.coverage_of_lit, 1)
-                   << " % |\n";
+                md << "| " << t.change << " | " << fixed(100.0 * t.coverage_of_lit, 1) << " % |\n";
         }
     }
 
@@ -161,7 +164,8 @@ std::string decode_summary(const DecodeResult& result, const CaptureSet& capture
     for (int axis = 0; axis < 2; ++axis) {
         const Image<float>& decoded = axis == 0 ? result.proj_x : result.proj_y;
         const auto period = finest_period(m.sequence, axis == 0 ? Axis::x : Axis::y);
-        if (decoded.empty() || !period) continue;
+        if (decoded.empty() || !period)
+            continue;
         const AxisAccuracy a = compare_to_truth(decoded, truth, axis, *period);
         md << "| " << (axis == 0 ? "x" : "y") << " | " << fixed(*period, 2) << " | "
            << fixed(100.0 * a.coverage(), 2) << " % | " << fixed(a.rms_px, 4) << " | "

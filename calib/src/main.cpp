@@ -65,7 +65,8 @@ int main(int argc, char** argv) {
     }
 
     try {
-        for (auto* sub : app.get_subcommands()) return actions.at(sub)();
+        for (auto* sub : app.get_subcommands())
+            return actions.at(sub)();
     } catch (const fpp::InputError& e) {
         std::cerr << "fpp-calib: error: " << e.what() << "\n";
         return 2;

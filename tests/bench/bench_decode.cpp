@@ -81,7 +81,8 @@ fpp::Sequence family_sequence(const std::string& name) {
     if (name == "micro_5_periods") {
         fpp::MicroPhaseBlock micro;
         micro.axis = fpp::Axis::x;
-        for (int j : {0, 1, 11, 16, 19}) micro.periods.push_back(1.0 / (1.0 / 16.0 - j / 1400.0));
+        for (int j : {0, 1, 11, 16, 19})
+            micro.periods.push_back(1.0 / (1.0 / 16.0 - j / 1400.0));
         return {micro};
     }
     fpp::PhaseBlock phase;
@@ -128,10 +129,12 @@ private:
         return set;
     }
     Fixture() : full(make(full_sequence())), three(make(three_step_sequence())) {
-        for (const auto& f : full.frames) full_bytes += f.u8.pixel_count();
+        for (const auto& f : full.frames)
+            full_bytes += f.u8.pixel_count();
         for (const auto& name : family_names()) {
             families[name] = make(family_sequence(name));
-            for (const auto& f : families[name].frames) family_bytes[name] += f.u8.pixel_count();
+            for (const auto& f : families[name].frames)
+                family_bytes[name] += f.u8.pixel_count();
         }
     }
 };
@@ -192,7 +195,8 @@ void BM_StreamingPushPerFrame(benchmark::State& state) {
         state.PauseTiming();
         fpp::StreamingDecoder decoder(m.sequence, m.camera, m.projector);
         state.ResumeTiming();
-        for (const auto& f : fx.full.frames) decoder.push(f);
+        for (const auto& f : fx.full.frames)
+            decoder.push(f);
         state.PauseTiming();
         auto result = decoder.finish();
         benchmark::DoNotOptimize(result.proj_x.data());
@@ -209,7 +213,8 @@ void BM_StreamingFinish(benchmark::State& state) {
     for (auto _ : state) {
         state.PauseTiming();
         fpp::StreamingDecoder decoder(m.sequence, m.camera, m.projector);
-        for (const auto& f : fx.full.frames) decoder.push(f);
+        for (const auto& f : fx.full.frames)
+            decoder.push(f);
         state.ResumeTiming();
         auto result = decoder.finish();
         benchmark::DoNotOptimize(result.proj_x.data());
@@ -288,7 +293,8 @@ BENCHMARK(BM_OpenCV3StepPSP)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
-    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    if (benchmark::ReportUnrecognizedArguments(argc, argv))
+        return 1;
     fpp::bench::BestTimeReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
@@ -329,8 +335,8 @@ int main(int argc, char** argv) {
         const double family_copy = copy * bytes / double(fx.full_bytes);
         if (t > 0 && family_copy > 0)
             std::printf("  %-27s : %.2f x copy of its %zu frames  [%.2f ms vs %.2f ms]\n",
-                        name.c_str(), t / family_copy, fx.families.at(name).frames.size(),
-                        t * 1e3, family_copy * 1e3);
+                        name.c_str(), t / family_copy, fx.families.at(name).frames.size(), t * 1e3,
+                        family_copy * 1e3);
     }
     return 0;
 }

@@ -58,7 +58,7 @@ struct Fixture {
         return *slot;
     }
 
-  private:
+private:
     Fixture() {
         const fpp::sim::Rig rig = fpp::sim::Rig::paper();
         calibration = fpp::calib::calibration_from_rig(rig);

@@ -705,8 +705,8 @@ int run(int argc, char** argv) {
                     "scan on the scan clock %.0f ms against the single scan's %.0f ms (%.1fx: "
                     "the exposures and four times the frames)\n",
                     kHdrExposures, 4 * context.scanner->frames_per_scan(), hdr_push_mean,
-                    hdr_push_max, hdr_push_max < 4.0 ? "met" : "NOT met", fuse, after, hdr,
-                    single, single > 0 ? hdr / single : 0.0);
+                    hdr_push_max, hdr_push_max < 4.0 ? "met" : "NOT met", fuse, after, hdr, single,
+                    single > 0 ? hdr / single : 0.0);
     }
     g_hdr_context.reset();
     print_spread("baseline write", g_file_baseline_ms);

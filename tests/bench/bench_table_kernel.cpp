@@ -191,8 +191,8 @@ int main(int argc, char** argv) {
     if (benchmark::ReportUnrecognizedArguments(argc, argv))
         return 1;
     const int all = fpp::ThreadPool::resolve_threads(0);
-    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray,
-                                     fpp::TableModel::rational}) {
+    for (const fpp::TableModel model :
+         {fpp::TableModel::polynomial, fpp::TableModel::ray, fpp::TableModel::rational}) {
         const std::string m = fpp::to_string(model);
         benchmark::RegisterBenchmark(("copy_input/" + m).c_str(), copy_input, model)
             ->Unit(benchmark::kMillisecond)
@@ -221,8 +221,8 @@ int main(int argc, char** argv) {
 
     std::printf("\nsummary (%dx%d frame, tiles 32x8, best of the repetitions; %d threads = all)\n",
                 kCamera.width, kCamera.height, all);
-    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray,
-                                     fpp::TableModel::rational}) {
+    for (const fpp::TableModel model :
+         {fpp::TableModel::polynomial, fpp::TableModel::ray, fpp::TableModel::rational}) {
         const std::string m = fpp::to_string(model);
         const double copy = 1e3 * reporter.seconds("copy_input/" + m);
         const double one = 1e3 * reporter.seconds("apply_table/" + m + "/1_thread");
@@ -246,8 +246,8 @@ int main(int argc, char** argv) {
                 "  %-10s load (all CRCs and values checked): mapped %.1f ms, read %.1f ms\n", "",
                 mapped, read);
     }
-    for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray,
-                                     fpp::TableModel::rational}) {
+    for (const fpp::TableModel model :
+         {fpp::TableModel::polynomial, fpp::TableModel::ray, fpp::TableModel::rational}) {
         std::error_code ec;
         fs::remove(table_file_path(model), ec);
     }

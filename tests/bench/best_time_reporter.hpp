@@ -14,7 +14,7 @@
 namespace fpp::bench {
 
 class BestTimeReporter : public benchmark::ConsoleReporter {
-  public:
+public:
     void ReportRuns(const std::vector<Run>& runs) override {
         for (const Run& run : runs) {
             if (run.run_type != Run::RT_Iteration || run.iterations <= 0)
@@ -31,7 +31,7 @@ class BestTimeReporter : public benchmark::ConsoleReporter {
         return it == best_.end() ? 0.0 : it->second;
     }
 
-  private:
+private:
     void keep(const std::string& name, double t) {
         const auto [it, fresh] = best_.emplace(name, t);
         if (!fresh && t < it->second)

@@ -70,7 +70,8 @@ Problem make_problem() {
             const Vec3 board{(k % 4 - 1.5) * 40, (k / 4 - 1) * 40.0, 0};
             const Vec3 x = to_camera(pose, board);
             const Vec2 c = model.camera_pixel(x), q = model.projector_pixel(x);
-            p.corners.push_back({int(i), board,
+            p.corners.push_back({int(i),
+                                 board,
                                  {c[0] + noise(random), c[1] + noise(random)},
                                  {q[0] + noise(random), q[1] + noise(random)}});
             p.dense.push_back({x, {q[0] + noise(random), q[1] + noise(random)}, 0.5, int(i), c});
@@ -83,8 +84,7 @@ Problem make_problem() {
 void check_gradient(const FreeParameters& free) {
     const Problem p = make_problem();
     const GridRegularisation regularisation{0.5, 0.7, 0.01};
-    const Linearisation at =
-        linearise(p.state, p.corners, p.dense, p.used, free, regularisation);
+    const Linearisation at = linearise(p.state, p.corners, p.dense, p.used, free, regularisation);
     ASSERT_FALSE(at.gradient.empty());
     int checked = 0;
     for (std::size_t c = 0; c < at.gradient.size(); ++c) {
@@ -99,8 +99,7 @@ void check_gradient(const FreeParameters& free) {
             const double cp =
                 linearise(plus, p.corners, p.dense, p.used, free, regularisation, &p.state).cost;
             const double cm =
-                linearise(minus, p.corners, p.dense, p.used, free, regularisation, &p.state)
-                    .cost;
+                linearise(minus, p.corners, p.dense, p.used, free, regularisation, &p.state).cost;
             const double numeric = (cp - cm) / (2 * h);
             const double analytic = 2 * at.gradient[c];
             const double scale = std::max({std::fabs(numeric), std::fabs(analytic), 1e-2});

@@ -425,8 +425,7 @@ TEST(CalibrationFile, YamlLineOfDashesAndTextIsRefusedBeforeOpenCvHangsOnIt) {
             EXPECT_NE(std::string(e.what()).find("'---' followed by text"), std::string::npos)
                 << e.what();
         }
-        EXPECT_THROW((void)fpp::calib::parse_calibration(text, "calibration.yml"),
-                     fpp::InputError);
+        EXPECT_THROW((void)fpp::calib::parse_calibration(text, "calibration.yml"), fpp::InputError);
         EXPECT_FALSE(fpp::calib::looks_like_camera_pair(text));
     }
     // A document marker alone or with a space is YAML as OpenCV writes it:

@@ -29,10 +29,10 @@
 
 namespace {
 
+using Eigen::Vector3d;
 using fpp::Vec3;
 using fpp::calib::FitError;
 using fpp::calib::FitOptions;
-using Eigen::Vector3d;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -86,10 +86,10 @@ TEST(ShapeFit, PlaneRecoversNormalOffsetAndNoise) {
         ASSERT_EQ(f.fit.residuals.size(), 5000u);
         // Normal towards the camera: positive residual = nearer the camera.
         EXPECT_LT(eig(f.normal).dot(eig(f.point)), 0.0);
-        const double rms_check = std::sqrt(
-            std::inner_product(f.fit.residuals.begin(), f.fit.residuals.end(),
-                               f.fit.residuals.begin(), 0.0) /
-            5000.0);
+        const double rms_check =
+            std::sqrt(std::inner_product(f.fit.residuals.begin(), f.fit.residuals.end(),
+                                         f.fit.residuals.begin(), 0.0) /
+                      5000.0);
         EXPECT_NEAR(rms_check, f.fit.rms, 1e-12);
         EXPECT_LT(f.fit.min, -3 * 0.05);
         EXPECT_GT(f.fit.max, 3 * 0.05);
@@ -187,8 +187,8 @@ struct SphereTruth {
 };
 
 // The cap a camera at the origin sees, up to `half_angle_deg` from the view direction.
-SphereTruth noisy_sphere(unsigned seed, Vector3d centre, double radius, std::size_t n,
-                         double sigma, double half_angle_deg = 70) {
+SphereTruth noisy_sphere(unsigned seed, Vector3d centre, double radius, std::size_t n, double sigma,
+                         double half_angle_deg = 70) {
     std::mt19937 rng(seed);
     std::normal_distribution<double> noise(0, sigma);
     SphereTruth t{centre, radius, {}};
@@ -211,8 +211,8 @@ TEST(ShapeFit, SphereRecoversCentreRadiusAndNoise) {
         EXPECT_NEAR(f.fit.rms, 0.02, 0.002);
         EXPECT_GT(f.fit.iterations, 0);
         // Residual sign: a point pushed outwards has a positive residual.
-        EXPECT_NEAR(f.fit.residuals[0],
-                    (eig(t.points[0]) - eig(f.centre)).norm() - f.radius, 1e-12);
+        EXPECT_NEAR(f.fit.residuals[0], (eig(t.points[0]) - eig(f.centre)).norm() - f.radius,
+                    1e-12);
     }
 }
 
@@ -265,8 +265,7 @@ CylinderTruth noisy_cylinder(unsigned seed, double radius, double arc_deg, doubl
     std::mt19937 rng(seed);
     std::normal_distribution<double> noise(0, sigma);
     std::uniform_real_distribution<double> along(-length / 2, length / 2);
-    std::uniform_real_distribution<double> angle(-arc_deg / 2 * kPi / 180,
-                                                 arc_deg / 2 * kPi / 180);
+    std::uniform_real_distribution<double> angle(-arc_deg / 2 * kPi / 180, arc_deg / 2 * kPi / 180);
     CylinderTruth t;
     t.point = Vector3d(20, 10, 650);
     t.radius = radius;

@@ -30,9 +30,8 @@ TEST(SimSession, CheckerboardPosesSpreadThroughTheVolumeAndStayVisible) {
     double zmin = 1e9, zmax = 0, tilt_x = 0, tilt_y = 0, xmin = 1e9, xmax = -1e9, ymin = 1e9,
            ymax = -1e9;
     for (const sim::Pose& p : poses) {
-        EXPECT_TRUE(
-            sim::checkerboard_fully_visible(rig, options.board, p,
-                                            sim::checkerboard_margin_px(rig, options)));
+        EXPECT_TRUE(sim::checkerboard_fully_visible(rig, options.board, p,
+                                                    sim::checkerboard_margin_px(rig, options)));
         zmin = std::min(zmin, p.centre[2]);
         zmax = std::max(zmax, p.centre[2]);
         xmin = std::min(xmin, p.centre[0]);
@@ -73,9 +72,8 @@ TEST(SimSession, BoardsAreCentredOnTheCommonFieldWhenTheCameraAxisIsOffIt) {
     ASSERT_EQ(poses.size(), 30u);
     double zmin = 1e9, zmax = 0;
     for (const sim::Pose& p : poses) {
-        EXPECT_TRUE(
-            sim::checkerboard_fully_visible(rig, options.board, p,
-                                            sim::checkerboard_margin_px(rig, options)));
+        EXPECT_TRUE(sim::checkerboard_fully_visible(rig, options.board, p,
+                                                    sim::checkerboard_margin_px(rig, options)));
         zmin = std::min(zmin, p.centre[2]);
         zmax = std::max(zmax, p.centre[2]);
     }

@@ -183,9 +183,9 @@ struct Acceptance {
     calib::SessionResult result;
     ProjectionCheck intrinsics;
     PlaneCheck plane;
-    PlaneCheck plane_rig_model; // reconstructed with the rig's own 5-coefficient model
+    PlaneCheck plane_rig_model;           // reconstructed with the rig's own 5-coefficient model
     ProjectionCheck intrinsics_rig_model; // the rig's own 5-coefficient model: the floor
-    double origin_max_px = 0;   // corner 0 against the board's corner (0, 0), over the poses
+    double origin_max_px = 0; // corner 0 against the board's corner (0, 0), over the poses
     double seconds_session = 0, seconds_calibration = 0;
 };
 

@@ -64,11 +64,13 @@ TEST(CliDecode, SimulatedPlaneDecodesToGroundTruth) {
                              " --scene plane --sequence gray-xy --out " + quote(capture.string()),
                          dir);
     ASSERT_EQ(sim.exit_code, 0) << sim.output;
-    auto dec = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
+    auto dec =
+        run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
     ASSERT_EQ(dec.exit_code, 0) << dec.output;
 
-    for (const char* name : {"proj_x.tiff", "proj_y.tiff", "modulation.tiff", "mask.png",
-                             "flags.png", "proj_x.png", "proj_y.png", "modulation.png", "decode.md"})
+    for (const char* name :
+         {"proj_x.tiff", "proj_y.tiff", "modulation.tiff", "mask.png", "flags.png", "proj_x.png",
+          "proj_y.png", "modulation.png", "decode.md"})
         EXPECT_TRUE(fs::exists(out / name)) << name;
 
     const auto truth = fpp::read_tiff_float(capture / "truth_proj.tiff");
@@ -103,17 +105,18 @@ TEST(CliDecode, ReversedShiftIsDiagnosedAndExitsNonZero) {
     TempDir dir;
     const fs::path rig = write_small_rig(dir);
     const fs::path capture = dir / "capture";
-    auto sim = run_calib("simulate --rig " + quote(rig.string()) +
-                             " --scene plane --sequence heterodyne-x --out " +
-                             quote(capture.string()),
-                         dir);
+    auto sim =
+        run_calib("simulate --rig " + quote(rig.string()) +
+                      " --scene plane --sequence heterodyne-x --out " + quote(capture.string()),
+                  dir);
     ASSERT_EQ(sim.exit_code, 0) << sim.output;
     fpp::CaptureManifest manifest = fpp::read_manifest(capture / "capture.yaml");
     std::get<fpp::PhaseBlock>(manifest.sequence[2]).shift_sign = -1;
     std::ofstream(capture / "capture.yaml") << fpp::manifest_to_yaml(manifest);
 
     const fs::path out = dir / "decoded";
-    auto dec = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
+    auto dec =
+        run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
     EXPECT_EQ(dec.exit_code, 3) << dec.output;
     EXPECT_NE(dec.output.find("With shift_sign 1 in sequence[2], 100 % of lit pixels decode"),
               std::string::npos)
@@ -133,8 +136,7 @@ TEST(CliDecode, BadOptionNamesTheOptionAndWritesNothing) {
                              quote(out.string()),
                          dir);
     EXPECT_EQ(run.exit_code, 2) << run.output;
-    EXPECT_NE(run.output.find("command line: --min-modulation: "), std::string::npos)
-        << run.output;
+    EXPECT_NE(run.output.find("command line: --min-modulation: "), std::string::npos) << run.output;
     EXPECT_NE(run.output.find("in [0, 1)"), std::string::npos) << run.output;
     EXPECT_FALSE(fs::exists(out));
 }
@@ -143,14 +145,16 @@ TEST(CliDecode, MalformedManifestExitsNonZeroAndWritesNothing) {
     TempDir dir;
     const fs::path capture = dir / "bad";
     fs::create_directories(capture);
-    std::ofstream(capture / "capture.yaml") << "format: fpp-capture/1\n"
-                                               "camera: {width: 4, height: 4}\n"
-                                               "projector: {width: 8, height: 8}\n"
-                                               "frames: [a.png, b.png, c.png]\n"
-                                               "sequence:\n"
-                                               "  - {pattern: phase, axis: x, period: -2.0, steps: 3}\n";
+    std::ofstream(capture / "capture.yaml")
+        << "format: fpp-capture/1\n"
+           "camera: {width: 4, height: 4}\n"
+           "projector: {width: 8, height: 8}\n"
+           "frames: [a.png, b.png, c.png]\n"
+           "sequence:\n"
+           "  - {pattern: phase, axis: x, period: -2.0, steps: 3}\n";
     const fs::path out = dir / "out";
-    auto run = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
+    auto run =
+        run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
     EXPECT_EQ(run.exit_code, 2) << run.output;
     EXPECT_NE(run.output.find("capture.yaml"), std::string::npos) << run.output;
     EXPECT_NE(run.output.find("period"), std::string::npos) << run.output;
@@ -163,7 +167,8 @@ TEST(CliDecode, MissingFrameNamesTheFrame) {
     ASSERT_EQ(simulate_gray_x_plane(dir, capture).exit_code, 0);
     fs::remove(capture / "005.png");
     const fs::path out = dir / "out";
-    auto run = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
+    auto run =
+        run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()), dir);
     EXPECT_EQ(run.exit_code, 2) << run.output;
     EXPECT_NE(run.output.find("005.png"), std::string::npos) << run.output;
     EXPECT_FALSE(fs::exists(out));
@@ -174,8 +179,8 @@ TEST(CliSimulate, RefusesToOverwriteACaptureSet) {
     const fs::path rig = write_small_rig(dir);
     const fs::path capture = dir / "capture";
     fs::create_directories(capture);
-    auto run = run_calib("simulate --rig " + quote(rig.string()) + " --out " + quote(capture.string()),
-                         dir);
+    auto run = run_calib(
+        "simulate --rig " + quote(rig.string()) + " --out " + quote(capture.string()), dir);
     EXPECT_NE(run.exit_code, 0);
     EXPECT_NE(run.output.find("already exists"), std::string::npos) << run.output;
     EXPECT_TRUE(fs::is_empty(capture));
@@ -183,7 +188,8 @@ TEST(CliSimulate, RefusesToOverwriteACaptureSet) {
 
 TEST(CliSimulate, UnknownSceneIsAnError) {
     TempDir dir;
-    auto run = run_calib("simulate --scene no-such-scene --out " + quote((dir / "c").string()), dir);
+    auto run =
+        run_calib("simulate --scene no-such-scene --out " + quote((dir / "c").string()), dir);
     EXPECT_NE(run.exit_code, 0);
     EXPECT_NE(run.output.find("no-such-scene"), std::string::npos) << run.output;
     EXPECT_FALSE(fs::exists(dir / "c"));
@@ -214,12 +220,12 @@ TEST(CliDecode, CorrectPhaseErrorRemovesAProjectorGammasErrorFromTheCaptureAlone
     double rms[2] = {0, 0};
     for (int corrected = 0; corrected < 2; ++corrected) {
         const fs::path out = dir / (corrected ? "corrected" : "as-is");
-        auto dec = run_calib("decode " + quote(capture.string()) + " --out " +
-                                 quote(out.string()) + (corrected ? " --correct-phase-error" : ""),
+        auto dec = run_calib("decode " + quote(capture.string()) + " --out " + quote(out.string()) +
+                                 (corrected ? " --correct-phase-error" : ""),
                              dir);
         ASSERT_EQ(dec.exit_code, 0) << dec.output;
-        const auto a = fpp::compare_to_truth(fpp::read_tiff_float(out / "proj_x.tiff"), truth, 0,
-                                             20.0);
+        const auto a =
+            fpp::compare_to_truth(fpp::read_tiff_float(out / "proj_x.tiff"), truth, 0, 20.0);
         EXPECT_GT(a.coverage(), 0.98);
         rms[corrected] = a.rms_px;
         std::ostringstream text;

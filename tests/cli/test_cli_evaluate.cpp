@@ -137,7 +137,7 @@ void write_plain_ply(const fs::path& file, const std::vector<std::array<float, 3
 }
 
 class CliEvaluate : public ::testing::Test {
-  protected:
+protected:
     static void SetUpTestSuite() {
         dir_ = new TempDir;
         const Scene s = plane_scene();

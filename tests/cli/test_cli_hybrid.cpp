@@ -1,9 +1,9 @@
 // fpp-calib hybrid and reconstruct --table, run as a person would: a stereo
 // calibration from a checkerboard session, a table from the same session
 // (boards placed by the camera) and from a plane session (the paper's), a
-// scan reconstructed with each; `calibrate`, both from one reading; bad input gives exit code 2, a message naming
-// the file and what is wrong, and nothing written. Camera binned 4x
-// (400 x 300) so that each step takes a second or two.
+// scan reconstructed with each; `calibrate`, both from one reading; bad input gives exit code 2, a
+// message naming the file and what is wrong, and nothing written. Camera binned 4x (400 x 300) so
+// that each step takes a second or two.
 
 #include "test_support.hpp"
 
@@ -142,11 +142,11 @@ TEST(CliHybrid, CalibrateWritesWhatStereoAndThenHybridWrite) {
     TempDir dir;
     const fs::path calib = dir / "calib.yaml", table = dir / "table.fpt";
     const fs::path stereo_report = dir / "stereo-report", hybrid_report = dir / "hybrid-report";
-    ToolRun run = run_calib("calibrate " + shell_quote(m.boards) + " --out " + shell_quote(calib) +
-                                " --table " + shell_quote(table) + " --stereo-report " +
-                                shell_quote(stereo_report) + " --hybrid-report " +
-                                shell_quote(hybrid_report),
-                            dir);
+    ToolRun run =
+        run_calib("calibrate " + shell_quote(m.boards) + " --out " + shell_quote(calib) +
+                      " --table " + shell_quote(table) + " --stereo-report " +
+                      shell_quote(stereo_report) + " --hybrid-report " + shell_quote(hybrid_report),
+                  dir);
     ASSERT_EQ(run.exit_code, 0) << run.output;
     EXPECT_TRUE(contains(run.output, "calibrated from 10 of 10 poses")) << run.output;
     EXPECT_TRUE(contains(run.output, "poses: 10 of 10 used")) << run.output;

@@ -123,10 +123,18 @@ double figure(const std::string& name) {
 }
 
 const std::vector<std::string>& methods() {
-    static const std::vector<std::string> keys = {
-        "exact",          "sv-paper",           "paper-polynomial",     "paper-ray",
-        "paper-rational", "sv",                 "boards-polynomial",    "boards-ray",
-        "boards-rational", "boards-only-rational", "model-only-rational", "planes-rational"};
+    static const std::vector<std::string> keys = {"exact",
+                                                  "sv-paper",
+                                                  "paper-polynomial",
+                                                  "paper-ray",
+                                                  "paper-rational",
+                                                  "sv",
+                                                  "boards-polynomial",
+                                                  "boards-ray",
+                                                  "boards-rational",
+                                                  "boards-only-rational",
+                                                  "model-only-rational",
+                                                  "planes-rational"};
     return keys;
 }
 
@@ -154,8 +162,7 @@ TEST(CliPaperExperiments, RunsWritesItsOutputsAndKeepsTheAccuracyRelations) {
 
     // The reference: the rig's exact model leaves only the decoding's error.
     for (const char* scene : {"plane", "cylinder", "sphere", "relief"})
-        EXPECT_LT(figure(std::string("truth.") + scene + ".noise_free.exact.rms"), 0.015)
-            << scene;
+        EXPECT_LT(figure(std::string("truth.") + scene + ".noise_free.exact.rms"), 0.015) << scene;
     // On this rig the paper's stereo model fits (its calibration absorbs the
     // distortion outside the 5-coefficient model) and ours takes the same
     // shape: noise-free, our table's shape error (less its offset and tilt)
@@ -203,8 +210,8 @@ TEST(CliPaperExperiments, RunsWritesItsOutputsAndKeepsTheAccuracyRelations) {
         const bool cubic_from_boards = m == "boards-polynomial" || m == "boards-ray";
         int measured = 0;
         for (int k = 1; k <= 7; ++k) {
-            const double error = figure("ball_bar." + std::to_string(k) + "." + m +
-                                        ".spacing_error_noise_free");
+            const double error =
+                figure("ball_bar." + std::to_string(k) + "." + m + ".spacing_error_noise_free");
             if (cubic_from_boards && std::isnan(error))
                 continue;
             ++measured;
@@ -236,9 +243,11 @@ TEST(CliPaperExperiments, RunsWritesItsOutputsAndKeepsTheAccuracyRelations) {
         EXPECT_EQ(c.camera_size, camera) << file;
     }
     EXPECT_FALSE(fpp::calib::load_calibration(s.out / "calib.yaml").projector_correction.empty());
-    EXPECT_TRUE(fpp::calib::load_calibration(s.out / "calib-paper.yaml").projector_correction.empty());
+    EXPECT_TRUE(
+        fpp::calib::load_calibration(s.out / "calib-paper.yaml").projector_correction.empty());
     for (const std::string& key : tables()) {
-        const fpp::CoefficientTable table = fpp::load_table(s.out / ("table-" + key + ".fpt"), &camera);
+        const fpp::CoefficientTable table =
+            fpp::load_table(s.out / ("table-" + key + ".fpt"), &camera);
         EXPECT_TRUE(fs::exists(s.out / ("hybrid-report-" + key) / "summary.md")) << key;
         if (key == "boards-only-rational")
             continue; // the boards' samples alone: fewer pixels, below
@@ -338,7 +347,8 @@ TEST(CliPaperExperiments, LensDefectsRigOurProcedureBeatsThePapersAgainstTheTrut
     // Ours against the paper's, noise-free, nothing removed.
     for (const char* scene : {"plane", "cylinder", "relief"}) {
         const std::string base = std::string("truth.") + scene + ".noise_free.";
-        EXPECT_LT(d.figure(base + "boards-rational.rms"), 0.6 * d.figure(base + "paper-rational.rms"))
+        EXPECT_LT(d.figure(base + "boards-rational.rms"),
+                  0.6 * d.figure(base + "paper-rational.rms"))
             << scene;
         EXPECT_LT(d.figure(base + "boards-rational.shape_rms"),
                   0.2 * d.figure(base + "sv-paper.shape_rms"))
@@ -349,7 +359,8 @@ TEST(CliPaperExperiments, LensDefectsRigOurProcedureBeatsThePapersAgainstTheTrut
     double ours = 0, paper = 0;
     for (int k = 1; k <= 7; ++k) {
         const std::string base = "ball_bar." + std::to_string(k) + ".";
-        ours = std::max(ours, std::fabs(d.figure(base + "boards-rational.spacing_error_noise_free")));
+        ours =
+            std::max(ours, std::fabs(d.figure(base + "boards-rational.spacing_error_noise_free")));
         paper = std::max(paper, std::fabs(d.figure(base + "sv-paper.spacing_error_noise_free")));
     }
     EXPECT_LT(ours, 0.5 * paper);

@@ -48,7 +48,7 @@ fpp::sim::Rig small_rig() {
 
 // Captures and calibrations shared by the tests (simulated once).
 class CliReconstruct : public ::testing::Test {
-  protected:
+protected:
     static void SetUpTestSuite() {
         dir_ = new TempDir;
         const fs::path rig_file = *dir_ / "rig.yaml";
@@ -80,7 +80,8 @@ fs::path misdescribed_copy(const fs::path& from, const fs::path& to) {
     fs::copy(from, to, fs::copy_options::recursive);
     fpp::CaptureManifest manifest = fpp::read_manifest(to / "capture.yaml");
     for (auto& block : manifest.sequence)
-        if (auto* phase = std::get_if<fpp::PhaseBlock>(&block)) phase->shift_sign = -1;
+        if (auto* phase = std::get_if<fpp::PhaseBlock>(&block))
+            phase->shift_sign = -1;
     std::ofstream(to / "capture.yaml") << fpp::manifest_to_yaml(manifest);
     return to;
 }
@@ -284,7 +285,8 @@ TEST_F(CliReconstruct, MisdescribedCaptureWritesNoCloud) {
 TEST_F(CliReconstruct, NoPointIsAnErrorNotAnEmptyCloud) {
     TempDir out;
     fpp::calib::StereoCalibration wrong = fpp::calib::calibration_from_rig(small_rig());
-    for (double& t : wrong.T) t = -t;
+    for (double& t : wrong.T)
+        t = -t;
     const fs::path calib = out / "wrong.yaml";
     fpp::calib::save_calibration(calib, wrong);
     const fs::path ply = out / "cloud.ply";

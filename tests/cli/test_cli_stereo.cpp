@@ -125,8 +125,8 @@ TEST(CliStereo, SimulatedSessionCalibratesAndWritesTheReport) {
 TEST(CliStereo, JointProcedureAndTheHeldOutCheck) {
     TempDir dir;
     const fs::path session = simulate_session(dir, "session", 6, "--seed 4");
-    const ToolRun run =
-        stereo(dir, session, "--procedure joint --camera-grid none --projector-grid none --held-out");
+    const ToolRun run = stereo(
+        dir, session, "--procedure joint --camera-grid none --projector-grid none --held-out");
     ASSERT_EQ(run.exit_code, 0) << run.output;
     EXPECT_TRUE(contains(run.output, "joint bundle adjustment")) << run.output;
     EXPECT_TRUE(contains(run.output, "held-out poses")) << run.output;

@@ -52,7 +52,8 @@ constexpr const char* kAddress = "127.0.0.1";
 fpp::sim::Rig test_rig(int bit_depth = 8) {
     fpp::sim::Rig rig = fpp::sim::Rig::paper().without_effects().binned_camera(4);
     rig.sensor.bit_depth = bit_depth;
-    if (bit_depth > 8) rig.sensor.white_level *= double(1 << (bit_depth - 8));
+    if (bit_depth > 8)
+        rig.sensor.white_level *= double(1 << (bit_depth - 8));
     rig.sensor.read_noise_dn = 0.5 * double(1 << (bit_depth - 8));
     return rig;
 }
@@ -66,7 +67,8 @@ CameraSettings software_triggered(const std::string& pixel_format = "Mono8") {
 }
 
 bool same_pixels(const fpp::Frame& a, const fpp::Frame& b) {
-    if (a.bit_depth != b.bit_depth || a.size() != b.size()) return false;
+    if (a.bit_depth != b.bit_depth || a.size() != b.size())
+        return false;
     return a.bit_depth == 8 ? a.u8.storage() == b.u8.storage() : a.u16.storage() == b.u16.storage();
 }
 
@@ -80,7 +82,8 @@ fpp::drivers::CapturedFrame capture(AravisFakeCamera& fake, AravisCamera& camera
 
 // Images equal where both are numbers, NaN at the same pixels.
 std::size_t differing_pixels(const fpp::Image<float>& a, const fpp::Image<float>& b) {
-    if (a.size() != b.size()) return std::size_t(-1);
+    if (a.size() != b.size())
+        return std::size_t(-1);
     std::size_t differ = 0;
     for (std::size_t i = 0; i < a.storage().size(); ++i) {
         const float x = a.storage()[i], y = b.storage()[i];
@@ -94,7 +97,7 @@ TEST(GigeFrameIds, CountGapsAcrossThe16BitWrap) {
     using fpp::drivers::gige_frames_missed;
     using fpp::drivers::gige_next_frame_id;
     EXPECT_EQ(gige_next_frame_id(41u), 42u);
-    EXPECT_EQ(gige_next_frame_id(65535u), 1u); // 0 is reserved
+    EXPECT_EQ(gige_next_frame_id(65535u), 1u);     // 0 is reserved
     EXPECT_EQ(gige_next_frame_id(65536u), 65537u); // extended 64-bit ids do not wrap
     EXPECT_EQ(gige_frames_missed(41, 42), 0u);
     EXPECT_EQ(gige_frames_missed(41, 44), 2u);
@@ -208,7 +211,8 @@ TEST(AravisCamera, DeliversRenderedFramesInOrderPixelForPixel) {
         std::uint64_t previous_id = 0;
         std::int64_t previous_ns = 0;
         for (int k = 0; k < 6; ++k) {
-            const fpp::Frame rendered = renderer.render(patterns[std::size_t(k)], std::uint64_t(k + 1));
+            const fpp::Frame rendered =
+                renderer.render(patterns[std::size_t(k)], std::uint64_t(k + 1));
             const auto got = capture(fake, camera, rendered);
             EXPECT_TRUE(same_pixels(got.frame, rendered)) << "frame " << k;
             if (k > 0) {
@@ -246,11 +250,13 @@ TEST(AravisCamera, FringeSequenceThroughTheCameraDecodesBitIdentically) {
         previous_id = got.frame_id;
         through_camera.frames.push_back(std::move(got.frame));
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     camera.stop();
     std::cout << "[ figures  ] " << direct.frames.size() << " frames of " << rig.camera_size.width
               << "x" << rig.camera_size.height << " through the fake GigE camera in " << seconds
-              << " s (" << double(direct.frames.size()) / seconds << " frames/s, trigger to frame)\n";
+              << " s (" << double(direct.frames.size()) / seconds
+              << " frames/s, trigger to frame)\n";
 
     fpp::CaptureSet direct_set;
     direct_set.manifest = direct.manifest;
@@ -258,7 +264,8 @@ TEST(AravisCamera, FringeSequenceThroughTheCameraDecodesBitIdentically) {
     const fpp::DecodeResult expected = fpp::decode(direct_set);
     const fpp::DecodeResult decoded = fpp::decode(through_camera);
     std::size_t valid = 0;
-    for (const std::uint8_t m : expected.mask.storage()) valid += (m & fpp::kDecodeValid) ? 1 : 0;
+    for (const std::uint8_t m : expected.mask.storage())
+        valid += (m & fpp::kDecodeValid) ? 1 : 0;
     ASSERT_GT(valid, expected.mask.pixel_count() / 3) << "scene barely decodes; test is void";
     EXPECT_EQ(decoded.mask.storage(), expected.mask.storage());
     EXPECT_EQ(differing_pixels(decoded.proj_x, expected.proj_x), 0u);
@@ -283,14 +290,16 @@ TEST(AravisCamera, SustainedStreamKeepsIdsConsecutiveAndBuffersInThePool) {
         frame.u8.storage()[std::size_t(k)] = static_cast<std::uint8_t>(k + 1); // tags frame k
         const auto got = capture(fake, camera, frame);
         ASSERT_EQ(got.frame.u8.storage()[std::size_t(k)], k + 1) << "frame " << k << " is stale";
-        if (k == 0) first_id = got.frame_id;
+        if (k == 0)
+            first_id = got.frame_id;
         if (k > 0) {
             ASSERT_EQ(got.frame_id, fpp::drivers::gige_next_frame_id(previous_id));
             wrapped = wrapped || got.frame_id < previous_id;
         }
         previous_id = got.frame_id;
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::cout << "[ figures  ] " << count << " frames 400x300 Mono8, ids " << first_id << ".."
               << previous_id << ", " << double(count) / seconds << " frames/s\n";
     EXPECT_EQ(camera.buffers_outstanding(), 0);
@@ -337,7 +346,8 @@ TEST(AravisCamera, CameraGoneMidStreamIsADeviceError) {
         FAIL() << "a frame from a camera that is gone";
     } catch (const DeviceError& e) {
         const std::string what = e.what();
-        EXPECT_NE(what.find("frame " + std::to_string(fpp::drivers::gige_next_frame_id(first.frame_id)) +
+        EXPECT_NE(what.find("frame " +
+                            std::to_string(fpp::drivers::gige_next_frame_id(first.frame_id)) +
                             " did not arrive within 200 ms"),
                   std::string::npos)
             << what;
@@ -358,7 +368,8 @@ TEST(AravisCamera, CameraGoneMidStreamIsADeviceError) {
 #else
 
 TEST(AravisCamera, NotBuilt) {
-    if (fpp::test::in_ci()) FAIL() << "fpp_aravis is not linked to this test";
+    if (fpp::test::in_ci())
+        FAIL() << "fpp_aravis is not linked to this test";
     GTEST_SKIP() << "the Aravis driver is not built (aravis-0.8 not found)";
 }
 

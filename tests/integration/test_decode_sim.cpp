@@ -29,7 +29,8 @@ constexpr int kBinning = fpp::test::kSimulatedCaptureBinning;
 
 fpp::sim::Rig paper_rig(double read_noise_dn) {
     fpp::sim::Rig rig = fpp::sim::Rig::paper().without_effects();
-    if (kBinning > 1) rig = rig.binned_camera(kBinning);
+    if (kBinning > 1)
+        rig = rig.binned_camera(kBinning);
     rig.sensor.read_noise_dn = read_noise_dn;
     return rig;
 }
@@ -45,7 +46,8 @@ double finest_period(const fpp::Sequence& sequence, fpp::Axis axis) {
     double period = 0;
     for (const auto& block : sequence)
         if (const auto* p = std::get_if<fpp::PhaseBlock>(&block))
-            if (p->axis == axis && (period == 0 || p->period < period)) period = p->period;
+            if (p->axis == axis && (period == 0 || p->period < period))
+                period = p->period;
     return period;
 }
 
@@ -59,12 +61,14 @@ fpp::Image<std::uint8_t> near_edges(const fpp::sim::SimulatedCapture& sim, int r
     auto lit = [&](int x, int y) { return std::isfinite(proj.at(x, y, 0)); };
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            if (!lit(x, y)) continue;
+            if (!lit(x, y))
+                continue;
             bool e = false;
             const int nx[4] = {x - 1, x + 1, x, x};
             const int ny[4] = {y, y, y - 1, y + 1};
             for (int k = 0; k < 4 && !e; ++k) {
-                if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) continue;
+                if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h)
+                    continue;
                 if (!lit(nx[k], ny[k]) ||
                     std::abs(double(xyz.at(x, y, 2)) - double(xyz.at(nx[k], ny[k], 2))) > 2.0)
                     e = true;
@@ -74,7 +78,8 @@ fpp::Image<std::uint8_t> near_edges(const fpp::sim::SimulatedCapture& sim, int r
     fpp::Image<std::uint8_t> near(w, h, 1, 0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            if (!edge.at(x, y)) continue;
+            if (!edge.at(x, y))
+                continue;
             for (int v = std::max(0, y - radius); v <= std::min(h - 1, y + radius); ++v)
                 for (int u = std::max(0, x - radius); u <= std::min(w - 1, x + radius); ++u)
                     near.at(u, v) = 1;
@@ -83,10 +88,10 @@ fpp::Image<std::uint8_t> near_edges(const fpp::sim::SimulatedCapture& sim, int r
 }
 
 struct EdgeReport {
-    std::size_t near_valid = 0;  // decoded pixels near edges
-    std::size_t near_gross = 0;  // ... off by more than the gross limit
-    std::size_t far_truth = 0;   // lit pixels away from edges
-    std::size_t far_valid = 0;   // ... decoded
+    std::size_t near_valid = 0; // decoded pixels near edges
+    std::size_t near_gross = 0; // ... off by more than the gross limit
+    std::size_t far_truth = 0;  // lit pixels away from edges
+    std::size_t far_valid = 0;  // ... decoded
     double far_coverage() const { return far_truth ? double(far_valid) / double(far_truth) : 0; }
 };
 
@@ -98,14 +103,18 @@ EdgeReport edge_report(const fpp::Image<float>& decoded, const fpp::sim::Simulat
         for (int x = 0; x < decoded.width(); ++x) {
             const float t = sim.truth_projector.at(x, y, channel);
             const float d = decoded.at(x, y);
-            if (!std::isfinite(t)) continue;
+            if (!std::isfinite(t))
+                continue;
             if (near.at(x, y)) {
-                if (!std::isfinite(d)) continue;
+                if (!std::isfinite(d))
+                    continue;
                 ++r.near_valid;
-                if (std::abs(double(d) - double(t)) > gross) ++r.near_gross;
+                if (std::abs(double(d) - double(t)) > gross)
+                    ++r.near_gross;
             } else {
                 ++r.far_truth;
-                if (std::isfinite(d)) ++r.far_valid;
+                if (std::isfinite(d))
+                    ++r.far_valid;
             }
         }
     return r;
@@ -135,7 +144,9 @@ std::vector<MethodCase> method_cases() {
     };
 }
 
-void PrintTo(const MethodCase& c, std::ostream* os) { *os << c.sequence; }
+void PrintTo(const MethodCase& c, std::ostream* os) {
+    *os << c.sequence;
+}
 
 class DecodeSim : public ::testing::TestWithParam<MethodCase> {};
 
@@ -144,8 +155,10 @@ TEST_P(DecodeSim, MatchesTruth) {
     for (const std::string& scene_name : mc.scenes) {
         const fpp::sim::Scene scene = fpp::sim::named_scene(scene_name);
         for (const double noise : {0.0, 1.5}) {
-            if (noise > 0 && !mc.noisy) continue;
-            SCOPED_TRACE(mc.sequence + " on " + scene_name + ", read noise " + std::to_string(noise));
+            if (noise > 0 && !mc.noisy)
+                continue;
+            SCOPED_TRACE(mc.sequence + " on " + scene_name + ", read noise " +
+                         std::to_string(noise));
             const fpp::sim::Rig rig = paper_rig(noise);
             const fpp::sim::Renderer renderer(rig, scene);
             const fpp::Sequence sequence = fpp::standard_sequence(mc.sequence, rig.projector_size);
@@ -210,12 +223,15 @@ TEST(DecodeSimStreaming, BitIdenticalToBatch) {
     const fpp::DecodeResult batch = fpp::decode(set);
     fpp::StreamingDecoder decoder(set.manifest.sequence, set.manifest.camera,
                                   set.manifest.projector);
-    for (const auto& f : set.frames) decoder.push(f);
+    for (const auto& f : set.frames)
+        decoder.push(f);
     const fpp::DecodeResult streamed = decoder.finish();
     auto same = [](const auto& a, const auto& b) {
         using T = std::remove_cvref_t<decltype(*a.data())>;
-        if (a.size() != b.size()) return false;
-        if (a.empty()) return b.empty(); // memcmp must not see null pointers
+        if (a.size() != b.size())
+            return false;
+        if (a.empty())
+            return b.empty(); // memcmp must not see null pointers
         return std::memcmp(a.data(), b.data(), a.pixel_count() * sizeof(T)) == 0;
     };
     EXPECT_TRUE(same(batch.proj_x, streamed.proj_x));

@@ -189,9 +189,10 @@ TEST(ScannerGige, PacketLossRetriesOrFailsCleanlyAndNeverDecodesOnePatternAsAnot
                 }
             }
         }
-        std::printf("packet loss %.1f %%: %d of %d scans written (%d after a retry), %d failed%s%s\n",
-                    100 * loss, written, kScans, retried, failed, failed ? ", first: " : "",
-                    first_failure.c_str());
+        std::printf(
+            "packet loss %.1f %%: %d of %d scans written (%d after a retry), %d failed%s%s\n",
+            100 * loss, written, kScans, retried, failed, failed ? ", first: " : "",
+            first_failure.c_str());
     }
     // The link whole again: the next scan is written at the first attempt.
     const ScanOutcome out = scanner.scan(ScanMode::scan);
@@ -285,8 +286,7 @@ TEST(ScannerGige, CameraLostMidScanFailsCleanlyAndTheScanAfterItsReturnSucceeds)
     for (const auto& [level, line] : lines.lines) {
         closed |= level == LogLevel::warning && line.find("camera 127.0.0.1 closed after an "
                                                           "error") != std::string::npos;
-        failed |= level == LogLevel::error &&
-                  line.rfind("scan failed: camera 127.0.0.1", 0) == 0;
+        failed |= level == LogLevel::error && line.rfind("scan failed: camera 127.0.0.1", 0) == 0;
     }
     EXPECT_TRUE(closed);
     EXPECT_TRUE(failed);

@@ -33,13 +33,17 @@ double jump_share(const fpp::Image<float>& p, double step) {
     for (int y = 0; y < p.height(); ++y)
         for (int x = 0; x < p.width(); ++x) {
             const float a = p.at(x, y);
-            if (!std::isfinite(a)) continue;
+            if (!std::isfinite(a))
+                continue;
             for (const auto& [u, v] : {std::pair{x + 1, y}, std::pair{x, y + 1}}) {
-                if (u >= p.width() || v >= p.height()) continue;
+                if (u >= p.width() || v >= p.height())
+                    continue;
                 const float b = p.at(u, v);
-                if (!std::isfinite(b)) continue;
+                if (!std::isfinite(b))
+                    continue;
                 ++pairs;
-                if (std::abs(double(a) - double(b)) > step) ++jumps;
+                if (std::abs(double(a) - double(b)) > step)
+                    ++jumps;
             }
         }
     return pairs ? double(jumps) / double(pairs) : 1.0;
@@ -50,7 +54,8 @@ TEST(DecodeDatasets, EveryCaptureDecodes) {
     FPP_REQUIRE_DATASET(fpp::test::dataset("slmaster/monocular"));
     int decoded = 0;
     for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
-        if (entry.path().filename() != "capture.yaml") continue;
+        if (entry.path().filename() != "capture.yaml")
+            continue;
         SCOPED_TRACE(entry.path().string());
         fpp::DecodeResult r;
         ASSERT_NO_THROW(r = decode_folder(entry.path().parent_path()));
@@ -88,7 +93,8 @@ TEST(DecodeDatasets, SLMasterReliefIsSmoothAndComplete) {
         int count = 0;
         for (int x = 470; x < 900; ++x) {
             const float v = r.proj_x.at(x, row);
-            if (!std::isfinite(v)) continue;
+            if (!std::isfinite(v))
+                continue;
             ++count;
             if (std::isfinite(previous)) {
                 // About 1.6 projector px per camera px; a wrong fringe order
@@ -130,7 +136,8 @@ TEST(DecodeDatasets, SLStudioCalibrationPosesDecodeInXAndY) {
         // Well-lit pixels (modulation >= 15 DN: board, table, wall) decode.
         std::size_t lit = 0, valid = 0;
         for (std::size_t i = 0; i < r.mask.pixel_count(); ++i) {
-            if (r.modulation.data()[i] < 15.0f) continue;
+            if (r.modulation.data()[i] < 15.0f)
+                continue;
             ++lit;
             valid += (r.mask.data()[i] & fpp::kDecodeValid) != 0;
         }
@@ -172,9 +179,11 @@ TEST(DecodeDatasets, SLStudioSkulls) {
     std::size_t both = 0, far = 0;
     for (std::size_t i = 0; i < r1.proj_x.pixel_count(); ++i) {
         const float a = r1.proj_x.data()[i], b = r2.proj_x.data()[i];
-        if (!std::isfinite(a) || !std::isfinite(b)) continue;
+        if (!std::isfinite(a) || !std::isfinite(b))
+            continue;
         ++both;
-        if (std::abs(a - b) > 57.0f) ++far;
+        if (std::abs(a - b) > 57.0f)
+            ++far;
     }
     EXPECT_GT(both, 300000u);
     EXPECT_LT(double(far) / double(both), 5e-3);

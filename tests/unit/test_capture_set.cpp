@@ -51,7 +51,8 @@ const fs::path kOrigin = "/captures/pose-07/capture.yaml";
 // kValid with `from` (which must occur) replaced by `to`.
 std::string with(const std::string& from, const std::string& to, std::string text = kValid) {
     const auto at = text.find(from);
-    if (at == std::string::npos) throw std::logic_error("test text lacks: " + from);
+    if (at == std::string::npos)
+        throw std::logic_error("test text lacks: " + from);
     return text.replace(at, from.size(), to);
 }
 
@@ -75,7 +76,8 @@ void expect_input_error(F&& f, const fs::path& file, const std::string& field,
     }
 }
 
-void expect_rejected(const std::string& yaml, const std::string& field, const std::string& hint = "") {
+void expect_rejected(const std::string& yaml, const std::string& field,
+                     const std::string& hint = "") {
     expect_input_error([&] { fpp::parse_manifest(yaml, kOrigin); }, kOrigin, field, hint);
 }
 
@@ -85,10 +87,12 @@ fpp::Frame random_frame(fpp::Size size, int depth, std::uint32_t seed) {
     std::mt19937 rng(seed);
     if (depth == 8) {
         f.u8 = fpp::Image<std::uint8_t>(size);
-        for (auto& v : f.u8.storage()) v = static_cast<std::uint8_t>(rng());
+        for (auto& v : f.u8.storage())
+            v = static_cast<std::uint8_t>(rng());
     } else {
         f.u16 = fpp::Image<std::uint16_t>(size);
-        for (auto& v : f.u16.storage()) v = static_cast<std::uint16_t>(rng());
+        for (auto& v : f.u16.storage())
+            v = static_cast<std::uint16_t>(rng());
     }
     return f;
 }
@@ -112,7 +116,8 @@ void expect_same_frames(const std::vector<fpp::Frame>& a, const std::vector<fpp:
 
 std::vector<std::string> listing(const fs::path& folder) {
     std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(folder)) names.push_back(e.path().filename().string());
+    for (const auto& e : fs::directory_iterator(folder))
+        names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
 }
@@ -216,7 +221,8 @@ metadata:                             # free-form map; readers keep it, never ne
 
 TEST(CaptureManifest, AcceptsSignedAndExponentNumbers) {
     const auto m = fpp::parse_manifest(
-        with("    steps: 3\n", "    steps: +3\n    shift_sign: -1\n    phase_offset: -3.141592653589793e0\n"),
+        with("    steps: 3\n",
+             "    steps: +3\n    shift_sign: -1\n    phase_offset: -3.141592653589793e0\n"),
         kOrigin);
     const auto& p = std::get<fpp::PhaseBlock>(m.sequence[1]);
     EXPECT_EQ(p.steps, 3);
@@ -255,15 +261,17 @@ TEST(CaptureManifestRejects, UnknownAxis) {
 TEST(CaptureManifestRejects, MissingBlockField) {
     expect_rejected(with("    steps: 3\n", ""), "sequence[1].steps", "missing");
     expect_rejected(with("    bits: 3\n", ""), "sequence[2].bits", "missing");
-    expect_rejected(with("  - pattern: white\n", "  - axis: x\n"), "sequence[0].pattern", "missing");
+    expect_rejected(with("  - pattern: white\n", "  - axis: x\n"), "sequence[0].pattern",
+                    "missing");
 }
 
 TEST(CaptureManifestRejects, MissingTopLevelField) {
     expect_rejected(with("camera:    {width: 16, height: 12}\n", ""), "camera", "missing");
     expect_rejected(with("{width: 16, height: 12}", "{width: 16}"), "camera.height", "missing");
     expect_rejected(with("projector: {width: 64, height: 40}\n", ""), "projector", "missing");
-    expect_rejected(with("frames: [f0.png, f1.png, f2.png, f3.png, f4.png, f5.png, f6.png, f7.png]\n", ""),
-                    "frames", "missing");
+    expect_rejected(
+        with("frames: [f0.png, f1.png, f2.png, f3.png, f4.png, f5.png, f6.png, f7.png]\n", ""),
+        "frames", "missing");
 }
 
 TEST(CaptureManifestRejects, FrameCountMismatch) {
@@ -280,14 +288,17 @@ TEST(CaptureManifestRejects, NonFiniteNumbers) {
                     "sequence[1].phase_offset", "non-finite");
     expect_rejected(with("    steps: 3\n", "    steps: 3\n    phase_offset: nan\n"),
                     "sequence[1].phase_offset", "non-finite");
-    expect_rejected(with("period: 8.0\n    steps", "period: 1e999\n    steps"), "sequence[1].period",
-                    "out of the double range");
+    expect_rejected(with("period: 8.0\n    steps", "period: 1e999\n    steps"),
+                    "sequence[1].period", "out of the double range");
 }
 
 TEST(CaptureManifestRejects, NonPositivePeriods) {
-    expect_rejected(with("period: 8.0\n    steps", "period: 0\n    steps"), "sequence[1].period", "> 0");
-    expect_rejected(with("period: 8.0\n    steps", "period: -8.0\n    steps"), "sequence[1].period", "> 0");
-    expect_rejected(with("period: 8.0\n    bits", "period: -8.0\n    bits"), "sequence[2].period", "> 0");
+    expect_rejected(with("period: 8.0\n    steps", "period: 0\n    steps"), "sequence[1].period",
+                    "> 0");
+    expect_rejected(with("period: 8.0\n    steps", "period: -8.0\n    steps"), "sequence[1].period",
+                    "> 0");
+    expect_rejected(with("period: 8.0\n    bits", "period: -8.0\n    bits"), "sequence[2].period",
+                    "> 0");
 }
 
 TEST(CaptureManifestRejects, FewerThanThreeSteps) {
@@ -324,8 +335,9 @@ TEST(CaptureManifestRejects, GrayPeriodMatchingNoPhaseBlock) {
     expect_rejected(with("period: 8.0\n    bits", "period: 16.0\n    bits"), "sequence[2].period",
                     "not the period of any phase block");
     // A phase block with that period on the other axis does not count.
-    expect_rejected(with("axis: x\n    period: 8.0\n    bits", "axis: y\n    period: 8.0\n    bits"),
-                    "sequence[2].period", "no phase block on this axis");
+    expect_rejected(
+        with("axis: x\n    period: 8.0\n    bits", "axis: y\n    period: 8.0\n    bits"),
+        "sequence[2].period", "no phase block on this axis");
 }
 
 TEST(CaptureManifestRejects, NonIntegerWhereAnIntegerIsNeeded) {
@@ -348,10 +360,10 @@ TEST(CaptureManifestRejects, WrongYamlTypes) {
                     "true or false");
     expect_rejected(with("complementary: true", "complementary: 1"), "sequence[2].complementary",
                     "true or false");
-    expect_rejected(with("period: 8.0\n    steps", "period: \"8.0\"\n    steps"), "sequence[1].period",
-                    "quoted");
-    expect_rejected(with("period: 8.0\n    steps", "period: [8.0]\n    steps"), "sequence[1].period",
-                    "must be a number");
+    expect_rejected(with("period: 8.0\n    steps", "period: \"8.0\"\n    steps"),
+                    "sequence[1].period", "quoted");
+    expect_rejected(with("period: 8.0\n    steps", "period: [8.0]\n    steps"),
+                    "sequence[1].period", "must be a number");
     expect_rejected(with("metadata:\n  exposure_us: 8000\n", "metadata: [1, 2]\n"), "metadata",
                     "must be a map");
 }
@@ -391,8 +403,8 @@ TEST(CaptureManifestRejects, DuplicateKeys) {
 }
 
 TEST(CaptureManifestRejects, CenterlineWidthNotPositive) {
-    const std::string base = with("  - pattern: white\n",
-                                  "  - {pattern: centerline, axis: y, position: 20.0, width: 1.0}\n");
+    const std::string base = with(
+        "  - pattern: white\n", "  - {pattern: centerline, axis: y, position: 20.0, width: 1.0}\n");
     EXPECT_NO_THROW(fpp::parse_manifest(base, kOrigin));
     expect_rejected(with("width: 1.0", "width: 0", base), "sequence[0].width", "> 0");
     expect_rejected(with("width: 1.0", "width: -2", base), "sequence[0].width", "> 0");
@@ -400,12 +412,12 @@ TEST(CaptureManifestRejects, CenterlineWidthNotPositive) {
 }
 
 TEST(CaptureManifestRejects, CenterlineOutsideTheProjector) {
-    const std::string base = with("  - pattern: white\n",
-                                  "  - {pattern: centerline, axis: y, position: 41.0, width: 1.0}\n");
+    const std::string base = with(
+        "  - pattern: white\n", "  - {pattern: centerline, axis: y, position: 41.0, width: 1.0}\n");
     // Rows 0..39: a line at 41 +- 0.5 lights nothing; one at 40 +- 1 lights row 39.
     expect_rejected(base, "sequence[0].position", "lights no pixel");
-    EXPECT_NO_THROW(fpp::parse_manifest(with("position: 41.0, width: 1.0", "position: 40.0, width: 2.0", base),
-                                        kOrigin));
+    EXPECT_NO_THROW(fpp::parse_manifest(
+        with("position: 41.0, width: 1.0", "position: 40.0, width: 2.0", base), kOrigin));
 }
 
 TEST(CaptureManifestRejects, NonPositiveCameraOrProjectorSize) {
@@ -426,10 +438,11 @@ TEST(CaptureManifestRejects, FramePathsOutsideTheFolderOrRepeated) {
 }
 
 TEST(CaptureManifestRejects, TruthWithUnknownKeysOrNoFile) {
-    expect_rejected(with("metadata:", "truth: {xyz: t.tiff, depth: d.tiff}\nmetadata:"), "truth.depth",
-                    "unknown key");
+    expect_rejected(with("metadata:", "truth: {xyz: t.tiff, depth: d.tiff}\nmetadata:"),
+                    "truth.depth", "unknown key");
     expect_rejected(with("metadata:", "truth: {}\nmetadata:"), "truth", "lists no file");
-    expect_rejected(with("metadata:", "truth: {xyz: f2.png}\nmetadata:"), "truth.xyz", "also frames[2]");
+    expect_rejected(with("metadata:", "truth: {xyz: f2.png}\nmetadata:"), "truth.xyz",
+                    "also frames[2]");
 }
 
 TEST(CaptureManifestRejects, YamlSyntaxErrorNamesFileAndLine) {
@@ -539,9 +552,10 @@ TEST(CaptureSetRejects, CorruptFrame) {
 TEST(CaptureSetRejects, TruthFileListedButMissing) {
     TempDir dir;
     const fs::path folder = make_set(dir);
-    write_text(folder / "capture.yaml", with("metadata:", "truth:\n  xyz: truth_xyz.tiff\nmetadata:"));
-    expect_input_error([&] { fpp::read_capture_set(folder); }, folder / "truth_xyz.tiff", "truth.xyz",
-                       "not found");
+    write_text(folder / "capture.yaml",
+               with("metadata:", "truth:\n  xyz: truth_xyz.tiff\nmetadata:"));
+    expect_input_error([&] { fpp::read_capture_set(folder); }, folder / "truth_xyz.tiff",
+                       "truth.xyz", "not found");
 }
 
 TEST(CaptureSetRejects, MissingManifest) {
@@ -633,7 +647,8 @@ TEST(CaptureSetWrite, RoundTripKeepsNumbersNamesAndMetadataExactly) {
     p.period = 8.0;
     p.phase_offset = 0.1 + 0.2; // not a short decimal
     p.shift_sign = -1;
-    m.frames = {"frames/a b.png", "007", "true", "f#3.png", "x:y.png", "-f5.png", "f6.png", "ü.png"};
+    m.frames = {"frames/a b.png", "007",     "true",   "f#3.png",
+                "x:y.png",        "-f5.png", "f6.png", "ü.png"};
     m.metadata_yaml = "exposure_us: 8000\nlens:\n  focal_mm: 12.5\n  name: \"C-mount: 1/1.8\"\n"
                       "notes: [a, b]";
     fpp::write_capture_set(dir / "set", m, frames_for(m));
@@ -642,7 +657,8 @@ TEST(CaptureSetWrite, RoundTripKeepsNumbersNamesAndMetadataExactly) {
     EXPECT_EQ(back.manifest.frames, m.frames);
     // The metadata map is the same (compare through a second round trip, whose
     // text must then be stable).
-    EXPECT_EQ(YAML::Dump(YAML::Load(back.manifest.metadata_yaml)), YAML::Dump(YAML::Load(m.metadata_yaml)));
+    EXPECT_EQ(YAML::Dump(YAML::Load(back.manifest.metadata_yaml)),
+              YAML::Dump(YAML::Load(m.metadata_yaml)));
     fpp::write_capture_set(dir / "again", back.manifest, back.frames);
     EXPECT_EQ(fpp::read_manifest(dir / "again" / "capture.yaml"), back.manifest);
 }
@@ -664,10 +680,16 @@ TEST(CaptureSetWrite, TruthImagesAreWrittenAndRead) {
     EXPECT_EQ(fpp::read_tiff_float(dir / "set" / "truth_proj.tiff").channels(), 2);
 
     // Listed but not given, or given with the wrong channel count: refused, nothing written.
-    expect_input_error([&] { fpp::write_capture_set(dir / "b", m, frames_for(m), {&xyz, nullptr}); },
-                       dir / "b" / "capture.yaml", "truth.projector", "no image");
-    expect_input_error([&] { fpp::write_capture_set(dir / "c", m, frames_for(m), {&proj, &proj}); },
-                       dir / "c" / "capture.yaml", "truth.xyz", "3-channel");
+    expect_input_error(
+        [&] {
+            fpp::write_capture_set(dir / "b", m, frames_for(m), {&xyz, nullptr});
+        },
+        dir / "b" / "capture.yaml", "truth.projector", "no image");
+    expect_input_error(
+        [&] {
+            fpp::write_capture_set(dir / "c", m, frames_for(m), {&proj, &proj});
+        },
+        dir / "c" / "capture.yaml", "truth.xyz", "3-channel");
     EXPECT_EQ(listing(dir.path()), std::vector<std::string>{"set"});
 }
 
@@ -707,13 +729,13 @@ TEST(CaptureSetWrite, FramesNotMatchingTheManifestAreRefused) {
 
     frames = frames_for(m);
     frames[5] = random_frame({15, 12}, 8, 1);
-    expect_input_error([&] { fpp::write_capture_set(dir / "set", m, frames); }, dir / "set" / "f5.png",
-                       "frames[5]", "15x12");
+    expect_input_error([&] { fpp::write_capture_set(dir / "set", m, frames); },
+                       dir / "set" / "f5.png", "frames[5]", "15x12");
 
     frames = frames_for(m);
     frames[6] = random_frame({16, 12}, 16, 1);
-    expect_input_error([&] { fpp::write_capture_set(dir / "set", m, frames); }, dir / "set" / "f6.png",
-                       "frames[6]", "16-bit");
+    expect_input_error([&] { fpp::write_capture_set(dir / "set", m, frames); },
+                       dir / "set" / "f6.png", "frames[6]", "16-bit");
     EXPECT_TRUE(listing(dir.path()).empty());
 }
 
@@ -757,13 +779,20 @@ sequence:
 }
 
 TEST(SequenceFile, RejectionsNameTheFileAndField) {
-    expect_input_error([] { fpp::parse_sequence("name: x\n", "scan.yaml"); }, "scan.yaml", "sequence",
-                       "missing");
+    expect_input_error([] { fpp::parse_sequence("name: x\n", "scan.yaml"); }, "scan.yaml",
+                       "sequence", "missing");
     expect_input_error(
-        [] { fpp::parse_sequence("sequence:\n  - {pattern: phase, axis: x, period: 20, steps: 8, foo: 1}\n", "scan.yaml"); },
+        [] {
+            fpp::parse_sequence(
+                "sequence:\n  - {pattern: phase, axis: x, period: 20, steps: 8, foo: 1}\n",
+                "scan.yaml");
+        },
         "scan.yaml", "sequence[0].foo", "unknown key");
     expect_input_error(
-        [] { fpp::parse_sequence("sequence:\n  - {pattern: gray, axis: x, period: 20, bits: 6}\n", "scan.yaml"); },
+        [] {
+            fpp::parse_sequence("sequence:\n  - {pattern: gray, axis: x, period: 20, bits: 6}\n",
+                                "scan.yaml");
+        },
         "scan.yaml", "sequence[0].period", "no phase block");
 }
 
@@ -776,13 +805,17 @@ TEST(SequenceValidation, ChecksAgainstTheProjector) {
     g.bits = 5;
     const fpp::Sequence seq = {p, g};
     EXPECT_NO_THROW(fpp::validate_sequence(seq, {640, 480}, "scan.yaml")); // 32 periods
-    expect_input_error([&] { fpp::validate_sequence(seq, {641, 480}, "scan.yaml"); }, "scan.yaml",
-                       "sequence[1].bits", "at least 6 bits");
+    expect_input_error(
+        [&] {
+            fpp::validate_sequence(seq, {641, 480}, "scan.yaml");
+        },
+        "scan.yaml", "sequence[1].bits", "at least 6 bits");
 }
 
 TEST(Board, ReadsCheckerboardAndPlane) {
     const auto b = fpp::parse_board(
-        "format: fpp-board/1\nkind: checkerboard\ninner_corners: [13, 9]\nsquare_size: 8.0\n", "board.yaml");
+        "format: fpp-board/1\nkind: checkerboard\ninner_corners: [13, 9]\nsquare_size: 8.0\n",
+        "board.yaml");
     EXPECT_EQ(b.kind, fpp::BoardDescription::Kind::checkerboard);
     EXPECT_EQ(b.inner_columns, 13);
     EXPECT_EQ(b.inner_rows, 9);
@@ -795,10 +828,11 @@ TEST(Board, ReadsCheckerboardAndPlane) {
 }
 
 TEST(Board, Rejections) {
-    const std::string ok = "format: fpp-board/1\nkind: checkerboard\ninner_corners: [13, 9]\nsquare_size: 8.0\n";
+    const std::string ok =
+        "format: fpp-board/1\nkind: checkerboard\ninner_corners: [13, 9]\nsquare_size: 8.0\n";
     auto rejected = [](const std::string& text, const std::string& field, const std::string& hint) {
-        expect_input_error([&] { fpp::parse_board(text, "/cal/board.yaml"); }, "/cal/board.yaml", field,
-                           hint);
+        expect_input_error([&] { fpp::parse_board(text, "/cal/board.yaml"); }, "/cal/board.yaml",
+                           field, hint);
     };
     auto replace = [&](const std::string& from, const std::string& to) {
         std::string t = ok;
@@ -827,7 +861,8 @@ TEST(RealDatasets, EveryCaptureYamlReadsWithItsFrames) {
     FPP_REQUIRE_DATASET(root / "slstudio");
     int sets = 0;
     for (const auto& entry : fs::recursive_directory_iterator(root)) {
-        if (entry.path().filename() != "capture.yaml") continue;
+        if (entry.path().filename() != "capture.yaml")
+            continue;
         SCOPED_TRACE(entry.path().string());
         const fpp::CaptureSet set = fpp::read_capture_set(entry.path().parent_path());
         ++sets;
@@ -838,7 +873,8 @@ TEST(RealDatasets, EveryCaptureYamlReadsWithItsFrames) {
             EXPECT_EQ(f.bit_depth, 8);
         }
         // The manifest survives our writer unchanged.
-        EXPECT_EQ(fpp::parse_manifest(fpp::manifest_to_yaml(set.manifest), entry.path()), set.manifest);
+        EXPECT_EQ(fpp::parse_manifest(fpp::manifest_to_yaml(set.manifest), entry.path()),
+                  set.manifest);
     }
     EXPECT_GE(sets, 9); // six calibration poses, two skull scans, one SLMaster scan
 

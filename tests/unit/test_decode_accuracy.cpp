@@ -21,8 +21,8 @@ TEST(DecodeAccuracy, SeparatesUnwrappingErrorsFromNoise) {
             decoded.at(x, y) = truth.at(x, y, 0) + ((x + y) % 2 ? 0.1f : -0.1f);
         }
     decoded.at(3, 3) = truth.at(3, 3, 0) + 20.0f; // one period off: an unwrapping error
-    decoded.at(4, 4) = kNaN;                       // not decoded
-    truth.at(5, 5, 0) = kNaN;                      // decoded where no light reaches
+    decoded.at(4, 4) = kNaN;                      // not decoded
+    truth.at(5, 5, 0) = kNaN;                     // decoded where no light reaches
     const auto a = fpp::compare_to_truth(decoded, truth, 0, 20.0);
     EXPECT_EQ(a.truth_valid, 99u);
     EXPECT_EQ(a.decoded_valid, 99u);

@@ -289,7 +289,7 @@ TEST(DecodePlanFamilies, ShiftedCodeWrapsLeftOfTheOffset) {
     EXPECT_EQ(table[64], -1.0f);
     EXPECT_EQ(table[0], 0.0f);
     EXPECT_EQ(table[1], 1.0f);
-    EXPECT_EQ(table[3], 2.0f); // Gray 2 = 11b
+    EXPECT_EQ(table[3], 2.0f);                // Gray 2 = 11b
     EXPECT_EQ(plan.grays[0].max_step, 63.0f); // 10 + 63 * 20 = 1270 < 1279.5
 }
 

@@ -47,8 +47,8 @@ std::string message_of(const std::vector<DrmConnectorInfo>& connectors,
         EXPECT_EQ(e.kind(), fpp::drivers::DeviceKind::display);
         return e.what();
     }
-    ADD_FAILURE() << "no error for connector '" << request.connector << "' mode '"
-                  << request.mode << "'";
+    ADD_FAILURE() << "no error for connector '" << request.connector << "' mode '" << request.mode
+                  << "'";
     return "";
 }
 
@@ -80,7 +80,8 @@ TEST(DrmOutput, NamedConnectorAndSize) {
 
 TEST(DrmOutput, NothingFittingIsADeviceErrorListingWhatThereIs) {
     std::string what = message_of(board(), {"HDMI-A-1", ""});
-    EXPECT_NE(what.find("connector HDMI-A-1 is not present and connected"), std::string::npos) << what;
+    EXPECT_NE(what.find("connector HDMI-A-1 is not present and connected"), std::string::npos)
+        << what;
     EXPECT_NE(what.find("HDMI-A-1 (disconnected), HDMI-A-2, DSI-1"), std::string::npos) << what;
     what = message_of(board(), {"VGA-1", ""});
     EXPECT_NE(what.find("VGA-1"), std::string::npos) << what;
@@ -145,7 +146,8 @@ TEST(DrmDisplay, AFileThatIsNoKmsDeviceIsADeviceError) {
 #else
 
 TEST(DrmDisplay, NotBuilt) {
-    if (fpp::test::in_ci()) FAIL() << "fpp_drm is not linked to this test";
+    if (fpp::test::in_ci())
+        FAIL() << "fpp_drm is not linked to this test";
     GTEST_SKIP() << "the DRM display driver is not built (libdrm not found)";
 }
 

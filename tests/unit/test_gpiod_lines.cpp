@@ -34,7 +34,8 @@ struct TimedEdge {
 int presses(const std::vector<TimedEdge>& edges, std::chrono::milliseconds window = 20ms) {
     Debouncer debouncer(window);
     int count = 0;
-    for (const auto& e : edges) count += debouncer.edge(e.t_ms * kMs, e.press) ? 1 : 0;
+    for (const auto& e : edges)
+        count += debouncer.edge(e.t_ms * kMs, e.press) ? 1 : 0;
     return count;
 }
 
@@ -45,16 +46,20 @@ TEST(Debouncer, CleanPressesCountOnce) {
 
 TEST(Debouncer, ContactBounceOnPressCountsOnce) {
     // Press at 1000 ms with 4 ms of chatter, held, then released.
-    EXPECT_EQ(presses({{1000, true}, {1001, false}, {1002, true}, {1003, false}, {1004, true},
+    EXPECT_EQ(presses({{1000, true},
+                       {1001, false},
+                       {1002, true},
+                       {1003, false},
+                       {1004, true},
                        {1300, false}}),
               1);
 }
 
 TEST(Debouncer, ReleaseChatterIsNoPress) {
     // The press is long done; releasing chatters into rising edges.
-    EXPECT_EQ(presses({{0, true}, {500, false}, {502, true}, {503, false}, {506, true},
-                       {507, false}}),
-              1);
+    EXPECT_EQ(
+        presses({{0, true}, {500, false}, {502, true}, {503, false}, {506, true}, {507, false}}),
+        1);
 }
 
 TEST(Debouncer, WindowBoundary) {
@@ -86,8 +91,7 @@ void expect_missing_chip(const std::function<void(const GpioLineConfig&)>& open)
 
 TEST(GpiodLines, MissingChipIsADeviceErrorNamingChipAndLine) {
     expect_missing_chip([](const GpioLineConfig& c) { fpp::drivers::GpiodTriggerOutput t(c); });
-    expect_missing_chip(
-        [](const GpioLineConfig& c) { fpp::drivers::GpiodButtonInput b(c, 20ms); });
+    expect_missing_chip([](const GpioLineConfig& c) { fpp::drivers::GpiodButtonInput b(c, 20ms); });
     expect_missing_chip([](const GpioLineConfig& c) { fpp::drivers::GpiodStatusLed l(c); });
     // By name too (lookup through /dev).
     try {
@@ -112,7 +116,8 @@ TEST(GpiodLines, ANonGpioDeviceIsADeviceError) {
 #else
 
 TEST(GpiodLines, NotBuilt) {
-    if (fpp::test::in_ci()) FAIL() << "fpp_gpiod is not linked to this test";
+    if (fpp::test::in_ci())
+        FAIL() << "fpp_gpiod is not linked to this test";
     GTEST_SKIP() << "the libgpiod driver is not built (libgpiod not found)";
 }
 

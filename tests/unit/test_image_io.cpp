@@ -398,7 +398,8 @@ TEST(PngRead, HeaderClaimingMoreThanTheFileCanHoldIsRefusedBeforeAllocating) {
     std::string png = "\x89PNG\r\n\x1a\n";
     auto be32 = [](std::uint32_t v) {
         std::string s(4, '\0');
-        for (int k = 0; k < 4; ++k) s[std::size_t(k)] = static_cast<char>(v >> (24 - 8 * k));
+        for (int k = 0; k < 4; ++k)
+            s[std::size_t(k)] = static_cast<char>(v >> (24 - 8 * k));
         return s;
     };
     auto chunk = [&](const std::string& type, const std::string& data) {
@@ -420,7 +421,8 @@ TEST(PngRead, HeaderClaimingMoreThanTheFileCanHoldIsRefusedBeforeAllocating) {
         ADD_FAILURE() << "accepted";
     } catch (const fpp::InputError& e) {
         EXPECT_EQ(e.file(), path);
-        EXPECT_NE(std::string(e.what()).find("more than a 59-byte file can hold"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find("more than a 59-byte file can hold"),
+                  std::string::npos)
             << e.what();
     }
 }

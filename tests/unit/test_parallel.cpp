@@ -26,13 +26,17 @@ void expect_covers(ThreadPool& pool, int count, int grain) {
     std::vector<std::atomic<int>> visits(static_cast<std::size_t>(count));
     std::atomic<bool> bad_chunk{false}, bad_worker{false};
     pool.parallel_for(count, grain, [&](int b, int e, int worker) {
-        if (b % grain != 0 || e - b > grain || e <= b) bad_chunk = true;
-        if (worker < 0 || worker >= pool.size()) bad_worker = true;
-        for (int i = b; i < e; ++i) ++visits[static_cast<std::size_t>(i)];
+        if (b % grain != 0 || e - b > grain || e <= b)
+            bad_chunk = true;
+        if (worker < 0 || worker >= pool.size())
+            bad_worker = true;
+        for (int i = b; i < e; ++i)
+            ++visits[static_cast<std::size_t>(i)];
     });
     EXPECT_FALSE(bad_chunk);
     EXPECT_FALSE(bad_worker);
-    for (int i = 0; i < count; ++i) ASSERT_EQ(visits[static_cast<std::size_t>(i)], 1) << i;
+    for (int i = 0; i < count; ++i)
+        ASSERT_EQ(visits[static_cast<std::size_t>(i)], 1) << i;
 }
 
 TEST(ThreadPool, CoversTheRangeOnce) {
@@ -50,7 +54,8 @@ TEST(ThreadPool, RethrowsAndStaysUsable) {
     ThreadPool pool(3);
     EXPECT_THROW(pool.parallel_for(100, 1,
                                    [](int b, int, int) {
-                                       if (b == 42) throw std::runtime_error("chunk 42");
+                                       if (b == 42)
+                                           throw std::runtime_error("chunk 42");
                                    }),
                  std::runtime_error);
     expect_covers(pool, 300, 4);
@@ -62,7 +67,8 @@ TEST(ThreadPool, NestedCallsRunInline) {
     std::atomic<bool> other_worker{false};
     pool.parallel_for(8, 1, [&](int, int, int worker) {
         pool.parallel_for(10, 3, [&](int b, int e, int w) {
-            if (w != worker) other_worker = true;
+            if (w != worker)
+                other_worker = true;
             inner += e - b;
         });
     });
@@ -87,12 +93,15 @@ TEST(ThreadPool, SharedPoolServesSeveralCallersAtOnce) {
                 const int count = 97 + t;
                 std::vector<int> seen(static_cast<std::size_t>(count), 0);
                 pool.parallel_for(count, 5, [&](int b, int e, int) {
-                    for (int i = b; i < e; ++i) ++seen[static_cast<std::size_t>(i)];
+                    for (int i = b; i < e; ++i)
+                        ++seen[static_cast<std::size_t>(i)];
                 });
-                for (int v : seen) failures += v != 1;
+                for (int v : seen)
+                    failures += v != 1;
             }
         });
-    for (auto& c : callers) c.join();
+    for (auto& c : callers)
+        c.join();
     EXPECT_EQ(failures, 0);
 }
 
@@ -129,9 +138,11 @@ TEST(ThreadPool, ConcurrentDecodesMatchASingleDecode) {
     std::vector<std::thread> callers;
     for (std::size_t t = 0; t < results.size(); ++t)
         callers.emplace_back([&, t] {
-            for (int round = 0; round < 10; ++round) results[t] = fpp::decode(set, options);
+            for (int round = 0; round < 10; ++round)
+                results[t] = fpp::decode(set, options);
         });
-    for (auto& c : callers) c.join();
+    for (auto& c : callers)
+        c.join();
     const std::size_t bytes = camera.area() * sizeof(float);
     for (const auto& r : results) {
         ASSERT_EQ(r.proj_x.size(), camera);

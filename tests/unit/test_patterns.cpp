@@ -15,7 +15,9 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-std::uint8_t level(double intensity) { return static_cast<std::uint8_t>(std::round(255.0 * intensity)); }
+std::uint8_t level(double intensity) {
+    return static_cast<std::uint8_t>(std::round(255.0 * intensity));
+}
 
 // Spec: I_k(p) = 1/2 + 1/2 cos(2 pi p / period + phase_offset + shift_sign 2 pi k / N).
 double spec_phase(const fpp::PhaseBlock& b, int k, double p) {
@@ -23,7 +25,9 @@ double spec_phase(const fpp::PhaseBlock& b, int k, double p) {
                                 static_cast<double>(b.shift_sign) * 2.0 * kPi * k / b.steps);
 }
 
-long long gray_code(long long n) { return n ^ (n >> 1); }
+long long gray_code(long long n) {
+    return n ^ (n >> 1);
+}
 
 // Spec, plain: plane j white where bit (bits-1-j) of g(floor(p/period)) is 1.
 bool spec_plain_bit(double period, int bits, int j, int p) {
@@ -60,7 +64,8 @@ fpp::GrayBlock gray(fpp::Axis axis, double period, int bits, bool complementary,
 // Profile of an x-axis pattern (row 0), checking that every row equals it.
 std::string row_bits(const fpp::Image<std::uint8_t>& image) {
     std::string s;
-    for (int x = 0; x < image.width(); ++x) s += image.at(x, 0) == 255 ? '1' : image.at(x, 0) == 0 ? '0' : '?';
+    for (int x = 0; x < image.width(); ++x)
+        s += image.at(x, 0) == 255 ? '1' : image.at(x, 0) == 0 ? '0' : '?';
     return s;
 }
 
@@ -71,7 +76,8 @@ TEST(Patterns, PhaseMatchesSpecFormulaBothSignsOffsetsAndAxes) {
     for (const auto axis : {fpp::Axis::x, fpp::Axis::y}) {
         for (const int sign : {1, -1}) {
             for (const double offset : {0.0, -kPi, 0.7}) {
-                for (const auto& [period, steps] : {std::pair{20.0, 8}, std::pair{7.3, 3}, std::pair{71.25, 4}}) {
+                for (const auto& [period, steps] :
+                     {std::pair{20.0, 8}, std::pair{7.3, 3}, std::pair{71.25, 4}}) {
                     const auto b = phase(axis, period, steps, sign, offset);
                     for (int k = 0; k < steps; ++k) {
                         const auto image = fpp::render_pattern(b, k, projector);
@@ -89,7 +95,8 @@ TEST(Patterns, PhaseMatchesSpecFormulaBothSignsOffsetsAndAxes) {
                         for (const double p : {0.0, 3.25, 40.5}) {
                             const double x = axis == fpp::Axis::x ? p : 1.0;
                             const double y = axis == fpp::Axis::x ? 1.0 : p;
-                            EXPECT_NEAR(fpp::pattern_intensity(b, k, x, y), spec_phase(b, k, p), 1e-12);
+                            EXPECT_NEAR(fpp::pattern_intensity(b, k, x, y), spec_phase(b, k, p),
+                                        1e-12);
                         }
                     }
                 }
@@ -170,7 +177,8 @@ TEST(Patterns, ComplementaryGrayMatchesSpecAndExtendsThePlainCode) {
     const auto hand = gray(fpp::Axis::x, 4.0, 2, true, false);
     EXPECT_EQ(row_bits(fpp::render_pattern(hand, 0, {16, 1})), "0000000011111111");
     EXPECT_EQ(row_bits(fpp::render_pattern(hand, 1, {16, 1})), "0000111111110000");
-    EXPECT_EQ(row_bits(fpp::render_pattern(hand, 2, {16, 1})), "0011110000111100"); // half-period plane
+    EXPECT_EQ(row_bits(fpp::render_pattern(hand, 2, {16, 1})),
+              "0011110000111100"); // half-period plane
 }
 
 TEST(Patterns, InverseGrayInterleavesEachPlaneWithItsInverse) {
@@ -224,7 +232,8 @@ TEST(Patterns, CenterlineLightsExactlyThePixelsWithinHalfTheWidth) {
     y.width = 1.0;
     const auto image = fpp::render_pattern(y, 0, {5, 6});
     for (int r = 0; r < 6; ++r) {
-        for (int c = 0; c < 5; ++c) EXPECT_EQ(image.at(c, r), r == 3 ? 255 : 0);
+        for (int c = 0; c < 5; ++c)
+            EXPECT_EQ(image.at(c, r), r == 3 ? 255 : 0);
     }
     EXPECT_EQ(fpp::pattern_intensity(y, 0, 100.0, 3.4), 1.0);
     EXPECT_EQ(fpp::pattern_intensity(y, 0, 100.0, 3.6), 0.0);
@@ -233,8 +242,10 @@ TEST(Patterns, CenterlineLightsExactlyThePixelsWithinHalfTheWidth) {
 TEST(Patterns, WhiteAndBlackAreUniform) {
     const auto white = fpp::render_pattern(fpp::WhiteBlock{}, 0, {33, 21});
     const auto black = fpp::render_pattern(fpp::BlackBlock{}, 0, {33, 21});
-    for (auto v : white.storage()) ASSERT_EQ(v, 255);
-    for (auto v : black.storage()) ASSERT_EQ(v, 0);
+    for (auto v : white.storage())
+        ASSERT_EQ(v, 255);
+    for (auto v : black.storage())
+        ASSERT_EQ(v, 0);
     EXPECT_EQ(fpp::pattern_intensity(fpp::WhiteBlock{}, 0, 3, 4), 1.0);
     EXPECT_EQ(fpp::pattern_intensity(fpp::BlackBlock{}, 0, 3, 4), 0.0);
 }
@@ -253,7 +264,8 @@ TEST(Patterns, FrameOutOfRangeAndInvalidBlocksThrow) {
 
 TEST(Patterns, GammaLutIdentityAndPrecompensation) {
     const auto identity = fpp::GammaLut::identity();
-    for (int v = 0; v < 256; ++v) EXPECT_EQ(identity.level[std::size_t(v)], v);
+    for (int v = 0; v < 256; ++v)
+        EXPECT_EQ(identity.level[std::size_t(v)], v);
     // gamma 1 is the identity.
     EXPECT_EQ(fpp::GammaLut::precompensate(1.0).level, identity.level);
 

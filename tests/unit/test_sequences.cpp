@@ -17,16 +17,17 @@ fpp::CaptureManifest manifest_for(const fpp::Sequence& sequence, fpp::Size proje
     m.camera = {64, 48};
     m.projector = projector;
     m.sequence = sequence;
-    for (int i = 0; i < fpp::frame_count(sequence); ++i) m.frames.push_back(std::to_string(i) + ".png");
+    for (int i = 0; i < fpp::frame_count(sequence); ++i)
+        m.frames.push_back(std::to_string(i) + ".png");
     return m;
 }
 
 } // namespace
 
 TEST(Sequences, EveryNamedSequencePassesTheReadersValidationAndRoundTrips) {
-    for (const fpp::Size projector : {fpp::Size{1280, 800}, fpp::Size{1824, 1140},
-                                      fpp::Size{1920, 1080}, fpp::Size{912, 1140},
-                                      fpp::Size{641, 479}}) {
+    for (const fpp::Size projector :
+         {fpp::Size{1280, 800}, fpp::Size{1824, 1140}, fpp::Size{1920, 1080}, fpp::Size{912, 1140},
+          fpp::Size{641, 479}}) {
         for (const auto& name : fpp::standard_sequence_names()) {
             SCOPED_TRACE(name + " on " + std::to_string(projector.width) + "x" +
                          std::to_string(projector.height));
@@ -101,7 +102,8 @@ TEST(Sequences, MultiPeriodAndHeterodyne) {
     EXPECT_DOUBLE_EQ(std::get<fpp::PhaseBlock>(het[0]).period, 20.0);
     EXPECT_DOUBLE_EQ(std::get<fpp::PhaseBlock>(het[1]).period, 1280.0 / 63.0);
     EXPECT_DOUBLE_EQ(std::get<fpp::PhaseBlock>(het[2]).period, 1280.0 / 56.0);
-    for (const auto& b : het) EXPECT_EQ(std::get<fpp::PhaseBlock>(b).steps, 8);
+    for (const auto& b : het)
+        EXPECT_EQ(std::get<fpp::PhaseBlock>(b).steps, 8);
 }
 
 TEST(Sequences, CenterlineXyIsThePapersSequence) {

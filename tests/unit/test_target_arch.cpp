@@ -34,14 +34,16 @@ constexpr const char* compiled_for() {
 
 // The ELF machine that `compiled_for()` implies.
 constexpr std::uint16_t elf_machine_for(const std::string_view arch) {
-    return arch == "aarch64" ? std::uint16_t{EM_AARCH64}
+    return arch == "aarch64"  ? std::uint16_t{EM_AARCH64}
            : arch == "x86_64" ? std::uint16_t{EM_X86_64}
                               : std::uint16_t{EM_NONE};
 }
 
 // This program's file (under qemu-user /proc/self/exe is the emulated
 // program, not qemu).
-std::filesystem::path own_program() { return std::filesystem::read_symlink("/proc/self/exe"); }
+std::filesystem::path own_program() {
+    return std::filesystem::read_symlink("/proc/self/exe");
+}
 
 // e_machine of a 64-bit little-endian ELF file; EM_NONE if it is not one.
 std::uint16_t elf_machine(const std::filesystem::path& file) {

@@ -100,9 +100,9 @@ TEST(YamlFields, WrittenRealsReadBackExactly) {
 
 TEST(YamlFields, WrittenStringsReadBackExactly) {
     const Reader in(kOrigin);
-    for (const std::string s : {"paper-rig", "", "round \"trip\"", "back\\slash", "two\nlines",
-                                "tab\there", "true", "null", "42", "1.5", "-dash", "a: b",
-                                "# not a comment", "[list]", "yes"}) {
+    for (const std::string s :
+         {"paper-rig", "", "round \"trip\"", "back\\slash", "two\nlines", "tab\there", "true",
+          "null", "42", "1.5", "-dash", "a: b", "# not a comment", "[list]", "yes"}) {
         const std::string text = fpp::yaml_fields::format_string(s);
         EXPECT_EQ(in.string_value(in.load("v: " + text)["v"], "v"), s) << text;
     }

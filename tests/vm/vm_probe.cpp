@@ -41,12 +41,12 @@ struct Options {
     int wait_ms = 60'000;
 };
 
-template <typename T, void (*Free)(T*)>
-struct Deleter {
+template <typename T, void (*Free)(T*)> struct Deleter {
     void operator()(T* p) const noexcept { Free(p); }
 };
 using ResourcesPtr = std::unique_ptr<drmModeRes, Deleter<drmModeRes, drmModeFreeResources>>;
-using ConnectorPtr = std::unique_ptr<drmModeConnector, Deleter<drmModeConnector, drmModeFreeConnector>>;
+using ConnectorPtr =
+    std::unique_ptr<drmModeConnector, Deleter<drmModeConnector, drmModeFreeConnector>>;
 using EncoderPtr = std::unique_ptr<drmModeEncoder, Deleter<drmModeEncoder, drmModeFreeEncoder>>;
 using ChipPtr = std::unique_ptr<gpiod_chip, Deleter<gpiod_chip, gpiod_chip_close>>;
 using LinePtr = std::unique_ptr<gpiod_line, Deleter<gpiod_line, gpiod_line_release>>;
@@ -54,26 +54,32 @@ using LinePtr = std::unique_ptr<gpiod_line, Deleter<gpiod_line, gpiod_line_relea
 // A dumb buffer with its framebuffer object, filled with one grey level.
 class DumbFramebuffer {
 public:
-    DumbFramebuffer(int fd, std::uint32_t width, std::uint32_t height, std::uint8_t grey) : fd_(fd) {
+    DumbFramebuffer(int fd, std::uint32_t width, std::uint32_t height, std::uint8_t grey)
+        : fd_(fd) {
         drm_mode_create_dumb create{};
         create.width = width;
         create.height = height;
         create.bpp = 32;
-        if (drmIoctl(fd, DRM_IOCTL_MODE_CREATE_DUMB, &create) != 0) return;
+        if (drmIoctl(fd, DRM_IOCTL_MODE_CREATE_DUMB, &create) != 0)
+            return;
         handle_ = create.handle;
-        if (drmModeAddFB(fd, width, height, 24, 32, create.pitch, handle_, &fb_) != 0) return;
+        if (drmModeAddFB(fd, width, height, 24, 32, create.pitch, handle_, &fb_) != 0)
+            return;
         drm_mode_map_dumb map{};
         map.handle = handle_;
-        if (drmIoctl(fd, DRM_IOCTL_MODE_MAP_DUMB, &map) != 0) return;
+        if (drmIoctl(fd, DRM_IOCTL_MODE_MAP_DUMB, &map) != 0)
+            return;
         void* pixels = mmap(nullptr, static_cast<std::size_t>(create.size), PROT_READ | PROT_WRITE,
                             MAP_SHARED, fd, static_cast<off_t>(map.offset));
-        if (pixels == MAP_FAILED) return;
+        if (pixels == MAP_FAILED)
+            return;
         std::memset(pixels, grey, static_cast<std::size_t>(create.size));
         munmap(pixels, static_cast<std::size_t>(create.size));
         ok_ = true;
     }
     ~DumbFramebuffer() {
-        if (fb_ != 0) drmModeRmFB(fd_, fb_);
+        if (fb_ != 0)
+            drmModeRmFB(fd_, fb_);
         if (handle_ != 0) {
             drm_mode_destroy_dumb destroy{};
             destroy.handle = handle_;
@@ -99,7 +105,8 @@ extern "C" void on_flip(int, unsigned int, unsigned int, unsigned int, void* pen
 bool check_display(const Options& opt) {
     const fpp::UniqueFd fd(open(opt.card.c_str(), O_RDWR | O_CLOEXEC));
     if (fd.get() < 0) {
-        std::printf("vm-probe: FAIL display: cannot open %s: %s\n", opt.card.c_str(), std::strerror(errno));
+        std::printf("vm-probe: FAIL display: cannot open %s: %s\n", opt.card.c_str(),
+                    std::strerror(errno));
         return false;
     }
     const ResourcesPtr res(drmModeGetResources(fd.get()));
@@ -107,17 +114,19 @@ bool check_display(const Options& opt) {
         std::printf("vm-probe: FAIL display: no KMS resources on %s\n", opt.card.c_str());
         return false;
     }
-    std::printf("vm-probe: display %s: %d connectors, %d CRTCs\n", opt.card.c_str(), res->count_connectors,
-                res->count_crtcs);
+    std::printf("vm-probe: display %s: %d connectors, %d CRTCs\n", opt.card.c_str(),
+                res->count_connectors, res->count_crtcs);
     for (int i = 0; i < res->count_connectors; ++i) {
         const ConnectorPtr c(drmModeGetConnector(fd.get(), res->connectors[i]));
-        if (!c || c->connection != DRM_MODE_CONNECTED || c->count_modes == 0) continue;
+        if (!c || c->connection != DRM_MODE_CONNECTED || c->count_modes == 0)
+            continue;
         const drmModeModeInfo mode = c->modes[0];
         std::printf("vm-probe: connector %s-%u connected, mode %ux%u@%u\n",
-                    drmModeGetConnectorTypeName(c->connector_type), c->connector_type_id, mode.hdisplay,
-                    mode.vdisplay, mode.vrefresh);
+                    drmModeGetConnectorTypeName(c->connector_type), c->connector_type_id,
+                    mode.hdisplay, mode.vdisplay, mode.vrefresh);
         const EncoderPtr enc(drmModeGetEncoder(fd.get(), c->encoders[0]));
-        if (!enc) break;
+        if (!enc)
+            break;
         std::uint32_t crtc = 0;
         for (int k = 0; k < res->count_crtcs; ++k)
             if ((enc->possible_crtcs & (1u << k)) != 0) {
@@ -126,7 +135,8 @@ bool check_display(const Options& opt) {
             }
         DumbFramebuffer dark(fd.get(), mode.hdisplay, mode.vdisplay, 0x20);
         DumbFramebuffer bright(fd.get(), mode.hdisplay, mode.vdisplay, 0xe0);
-        if (crtc == 0 || !dark.ok() || !bright.ok()) break;
+        if (crtc == 0 || !dark.ok() || !bright.ok())
+            break;
         std::uint32_t connector_id = c->connector_id;
         drmModeModeInfo set_mode = mode;
         if (drmModeSetCrtc(fd.get(), crtc, dark.id(), 0, 0, &connector_id, 1, &set_mode) != 0) {
@@ -155,8 +165,8 @@ bool check_display(const Options& opt) {
         }
         const double seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        std::printf("vm-probe: display OK: %d page flips in %.3f s (%.0f per second)\n", opt.flips, seconds,
-                    static_cast<double>(opt.flips) / seconds);
+        std::printf("vm-probe: display OK: %d page flips in %.3f s (%.0f per second)\n", opt.flips,
+                    seconds, static_cast<double>(opt.flips) / seconds);
         return true;
     }
     std::printf("vm-probe: FAIL display: no connected connector could be lit\n");
@@ -166,15 +176,17 @@ bool check_display(const Options& opt) {
 bool check_gpio(const Options& opt) {
     const ChipPtr chip(gpiod_chip_open_lookup(opt.chip.c_str()));
     if (!chip) {
-        std::printf("vm-probe: FAIL gpio: cannot open %s: %s\n", opt.chip.c_str(), std::strerror(errno));
+        std::printf("vm-probe: FAIL gpio: cannot open %s: %s\n", opt.chip.c_str(),
+                    std::strerror(errno));
         return false;
     }
     const unsigned int lines = gpiod_chip_num_lines(chip.get());
-    std::printf("vm-probe: gpio %s [%s] (%u lines)\n", gpiod_chip_name(chip.get()), gpiod_chip_label(chip.get()),
-                lines);
+    std::printf("vm-probe: gpio %s [%s] (%u lines)\n", gpiod_chip_name(chip.get()),
+                gpiod_chip_label(chip.get()), lines);
     for (unsigned int i = 0; i < lines; ++i) {
         gpiod_line* line = gpiod_chip_get_line(chip.get(), i);
-        if (line == nullptr) continue;
+        if (line == nullptr)
+            continue;
         const char* consumer = gpiod_line_consumer(line);
         std::printf("vm-probe:   line %u: %s %s\n", i,
                     gpiod_line_direction(line) == GPIOD_LINE_DIRECTION_OUTPUT ? "output" : "input",
@@ -183,14 +195,16 @@ bool check_gpio(const Options& opt) {
     const LinePtr output(gpiod_chip_get_line(chip.get(), opt.output));
     if (!output || gpiod_line_request_output(output.get(), "vm-probe", 0) != 0 ||
         gpiod_line_set_value(output.get(), 1) != 0 || gpiod_line_get_value(output.get()) != 1) {
-        std::printf("vm-probe: FAIL gpio: cannot drive line %u: %s\n", opt.output, std::strerror(errno));
+        std::printf("vm-probe: FAIL gpio: cannot drive line %u: %s\n", opt.output,
+                    std::strerror(errno));
         return false;
     }
     std::printf("vm-probe: gpio line %u driven high\n", opt.output);
     const LinePtr button(gpiod_chip_get_line(chip.get(), opt.button));
     if (!button || gpiod_line_request_rising_edge_events(button.get(), "vm-probe") != 0) {
-        std::printf("vm-probe: FAIL gpio: cannot request line %u for edges (held by gpio-keys?): %s\n",
-                    opt.button, std::strerror(errno));
+        std::printf(
+            "vm-probe: FAIL gpio: cannot request line %u for edges (held by gpio-keys?): %s\n",
+            opt.button, std::strerror(errno));
         return false;
     }
     std::printf("vm-probe: waiting for the button on line %u\n", opt.button);
@@ -205,7 +219,8 @@ bool check_gpio(const Options& opt) {
         std::printf("vm-probe: FAIL gpio: no button edge within %d ms\n", opt.wait_ms);
         return false;
     }
-    const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("vm-probe: gpio OK: button %s edge after %.3f s\n",
                 event.event_type == GPIOD_LINE_EVENT_RISING_EDGE ? "rising" : "falling", waited);
     return true;
@@ -215,7 +230,8 @@ bool parse_int(const char* text, int low, int high, int& out) {
     char* end = nullptr;
     errno = 0;
     const long v = std::strtol(text, &end, 10);
-    if (errno != 0 || end == text || *end != '\0' || v < low || v > high) return false;
+    if (errno != 0 || end == text || *end != '\0' || v < low || v > high)
+        return false;
     out = static_cast<int>(v);
     return true;
 }
@@ -228,17 +244,22 @@ int main(int argc, char** argv) {
         const std::string a = argv[i];
         const bool has_value = i + 1 < argc;
         int v = 0;
-        if (a == "--card" && has_value) opt.card = argv[++i];
-        else if (a == "--chip" && has_value) opt.chip = argv[++i];
+        if (a == "--card" && has_value)
+            opt.card = argv[++i];
+        else if (a == "--chip" && has_value)
+            opt.chip = argv[++i];
         else if (a == "--button" && has_value && parse_int(argv[++i], 0, 1023, v))
             opt.button = static_cast<unsigned int>(v);
         else if (a == "--output" && has_value && parse_int(argv[++i], 0, 1023, v))
             opt.output = static_cast<unsigned int>(v);
-        else if (a == "--flips" && has_value && parse_int(argv[++i], 1, 100'000, v)) opt.flips = v;
-        else if (a == "--wait-ms" && has_value && parse_int(argv[++i], 1, 3'600'000, v)) opt.wait_ms = v;
+        else if (a == "--flips" && has_value && parse_int(argv[++i], 1, 100'000, v))
+            opt.flips = v;
+        else if (a == "--wait-ms" && has_value && parse_int(argv[++i], 1, 3'600'000, v))
+            opt.wait_ms = v;
         else {
-            std::fprintf(stderr, "usage: vm-probe [--card PATH] [--chip NAME] [--button N] [--output N] "
-                                 "[--flips N] [--wait-ms N]\n");
+            std::fprintf(stderr,
+                         "usage: vm-probe [--card PATH] [--chip NAME] [--button N] [--output N] "
+                         "[--flips N] [--wait-ms N]\n");
             return 2;
         }
     }

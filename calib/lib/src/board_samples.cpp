@@ -51,7 +51,8 @@ void erode(Image<std::uint8_t>& mask, int r) {
 
 void BrightBoardOptions::validate() const {
     if (!(min_modulation_fraction > 0 && min_modulation_fraction < 1))
-        throw std::invalid_argument("bright board option min_modulation_fraction: must be in (0, 1)");
+        throw std::invalid_argument(
+            "bright board option min_modulation_fraction: must be in (0, 1)");
     if (erosion_px < 0 || erosion_px > 50)
         throw std::invalid_argument("bright board option erosion_px: must be in [0, 50]");
 }
@@ -97,8 +98,8 @@ double bright_fraction(const DecodeResult& decoded, const Image<std::uint8_t>& m
     return decoded_pixels ? double(kept) / double(decoded_pixels) : 0.0;
 }
 
-void dense_projector_samples(const DecodeResult& decoded, const Image<std::uint8_t>& mask,
-                             int step, std::vector<Vec2>& camera, std::vector<Vec2>& projector) {
+void dense_projector_samples(const DecodeResult& decoded, const Image<std::uint8_t>& mask, int step,
+                             std::vector<Vec2>& camera, std::vector<Vec2>& projector) {
     camera.clear();
     projector.clear();
     if (decoded.proj_y.empty() || step < 1)
@@ -108,8 +109,8 @@ void dense_projector_samples(const DecodeResult& decoded, const Image<std::uint8
         for (int u = step / 2; u < size.width; u += step)
             if (mask.at(u, v)) {
                 camera.push_back({double(u), double(v)});
-                projector.push_back({double(decoded.proj_x.at(u, v)),
-                                     double(decoded.proj_y.at(u, v))});
+                projector.push_back(
+                    {double(decoded.proj_x.at(u, v)), double(decoded.proj_y.at(u, v))});
             }
 }
 

@@ -37,7 +37,7 @@ void add_lens_parameters(LensModel& l, const double* delta) {
 // Where each block of parameters sits in the full parameter vector, and
 // which of them are free (column in the normal equations, or -1).
 class Layout {
-  public:
+public:
     Layout(const RigState& s, const FreeParameters& free, const std::vector<bool>& pose_used)
         : camera_grid_points_(s.camera_grid.control_points()),
           projector_grid_points_(s.projector_grid.control_points()),
@@ -97,8 +97,7 @@ class Layout {
             s.camera_grid.values()[std::size_t(k)][1] += d[std::size_t(camera_grid_ + 2 * k + 1)];
         }
         for (int k = 0; k < projector_grid_points_; ++k) {
-            s.projector_grid.values()[std::size_t(k)][0] +=
-                d[std::size_t(projector_grid_ + 2 * k)];
+            s.projector_grid.values()[std::size_t(k)][0] += d[std::size_t(projector_grid_ + 2 * k)];
             s.projector_grid.values()[std::size_t(k)][1] +=
                 d[std::size_t(projector_grid_ + 2 * k + 1)];
         }
@@ -110,7 +109,7 @@ class Layout {
         }
     }
 
-  private:
+private:
     int camera_grid_points_, projector_grid_points_, poses_;
     int camera_lens_ = 0, projector_lens_ = 0, stereo_ = 0, camera_grid_ = 0, projector_grid_ = 0,
         poses_offset_ = 0, size_ = 0, columns_ = 0;
@@ -261,7 +260,7 @@ struct Normal {
         cost += other.cost;
     }
 
-  private:
+private:
     GridRun run_;
 };
 
@@ -304,7 +303,7 @@ struct DataTerms {
 };
 
 class Problem {
-  public:
+public:
     Problem(const RigState& start, const std::vector<CornerObservation>& corners,
             const std::vector<DenseObservation>& dense, const std::vector<bool>& pose_used,
             const FreeParameters& free, const GridRegularisation& reg, ThreadPool* pool)
@@ -371,7 +370,7 @@ class Problem {
         return cost;
     }
 
-  private:
+private:
     static constexpr std::size_t kChunkObservations = 4096;
     static constexpr std::size_t kMaxChunks = 8;
 
@@ -458,7 +457,7 @@ class Problem {
         return out;
     }
 
-  private:
+private:
     static void chain_rotation(const double d[2][3], const Mat3& R, double out[2][3]) {
         for (int r = 0; r < 2; ++r)
             for (int c = 0; c < 3; ++c)
@@ -475,8 +474,7 @@ class Problem {
     // Smoothness and ridge terms of one grid (each coordinate alone), and
     // its gauge: no component along the gauge fields.
     double regularise(const CorrectionGrid& grid, const std::vector<std::vector<Vec2>>& gauge,
-                      double smoothness, const Layout& layout, int offset,
-                      Normal* normal) const {
+                      double smoothness, const Layout& layout, int offset, Normal* normal) const {
         double cost = 0;
         const std::vector<Vec2>& v = grid.values();
         // Far above every observation's weight: a constraint, not a preference.
@@ -724,8 +722,7 @@ AdjustmentOutcome adjust(RigState& state, const std::vector<CornerObservation>& 
             Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
             e(c) = 1;
             const Eigen::VectorXd x = ldlt.solve(e);
-            out.lens_variance[std::size_t(device * kLensParameters + k)] =
-                std::max(0.0, x(c));
+            out.lens_variance[std::size_t(device * kLensParameters + k)] = std::max(0.0, x(c));
         }
     return out;
 }

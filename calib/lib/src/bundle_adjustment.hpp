@@ -56,7 +56,7 @@ struct DenseObservation {
 struct FreeParameters {
     bool camera_lens = false, camera_grid = false;
     bool projector_lens = false, projector_grid = false;
-    bool skew = true; // the skew of each free lens
+    bool skew = true;    // the skew of each free lens
     bool stereo = false; // R, T
     bool poses = false;
     bool camera_observations = false, projector_observations = false;
@@ -108,8 +108,7 @@ struct Linearisation {
 Linearisation linearise(const RigState& state, const std::vector<CornerObservation>& corners,
                         const std::vector<DenseObservation>& dense,
                         const std::vector<bool>& pose_used, const FreeParameters& free,
-                        const GridRegularisation& regularisation,
-                        const RigState* start = nullptr);
+                        const GridRegularisation& regularisation, const RigState* start = nullptr);
 // The fields a correction grid must not hold, one per row, each a unit
 // vector of (du, dv) per control point: constant and linear displacements
 // (principal point, focal lengths, skew, a turn about the optical axis), the
@@ -125,8 +124,8 @@ void apply_increment(RigState& state, const std::vector<bool>& pose_used,
 // Projection through a lens and its correction grid, with derivatives.
 struct Projection {
     Vec2 pixel{};
-    double d_point[2][3]{};                // d pixel / d point (device frame, mm)
-    double d_lens[2][kLensParameters]{};   // d pixel / d lens parameters
+    double d_point[2][3]{};              // d pixel / d point (device frame, mm)
+    double d_lens[2][kLensParameters]{}; // d pixel / d lens parameters
     int grid_index[CorrectionGrid::kSupport]{};
     double grid_weight[CorrectionGrid::kSupport]{}; // d pixel_u / d du_k = d pixel_v / d dv_k
 };

@@ -68,9 +68,8 @@ inline void refuse_text_opencv_mishandles(std::string_view seen, const fs::path&
                              "'---' followed by text: a YAML document marker is '---' alone or "
                              "followed by a space");
         const std::size_t end = seen.find('\n', line_start);
-        const std::string_view text = rest.substr(0, end == std::string_view::npos
-                                                         ? rest.size()
-                                                         : end - line_start);
+        const std::string_view text =
+            rest.substr(0, end == std::string_view::npos ? rest.size() : end - line_start);
         const std::size_t indent = text.find_first_not_of(' ');
         const bool content = indent != std::string_view::npos && text[indent] != '\r' &&
                              text[indent] != '#' && text[indent] != '%' &&

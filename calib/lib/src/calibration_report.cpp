@@ -243,8 +243,8 @@ void reprojection_section(std::ostream& s, const SessionResult& r) {
       << " | " << fmt(r.stereo.initial_projector_rms, 4) << " |\n";
     const bool skew_on = r.stereo.skew_estimated;
     const std::string procedure = std::string(to_string(r.stereo.procedure)) + " bundle adjustment";
-    s << "| " << procedure << ", skew " << (skew_on ? "estimated" : "fixed at 0")
-      << " (saved) | " << fmt(c.camera_rms, 4) << " | " << fmt(c.projector_rms, 4) << " |\n";
+    s << "| " << procedure << ", skew " << (skew_on ? "estimated" : "fixed at 0") << " (saved) | "
+      << fmt(c.camera_rms, 4) << " | " << fmt(c.projector_rms, 4) << " |\n";
     if (r.other_skew) {
         const StereoCalibration& o = r.other_skew->calibration;
         s << "| " << procedure << ", skew " << (skew_on ? "fixed at 0" : "estimated")
@@ -270,8 +270,8 @@ void reprojection_section(std::ostream& s, const SessionResult& r) {
         std::size_t samples = 0;
         for (const PoseObservations& o : r.observations)
             samples += o.dense_camera.size();
-        s << "Dense samples of the boards' bright parts: " << samples
-          << ", projector residual RMS " << fmt(r.stereo.dense_rms, 4) << " px.\n";
+        s << "Dense samples of the boards' bright parts: " << samples << ", projector residual RMS "
+          << fmt(r.stereo.dense_rms, 4) << " px.\n";
     }
     s << "\n";
 }

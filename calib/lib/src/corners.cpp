@@ -275,7 +275,8 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
             cost += r * r;
             if (!A)
                 continue;
-            const double g1 = flat1 ? 0 : two_over_sqrt_pi * std::exp(-z1 * z1) * k / s; // d e1 / d d1
+            const double g1 =
+                flat1 ? 0 : two_over_sqrt_pi * std::exp(-z1 * z1) * k / s; // d e1 / d d1
             const double g2 = flat2 ? 0 : two_over_sqrt_pi * std::exp(-z2 * z2) * k / s;
             const double m1 = contrast * g1 * e2, m2 = contrast * e1 * g2; // dM/dd1, dM/dd2
             res(i) = r;

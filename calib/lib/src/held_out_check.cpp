@@ -50,9 +50,9 @@ std::string HeldOutCheck::summary() const {
           << " mm, scale error " << std::setprecision(1) << 1e6 * p.scale_error
           << " ppm, length error RMS " << std::setprecision(4) << p.length_rms_mm << " mm, max "
           << p.length_max_mm << " mm\n";
-    s << "all: fit RMS " << fit_rms_mm << " mm, length error RMS " << length_rms_mm
-      << " mm, max " << length_max_mm << " mm, scale error RMS " << std::setprecision(1)
-      << 1e6 * scale_error_rms << " ppm\n";
+    s << "all: fit RMS " << fit_rms_mm << " mm, length error RMS " << length_rms_mm << " mm, max "
+      << length_max_mm << " mm, scale error RMS " << std::setprecision(1) << 1e6 * scale_error_rms
+      << " ppm\n";
     return s.str();
 }
 
@@ -116,8 +116,8 @@ HeldOutCheck check_held_out(const SessionResult& session, const StereoSessionOpt
         for (const Vec3& p : measured)
             for (int i = 0; i < 3; ++i)
                 centre[std::size_t(i)] += p[std::size_t(i)] / double(measured.size());
-        h.distance_mm = std::sqrt(centre[0] * centre[0] + centre[1] * centre[1] +
-                                  centre[2] * centre[2]);
+        h.distance_mm =
+            std::sqrt(centre[0] * centre[0] + centre[1] * centre[1] + centre[2] * centre[2]);
         fit_sum += h.fit_rms_mm * h.fit_rms_mm * double(measured.size());
         fit_count += measured.size();
         length_sum += sum;
@@ -129,8 +129,7 @@ HeldOutCheck check_held_out(const SessionResult& session, const StereoSessionOpt
     check.fit_rms_mm = fit_count ? std::sqrt(fit_sum / double(fit_count)) : 0;
     check.length_rms_mm = length_count ? std::sqrt(length_sum / double(length_count)) : 0;
     check.scale_error_rms = std::sqrt(scale_sum / double(check.poses.size()));
-    check.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    check.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return check;
 }
 

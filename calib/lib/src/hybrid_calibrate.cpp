@@ -4,12 +4,12 @@
 #include "fpp/calib/hybrid_calibrate.hpp"
 
 #include "fpp/calib/session_folder.hpp"
-#include "hybrid_fit.hpp"
-#include "phase_smoothing.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/error.hpp"
 #include "fpp/parallel.hpp"
 #include "fpp/point_cloud.hpp"
+#include "hybrid_fit.hpp"
+#include "phase_smoothing.hpp"
 
 #include <Eigen/Dense>
 
@@ -253,11 +253,11 @@ std::string HybridResult::summary() const {
         if (!p.usable)
             s << "rejected: " << p.skip_reason << "\n";
         else if (checkerboard)
-            s << "board at " << std::setprecision(1) << p.distance_mm << " mm, tilt "
-              << p.tilt_deg << " deg, corners " << std::setprecision(4) << p.corner_rms_px
-              << " px, " << p.samples << " samples; SV plane " << std::setprecision(4)
-              << p.sv_offset_mm << " mm, " << p.sv_angle_deg << " deg from the camera's, SV RMS "
-              << p.plane_rms_mm << " mm about it\n";
+            s << "board at " << std::setprecision(1) << p.distance_mm << " mm, tilt " << p.tilt_deg
+              << " deg, corners " << std::setprecision(4) << p.corner_rms_px << " px, " << p.samples
+              << " samples; SV plane " << std::setprecision(4) << p.sv_offset_mm << " mm, "
+              << p.sv_angle_deg << " deg from the camera's, SV RMS " << p.plane_rms_mm
+              << " mm about it\n";
         else
             s << p.points << " points, plane at " << std::setprecision(1) << p.distance_mm
               << " mm, tilt " << p.tilt_deg << " deg, plane RMS " << std::setprecision(4)
@@ -321,16 +321,15 @@ SessionFolder hybrid_session(const fs::path& session, const StereoCalibration& c
 
 } // namespace
 
-std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
-                                           const StereoCalibration& calibration,
-                                           std::uint64_t calibration_hash,
-                                           const HybridOptions& options,
-                                           const std::vector<TableModel>& models,
-                                           const std::vector<BoardView>& views) {
+std::vector<HybridResult>
+calibrate_hybrid(const fs::path& session, const StereoCalibration& calibration,
+                 std::uint64_t calibration_hash, const HybridOptions& options,
+                 const std::vector<TableModel>& models, const std::vector<BoardView>& views) {
     const SessionFolder folder = hybrid_session(session, calibration, options, models);
     if (folder.board.kind != BoardDescription::Kind::checkerboard)
-        throw InputError(folder.folder / "board.yaml", "kind",
-                         "the poses were seen as checkerboards, but the session's board is not one");
+        throw InputError(
+            folder.folder / "board.yaml", "kind",
+            "the poses were seen as checkerboards, but the session's board is not one");
     if (views.size() != folder.poses.size())
         throw std::invalid_argument("hybrid calibration: " + std::to_string(views.size()) +
                                     " board views for the " + std::to_string(folder.poses.size()) +
@@ -355,8 +354,8 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
             options.progress(s);
     };
     if (folder.board.kind == BoardDescription::Kind::checkerboard)
-        return detail::calibrate_hybrid_checkerboard(folder, calibration, calibration_hash,
-                                                     options, models, nullptr);
+        return detail::calibrate_hybrid_checkerboard(folder, calibration, calibration_hash, options,
+                                                     models, nullptr);
     StereoCalibration calib = calibration;
     if (!calib.sizes_known()) {
         calib.camera_size = folder.camera_size;
@@ -447,20 +446,17 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
 
 namespace detail {
 
-std::vector<HybridResult> fit_hybrid_models(const HybridResult& common,
-                                            const std::vector<PoseSamples>& samples,
-                                            const Image<float>& rays, Size projector,
-                                            std::uint64_t calibration_hash,
-                                            const HybridOptions& options,
-                                            const std::vector<TableModel>& models,
-                                            const ModelSampleSource& model_source) {
+std::vector<HybridResult>
+fit_hybrid_models(const HybridResult& common, const std::vector<PoseSamples>& samples,
+                  const Image<float>& rays, Size projector, std::uint64_t calibration_hash,
+                  const HybridOptions& options, const std::vector<TableModel>& models,
+                  const ModelSampleSource& model_source) {
     const bool plane_session = common.board == BoardDescription::Kind::plane;
     std::vector<HybridResult> results;
     for (const TableModel model : models) {
         if (options.progress)
-            options.progress(std::string("fitting the ") + to_string(model) +
-                             " model per pixel (" + std::to_string(common.usable_poses) +
-                             " poses)");
+            options.progress(std::string("fitting the ") + to_string(model) + " model per pixel (" +
+                             std::to_string(common.usable_poses) + " poses)");
         const auto t_fit = std::chrono::steady_clock::now();
         HybridResult result;
         result.poses = common.poses;

@@ -66,9 +66,9 @@ bool camera_pose(const StereoCalibration& calibration, const std::vector<Vec3>& 
     RigState state;
     state.camera = calibration.camera;
     state.camera_grid = calibration.camera_correction;
-    state.poses.push_back({rotation_from_vector({rvec.at<double>(0), rvec.at<double>(1),
-                                                 rvec.at<double>(2)}),
-                           {tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)}});
+    state.poses.push_back(
+        {rotation_from_vector({rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2)}),
+         {tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)}});
     std::vector<CornerObservation> observations;
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (std::size_t k = 0; k < corners.size(); ++k)
@@ -177,7 +177,8 @@ BoardView read_board_view(const fs::path& folder, const PoseContext& context, Ti
     const CaptureSet capture = read_x_capture(folder);
     reading.stop();
     StageTimer decoding(time, "decoding");
-    const DecodeResult decoded = decode(capture, context.options.decode); // InputError naming the field
+    const DecodeResult decoded =
+        decode(capture, context.options.decode); // InputError naming the field
     decoding.stop();
     StageTimer corner_stage(time, "corners");
     const CheckerboardCorners corners =

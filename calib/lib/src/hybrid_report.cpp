@@ -87,8 +87,8 @@ cv::Mat plane_residual_figure(const HybridResult& r) {
     cv::line(out, {left, top}, {left, height - bottom}, {0, 0, 0}, 1);
     for (int t = 0; t <= 4; ++t) {
         const double v = vmax * t / 4;
-        cv::putText(out, fixed_text(v, 3), {2, y_of(v) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35, {0, 0, 0},
-                    1, cv::LINE_AA);
+        cv::putText(out, fixed_text(v, 3), {2, y_of(v) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35,
+                    {0, 0, 0}, 1, cv::LINE_AA);
     }
     for (int i = 0; i < n; ++i) {
         const HybridPose& p = r.poses[static_cast<std::size_t>(i)];
@@ -96,14 +96,14 @@ cv::Mat plane_residual_figure(const HybridResult& r) {
         if (p.usable) {
             cv::rectangle(out, {x, y_of(p.plane_max_mm)}, {x + 14, height - bottom},
                           {230, 200, 160}, cv::FILLED);
-            cv::rectangle(out, {x, y_of(p.plane_rms_mm)}, {x + 14, height - bottom},
-                          {200, 120, 40}, cv::FILLED);
+            cv::rectangle(out, {x, y_of(p.plane_rms_mm)}, {x + 14, height - bottom}, {200, 120, 40},
+                          cv::FILLED);
         } else {
             cv::putText(out, "x", {x + 2, height - bottom - 6}, cv::FONT_HERSHEY_SIMPLEX, 0.6,
                         {0, 0, 255}, 2);
         }
-        cv::putText(out, std::to_string(i + 1), {x, height - bottom + 16},
-                    cv::FONT_HERSHEY_SIMPLEX, 0.35, {0, 0, 0}, 1, cv::LINE_AA);
+        cv::putText(out, std::to_string(i + 1), {x, height - bottom + 16}, cv::FONT_HERSHEY_SIMPLEX,
+                    0.35, {0, 0, 0}, 1, cv::LINE_AA);
     }
     cv::putText(out, "plane fit per pose (mm): RMS (dark), max (light); x rejected", {left, 24},
                 cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
@@ -142,8 +142,8 @@ cv::Mat sv_offset_figure(const HybridResult& r) {
                           cv::FILLED);
         else
             cv::putText(out, "x", {x + 2, mid - 6}, cv::FONT_HERSHEY_SIMPLEX, 0.6, {0, 0, 255}, 2);
-        cv::putText(out, std::to_string(i + 1), {x, height - bottom + 16},
-                    cv::FONT_HERSHEY_SIMPLEX, 0.35, {0, 0, 0}, 1, cv::LINE_AA);
+        cv::putText(out, std::to_string(i + 1), {x, height - bottom + 16}, cv::FONT_HERSHEY_SIMPLEX,
+                    0.35, {0, 0, 0}, 1, cv::LINE_AA);
     }
     cv::putText(out, "SV plane minus the camera's, at each board's centre (um); x rejected",
                 {left, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
@@ -173,11 +173,12 @@ std::string hybrid_summary_markdown(const HybridResult& r) {
     std::ostringstream s;
     s << "# Hybrid calibration\n\n```\n" << r.summary() << "```\n\n";
     s << "| Fit RMS (mm) | median | 99 % | max |\n|---|---|---|---|\n";
-    for (const auto& [name, image] :
-         {std::pair<const char*, const Image<float>*>{"X", &r.rms_x}, {"Y", &r.rms_y},
-          {"Z", &r.rms_z}})
+    for (const auto& [name, image] : {std::pair<const char*, const Image<float>*>{"X", &r.rms_x},
+                                      {"Y", &r.rms_y},
+                                      {"Z", &r.rms_z}})
         s << "| " << name << " | " << fixed_text(quantile(*image, 0.5), 4) << " | "
-          << fixed_text(quantile(*image, 0.99), 4) << " | " << fixed_text(quantile(*image, 1.0), 4) << " |\n";
+          << fixed_text(quantile(*image, 0.99), 4) << " | " << fixed_text(quantile(*image, 1.0), 4)
+          << " |\n";
     s << "\nFit RMS: per pixel, the table against the boards' samples. Predicted depth sigma "
          "(sigma-z.png): the table's own uncertainty from its fit residuals.\n";
     if (r.board == BoardDescription::Kind::checkerboard)

@@ -301,12 +301,11 @@ void Run::calibrate_our_procedures() {
         ho.samples = samples;
         const std::string key = samples == HybridSamples::boards ? "boards-only" : "model-only";
         say("our tables fitted to " + std::string(to_string(samples)) + " samples only");
-        add_tables(
-            calibrate_hybrid(board_session_, our_calibration_, hash, ho, {HybridOptions{}.model},
-                             views),
-            Procedure::boards, key,
-            samples == HybridSamples::boards ? "our procedure, board samples only"
-                                             : "our procedure, stereo model only");
+        add_tables(calibrate_hybrid(board_session_, our_calibration_, hash, ho,
+                                    {HybridOptions{}.model}, views),
+                   Procedure::boards, key,
+                   samples == HybridSamples::boards ? "our procedure, board samples only"
+                                                    : "our procedure, stereo model only");
         // The boards alone reach fewer pixels and depths.
         methods().back().in_common = samples != HybridSamples::boards;
     }

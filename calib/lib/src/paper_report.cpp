@@ -240,8 +240,8 @@ void add_paper_relation_targets(std::vector<PaperTarget>& targets, const Record&
                 const std::string relation = plane ? "<= 0.5 x SV's" : "<= SV's";
                 const ErrorStats& a = clean ? s->truth_clean[m] : s->truth_noisy[m];
                 const ErrorStats& b = clean ? s->truth_clean[sv] : s->truth_noisy[sv];
-                target(std::string(key) + (plane ? "_half_of_sv." : "_no_worse_than_sv.") +
-                           noise + "." + method.key,
+                target(std::string(key) + (plane ? "_half_of_sv." : "_no_worse_than_sv.") + noise +
+                           "." + method.key,
                        std::string(key) + ": " + method.key + " Z error vs truth " + relation +
                            " (" + noise_text + ")",
                        a.rms <= factor * b.rms,
@@ -252,11 +252,10 @@ void add_paper_relation_targets(std::vector<PaperTarget>& targets, const Record&
                            (plane ? "_shape_half_of_sv." : "_shape_no_worse_than_sv.") + noise +
                            "." + method.key,
                        std::string(key) + ": " + method.key +
-                           " Z error shape vs truth (offset and tilt removed) " + relation +
-                           " (" + noise_text + ")",
+                           " Z error shape vs truth (offset and tilt removed) " + relation + " (" +
+                           noise_text + ")",
                        as.rms <= factor * bs.rms,
-                       mm(as.rms, 5) + " mm vs " + (plane ? "0.5 x " : "") + mm(bs.rms, 5) +
-                           " mm");
+                       mm(as.rms, 5) + " mm vs " + (plane ? "0.5 x " : "") + mm(bs.rms, 5) + " mm");
             }
         }
         const ReliefSummary& relief = r.relief;
@@ -291,11 +290,12 @@ void introduction_section(std::ostream& md, const Record& r) {
     const PaperExperimentOptions& o = r.options;
     const std::size_t best = r.default_method();
     md << "# The paper's experiments on the virtual scanner\n\n";
-    md << "Rig `" << r.rig.name << "` with its effects, camera " << r.rig.camera_size.width
-       << " x " << r.rig.camera_size.height << " (binning " << o.binning << "), seed " << o.seed
+    md << "Rig `" << r.rig.name << "` with its effects, camera " << r.rig.camera_size.width << " x "
+       << r.rig.camera_size.height << " (binning " << o.binning << "), seed " << o.seed
        << ". Sessions: the paper's "
        << (o.sv_calibration == SvCalibrationSource::checkerboard
-               ? std::to_string(o.checkerboard_poses) + " checkerboard poses (its stereo calibration) and "
+               ? std::to_string(o.checkerboard_poses) +
+                     " checkerboard poses (its stereo calibration) and "
                : std::string())
        << o.plane_poses << " flat-board poses (gray-x), and our " << o.board_poses
        << " checkerboard poses (gray-xy, a 180 x 135 mm pattern on a 420 x 375 mm white board) "
@@ -447,11 +447,11 @@ void calibration_section(std::ostream& md, const Record& r) {
             row(md, {name, "the rig's 5-coefficient model", "-", "-", "-", "-", "-", "-"});
             continue;
         }
-        row(md, {name, s->procedure, std::to_string(s->poses), mm(s->camera_rms),
-                 mm(s->projector_rms), s->dense_rms >= 0 ? mm(s->dense_rms) : "-",
-                 "camera " + mm(s->camera_grid_max, 3) + ", projector " +
-                     mm(s->projector_grid_max, 3),
-                 seconds_text(s->seconds)});
+        row(md,
+            {name, s->procedure, std::to_string(s->poses), mm(s->camera_rms), mm(s->projector_rms),
+             s->dense_rms >= 0 ? mm(s->dense_rms) : "-",
+             "camera " + mm(s->camera_grid_max, 3) + ", projector " + mm(s->projector_grid_max, 3),
+             seconds_text(s->seconds)});
     }
     if (r.our_stereo.calibrated)
         md << "\nOur camera grid's smoothness, chosen by cross-validation over the poses: "

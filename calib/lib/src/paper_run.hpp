@@ -22,9 +22,9 @@ namespace fpp::calib::paper {
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The paper's figures (Vargas et al., experiments 1 to 3).
-inline constexpr double kPaperPlaneSv = 0.118, kPaperPlaneHybrid = 0.044; // mm, plane-fit RMS
+inline constexpr double kPaperPlaneSv = 0.118, kPaperPlaneHybrid = 0.044;       // mm, plane-fit RMS
 inline constexpr double kPaperCylinderSv = 0.076, kPaperCylinderHybrid = 0.059; // mm
-inline constexpr double kPaperReliefDistance = 0.075; // mm, SV vs hybrid
+inline constexpr double kPaperReliefDistance = 0.075;                           // mm, SV vs hybrid
 inline constexpr double kPaperReliefSvSeconds = 1.04, kPaperReliefHybridSeconds = 0.14;
 inline constexpr double kPaperReliefPoints = 683047;
 
@@ -48,7 +48,7 @@ inline constexpr int kEdgeMarginPx = 2;
 // Targets.
 inline constexpr double kPlaneRatioTarget = 0.5; // paper: hybrid truth error <= half of SV's
 inline constexpr double kSpeedupTarget = 50;     // hybrid at least this much faster on the relief
-inline constexpr double kTruthRmsNoisy = 0.03, kTruthRmsNoiseFree = 0.015; // mm
+inline constexpr double kTruthRmsNoisy = 0.03, kTruthRmsNoiseFree = 0.015;  // mm
 inline constexpr double kTruthBias = 0.01;                                  // mm
 inline constexpr double kDiameterError = 0.01, kBallBarSpacingError = 0.02; // mm
 inline constexpr double kCalibrationSeconds = 20; // 30 full-size poses, stereo and hybrid
@@ -72,7 +72,7 @@ struct Method {
     // (false for a variant that covers less of the image: it is compared on
     // those pixels where it has a point).
     bool in_common = true;
-    std::unique_ptr<SvReconstructor> sv; // SV methods
+    std::unique_ptr<SvReconstructor> sv;            // SV methods
     const StereoCalibration* calibration = nullptr; // SV methods
     CoefficientTable table;                         // table methods
     TableModel model = TableModel::rational;
@@ -155,7 +155,7 @@ struct Record {
     // rays alone (frame_turn.hpp): what no board data can observe.
     FrameTurn paper_turn, our_turn;
     const FrameTurn* turn_of(Procedure p) const; // null for the reference
-    double seconds_boards_hybrid = 0; // our table's hybrid calibration (all its models)
+    double seconds_boards_hybrid = 0;            // our table's hybrid calibration (all its models)
     std::vector<ScanSummary> scans;
     std::vector<BallBarPosition> ball_bars;
     ReliefSummary relief;

@@ -190,8 +190,8 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
                         z_near = std::min(z_near, Z[k]);
                         z_far = std::max(z_far, Z[k]);
                     }
-                    const int added = options.model_samples(u, v, z_near, z_far, &phase[n], &Z[n],
-                                                            model_count);
+                    const int added =
+                        options.model_samples(u, v, z_near, z_far, &phase[n], &Z[n], model_count);
                     for (int k = 0; k < added; ++k, ++n) {
                         X[n] = xn * Z[n];
                         Y[n] = yn * Z[n];
@@ -215,8 +215,8 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
                 bool ok = true;
                 if (model == TableModel::polynomial) {
                     const double* values[3] = {X.data(), Y.data(), Z.data()};
-                    ok = least_squares(4, n, cubic_row, 3, values, w.data(),
-                                       options.max_condition, coeffs);
+                    ok = least_squares(4, n, cubic_row, 3, values, w.data(), options.max_condition,
+                                       coeffs);
                 } else if (model == TableModel::ray) {
                     const double* values[1] = {Z.data()};
                     ok = least_squares(4, n, cubic_row, 1, values, w.data(), options.max_condition,
@@ -259,8 +259,7 @@ PixelFit fit_pixel_models(const std::vector<PoseSamples>& poses, const Image<flo
                             board2[0] += dz * dz * xn * xn;
                             board2[1] += dz * dz * yn * yn;
                         } else {
-                            const double dx = cubic(cx, t[k]) - X[k],
-                                         dy = cubic(cy, t[k]) - Y[k];
+                            const double dx = cubic(cx, t[k]) - X[k], dy = cubic(cy, t[k]) - Y[k];
                             board2[0] += dx * dx;
                             board2[1] += dy * dy;
                         }

@@ -34,7 +34,8 @@ int decimals_for(std::span<const double> values) {
         const double m = std::pow(10.0, d);
         bool exact = true;
         for (double v : values)
-            exact = exact && std::abs(std::round(v * m) - v * m) < 1e-6 * std::max(1.0, std::abs(v * m));
+            exact = exact &&
+                    std::abs(std::round(v * m) - v * m) < 1e-6 * std::max(1.0, std::abs(v * m));
         if (exact)
             return d;
     }
@@ -69,8 +70,8 @@ double symmetric_limit(std::span<const double> values, double quantile, double f
             magnitudes.push_back(std::abs(v));
     if (magnitudes.empty())
         return fallback;
-    const auto k = static_cast<std::size_t>(
-        std::clamp(quantile, 0.0, 1.0) * static_cast<double>(magnitudes.size() - 1));
+    const auto k = static_cast<std::size_t>(std::clamp(quantile, 0.0, 1.0) *
+                                            static_cast<double>(magnitudes.size() - 1));
     std::nth_element(magnitudes.begin(), magnitudes.begin() + static_cast<std::ptrdiff_t>(k),
                      magnitudes.end());
     const double q = magnitudes[k];
@@ -79,11 +80,8 @@ double symmetric_limit(std::span<const double> values, double quantile, double f
 
 cv::Vec3b diverging_colour(double t) {
     // RdBu anchors as RGB from -1 (blue) to +1 (red).
-    static constexpr std::array<std::array<double, 3>, 5> anchors = {{{5, 48, 97},
-                                                                      {67, 147, 195},
-                                                                      {247, 247, 247},
-                                                                      {214, 96, 77},
-                                                                      {103, 0, 31}}};
+    static constexpr std::array<std::array<double, 3>, 5> anchors = {
+        {{5, 48, 97}, {67, 147, 195}, {247, 247, 247}, {214, 96, 77}, {103, 0, 31}}};
     if (!std::isfinite(t))
         t = 0;
     const double x = (std::clamp(t, -1.0, 1.0) + 1) * 2; // 0..4
@@ -110,11 +108,10 @@ cv::Mat signed_map_figure(const Image<float>& values, double limit, const std::s
         auto* out = colours.ptr<cv::Vec3b>(y);
         for (int x = 0; x < values.width(); ++x) {
             const double v = double(in[x]);
-            out[x] = std::isfinite(v)
-                         ? diverging_colour(v / limit)
-                         : cv::Vec3b(static_cast<std::uint8_t>(kNoValue[0]),
-                                     static_cast<std::uint8_t>(kNoValue[1]),
-                                     static_cast<std::uint8_t>(kNoValue[2]));
+            out[x] = std::isfinite(v) ? diverging_colour(v / limit)
+                                      : cv::Vec3b(static_cast<std::uint8_t>(kNoValue[0]),
+                                                  static_cast<std::uint8_t>(kNoValue[1]),
+                                                  static_cast<std::uint8_t>(kNoValue[2]));
         }
     }
     cv::Mat map;
@@ -147,7 +144,8 @@ cv::Mat signed_map_figure(const Image<float>& values, double limit, const std::s
     const std::array<double, 5> ticks = {limit, limit / 2, 0, -limit / 2, -limit};
     const int digits = decimals_for(ticks);
     for (std::size_t k = 0; k < ticks.size(); ++k) {
-        const int y = bar_top + static_cast<int>(std::lround(static_cast<double>(k) / 4 * (bar_h - 1)));
+        const int y =
+            bar_top + static_cast<int>(std::lround(static_cast<double>(k) / 4 * (bar_h - 1)));
         cv::line(canvas, {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, kBlack);
         char label[64];
         std::snprintf(label, sizeof label, ticks[k] > 0 ? "%+.*f" : "%.*f", digits, ticks[k]);
@@ -366,6 +364,5 @@ cv::Mat timing_plot(const std::vector<int>& sizes, const std::vector<PlotSeries>
 cv::Scalar series_colour(std::size_t i) {
     return kSeriesColours[i % (sizeof(kSeriesColours) / sizeof(kSeriesColours[0]))];
 }
-
 
 } // namespace fpp::calib

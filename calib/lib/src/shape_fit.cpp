@@ -457,8 +457,7 @@ std::optional<CylinderModel> cylinder_start(const Points& q, const Vector3d& axi
     if (!(values[0] > 1e-13 * values[2]))
         return std::nullopt;
     const Eigen::Matrix3d vectors = eig.eigenvectors();
-    const Eigen::Vector3d x =
-        vectors * (vectors.transpose() * atb).cwiseQuotient(values);
+    const Eigen::Vector3d x = vectors * (vectors.transpose() * atb).cwiseQuotient(values);
     const double r2 = x[2] + x[0] * x[0] + x[1] * x[1];
     if (!(r2 > 0) || !std::isfinite(r2) || std::sqrt(r2) > kMaxRadiusOverSpread)
         return std::nullopt;
@@ -597,12 +596,11 @@ CylinderFit fit_cylinder(std::span<const Vec3> points, const FitOptions& options
     result.axis_point = to_vec(c.to_world(m.point));
     result.axis = to_vec(m.axis);
     result.radius = m.radius * c.scale;
-    result.fit.message = "cylinder: diameter " + number(2 * result.radius, 4) + " mm, axis " +
-                         vector_text(m.axis, 6) + " through " +
-                         vector_text(c.to_world(m.point), 3) + " mm, " +
-                         number(result.arc_degrees, 1) + " degrees of arc, " +
-                         number(result.length, 1) + " mm long; " +
-                         residual_text(result.fit, options);
+    result.fit.message =
+        "cylinder: diameter " + number(2 * result.radius, 4) + " mm, axis " +
+        vector_text(m.axis, 6) + " through " + vector_text(c.to_world(m.point), 3) + " mm, " +
+        number(result.arc_degrees, 1) + " degrees of arc, " + number(result.length, 1) +
+        " mm long; " + residual_text(result.fit, options);
     return result;
 }
 
@@ -698,10 +696,9 @@ std::int32_t PointIndex::build(std::uint32_t begin, std::uint32_t end) {
         if (hi[a] - lo[a] > hi[axis] - lo[axis])
             axis = a;
     const std::uint32_t mid = begin + (end - begin) / 2;
-    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                     [&](std::uint32_t x, std::uint32_t y) {
-                         return points_[x][axis] < points_[y][axis];
-                     });
+    std::nth_element(
+        order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+        [&](std::uint32_t x, std::uint32_t y) { return points_[x][axis] < points_[y][axis]; });
     nodes_[static_cast<std::size_t>(id)].axis = static_cast<std::uint8_t>(axis);
     nodes_[static_cast<std::size_t>(id)].split = points_[order_[mid]][axis];
     const std::int32_t left = build(begin, mid);

@@ -134,10 +134,10 @@ void StereoOptions::validate() const {
     const auto bad = [](const std::string& field, const std::string& why) {
         throw std::invalid_argument("stereo option " + field + ": " + why);
     };
-    for (const auto& [grid, name] : {std::pair{camera_grid, "camera_grid"},
-                                     std::pair{projector_grid, "projector_grid"}})
-        if (!grid.empty() && (grid.columns < 4 || grid.rows < 4 || grid.columns > 64 ||
-                              grid.rows > 64))
+    for (const auto& [grid, name] :
+         {std::pair{camera_grid, "camera_grid"}, std::pair{projector_grid, "projector_grid"}})
+        if (!grid.empty() &&
+            (grid.columns < 4 || grid.rows < 4 || grid.columns > 64 || grid.rows > 64))
             bad(name, "a correction grid has 4 to 64 control points per axis (0 x 0: none)");
     if (!(camera_grid_smoothness >= 0) || !std::isfinite(camera_grid_smoothness))
         bad("camera_grid_smoothness", "must not be negative (0: chosen by cross-validation)");
@@ -409,9 +409,8 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         for (std::size_t k = 0; k < poses[i].board.size(); ++k)
             corners.push_back({static_cast<int>(i), poses[i].board[k], poses[i].camera[k],
                                poses[i].projector[k]});
-    detail::GridRegularisation regularisation{options.camera_grid_smoothness,
-                                              options.projector_grid_smoothness,
-                                              options.grid_ridge};
+    detail::GridRegularisation regularisation{
+        options.camera_grid_smoothness, options.projector_grid_smoothness, options.grid_ridge};
     const bool camera_first = options.procedure == StereoProcedure::camera_first;
 
     // The dense samples of the used poses, placed on their boards by the
@@ -616,9 +615,9 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                 // without the samples that are still off it.
                 const std::size_t again = drop_dense_outliers(5, 0.5);
                 say("  again with the residuals' weights" +
-                    (again ? " and without " + std::to_string(again) +
-                                 " dense samples off the model"
-                           : std::string()));
+                    (again
+                         ? " and without " + std::to_string(again) + " dense samples off the model"
+                         : std::string()));
                 noise = observation_noise(s);
                 free.projector_weight = 1 / square(noise.projector);
                 free.dense_weight = 1 / square(noise.dense);

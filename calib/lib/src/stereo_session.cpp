@@ -67,8 +67,8 @@ struct PoseContext {
 
 // One pose: decode, corners, their projector coordinates (by every method
 // and against the truth for simulated captures, on request), dense samples.
-void process_pose(int index, const fs::path& folder, const PoseContext& context,
-                  SessionPose& pose, PoseObservations& observations, PoseOutcome& outcome) {
+void process_pose(int index, const fs::path& folder, const PoseContext& context, SessionPose& pose,
+                  PoseObservations& observations, PoseOutcome& outcome) {
     const StereoSessionOptions& options = context.options;
     const int columns = context.columns, rows = context.rows;
     TimeSplit& time = outcome.time_split;
@@ -108,7 +108,7 @@ void process_pose(int index, const fs::path& folder, const PoseContext& context,
     // The other methods only for the report's comparison with the
     // simulator's truth (about 0.16 s a pose at full size).
     const bool compare = options.compare_corner_methods && capture.manifest.truth &&
-                           !capture.manifest.truth->projector.empty();
+                         !capture.manifest.truth->projector.empty();
     for (int m = 0; m < kCornerMethods; ++m) {
         ProjectorCornerOptions o = options.corners;
         o.method = static_cast<CornerMethod>(m);
@@ -272,13 +272,13 @@ SessionResult calibrate_session(const fs::path& session, const StereoSessionOpti
 
     const std::vector<Vec3> board_points =
         checkerboard_points(columns, rows, result.board.square_size);
-    const bool dense = options.dense_samples &&
-                       options.stereo.procedure == StereoProcedure::camera_first;
+    const bool dense =
+        options.dense_samples && options.stereo.procedure == StereoProcedure::camera_first;
     const int dense_step =
         options.dense_step_px > 0
             ? options.dense_step_px
-            : std::max(2, static_cast<int>(std::lround(
-                              std::sqrt(double(result.camera_size.area()) / 8000.0))));
+            : std::max(2, static_cast<int>(
+                              std::lround(std::sqrt(double(result.camera_size.area()) / 8000.0))));
     // Each pose on its own thread, decoded there (poses rather than pixels
     // in parallel: reading, corners and their projector coordinates are
     // sequential per pose); lines and results in pose order.

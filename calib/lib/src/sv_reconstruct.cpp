@@ -95,7 +95,7 @@ enum class Outcome { point, rejected, outside_projector, not_converged };
 struct Geometry {
     LensModel projector;
     Distortion dist;
-    const CorrectionGrid* correction; // the projector's, empty when none
+    const CorrectionGrid* correction;  // the projector's, empty when none
     double R[9];                       // camera -> projector rotation
     double T[3];                       // mm
     double Rt[9];                      // projector -> camera rotation
@@ -108,8 +108,8 @@ struct Geometry {
 
     Geometry(const StereoCalibration& c, const SvOptions& o)
         : projector(c.projector), dist(c.projector), correction(&c.projector_correction),
-          tolerance_px(o.tolerance_px),
-          max_iterations(o.max_iterations), solver(o.solver), max_gap_mm(o.max_ray_gap_mm) {
+          tolerance_px(o.tolerance_px), max_iterations(o.max_iterations), solver(o.solver),
+          max_gap_mm(o.max_ray_gap_mm) {
         const Mat3 rt = transpose(c.R);
         const Vec3 centre = c.projector_centre();
         for (int i = 0; i < 9; ++i) {

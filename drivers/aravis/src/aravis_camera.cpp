@@ -21,8 +21,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <ctime>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -61,11 +61,16 @@ struct PixelLayout {
 };
 
 std::optional<PixelLayout> layout_of(const std::string& pixel_format) {
-    if (pixel_format == "Mono8") return PixelLayout{8, 8};
-    if (pixel_format == "Mono10") return PixelLayout{16, 10};
-    if (pixel_format == "Mono12") return PixelLayout{16, 12};
-    if (pixel_format == "Mono14") return PixelLayout{16, 14};
-    if (pixel_format == "Mono16") return PixelLayout{16, 16};
+    if (pixel_format == "Mono8")
+        return PixelLayout{8, 8};
+    if (pixel_format == "Mono10")
+        return PixelLayout{16, 10};
+    if (pixel_format == "Mono12")
+        return PixelLayout{16, 12};
+    if (pixel_format == "Mono14")
+        return PixelLayout{16, 14};
+    if (pixel_format == "Mono16")
+        return PixelLayout{16, 16};
     return std::nullopt;
 }
 
@@ -84,15 +89,24 @@ std::int64_t realtime_to_monotonic_ns(std::uint64_t realtime_ns) {
 
 const char* buffer_status_text(ArvBufferStatus status) {
     switch (status) {
-    case ARV_BUFFER_STATUS_SUCCESS: return "complete";
-    case ARV_BUFFER_STATUS_CLEARED: return "cleared";
-    case ARV_BUFFER_STATUS_TIMEOUT: return "timed out while being received";
-    case ARV_BUFFER_STATUS_MISSING_PACKETS: return "missing packets";
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID: return "wrong packet id";
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH: return "larger than the buffer";
-    case ARV_BUFFER_STATUS_FILLING: return "still filling";
-    case ARV_BUFFER_STATUS_ABORTED: return "aborted";
-    default: return "failed";
+    case ARV_BUFFER_STATUS_SUCCESS:
+        return "complete";
+    case ARV_BUFFER_STATUS_CLEARED:
+        return "cleared";
+    case ARV_BUFFER_STATUS_TIMEOUT:
+        return "timed out while being received";
+    case ARV_BUFFER_STATUS_MISSING_PACKETS:
+        return "missing packets";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
+        return "wrong packet id";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
+        return "larger than the buffer";
+    case ARV_BUFFER_STATUS_FILLING:
+        return "still filling";
+    case ARV_BUFFER_STATUS_ABORTED:
+        return "aborted";
+    default:
+        return "failed";
     }
 }
 
@@ -197,16 +211,17 @@ struct AravisCamera::Impl {
                                   format_us(exposure_range.max_us) + " us");
         check_exposure(settings.exposure_us, exposure_range);
         arv_camera_set_exposure_time(cam, settings.exposure_us, error.out());
-        error.throw_if_set(name, "cannot set ExposureTime = " +
-                                     std::to_string(settings.exposure_us) + " us");
+        error.throw_if_set(
+            name, "cannot set ExposureTime = " + std::to_string(settings.exposure_us) + " us");
 
         arv_camera_set_acquisition_mode(cam, ARV_ACQUISITION_MODE_CONTINUOUS, error.out());
         error.throw_if_set(name, "cannot set AcquisitionMode = Continuous");
 
         set_string("TriggerSelector", "FrameStart");
         set_string("TriggerMode", "On");
-        set_string("TriggerSource",
-                   settings.trigger == TriggerMode::software ? "Software" : settings.trigger_source);
+        set_string("TriggerSource", settings.trigger == TriggerMode::software
+                                        ? "Software"
+                                        : settings.trigger_source);
 
         if (arv_camera_is_gv_device(cam) && settings.packet_size > 0) {
             arv_camera_gv_set_packet_size(cam, settings.packet_size, error.out());
@@ -317,7 +332,8 @@ struct AravisCamera::Impl {
         const std::uint64_t previous_timestamp = last_camera_timestamp;
         last_frame_id = frame_id;
         last_camera_timestamp = camera_timestamp;
-        if (!previous_id) return;
+        if (!previous_id)
+            return;
         const std::uint64_t missed = gige_frames_missed(*previous_id, frame_id);
         if (missed == UINT64_MAX)
             throw DeviceError(DeviceKind::camera, name,
@@ -357,16 +373,17 @@ AravisCamera::AravisCamera(const std::string& device, const CameraSettings& sett
         throw DeviceError(DeviceKind::camera, d.name, "cannot open: " + error.message());
 
     ArvDevice* arv_device = arv_camera_get_device(d.camera.get());
-    d.control_lost_handler = g_signal_connect_data(
-        arv_device, "control-lost", reinterpret_cast<GCallback>(on_control_lost),
-        &d.control_lost, nullptr, GConnectFlags(0));
+    d.control_lost_handler = g_signal_connect_data(arv_device, "control-lost",
+                                                   reinterpret_cast<GCallback>(on_control_lost),
+                                                   &d.control_lost, nullptr, GConnectFlags(0));
 
     d.configure();
     d.create_stream();
 }
 
 AravisCamera::~AravisCamera() {
-    if (!impl_) return;
+    if (!impl_)
+        return;
     stop();
     Impl& d = *impl_;
     if (d.control_lost_handler != 0)
@@ -375,15 +392,26 @@ AravisCamera::~AravisCamera() {
     d.camera.reset();
 }
 
-Size AravisCamera::size() const { return impl_->size; }
-int AravisCamera::bit_depth() const { return impl_->layout.container_bits; }
-const std::string& AravisCamera::name() const { return impl_->name; }
-int AravisCamera::buffer_count() const { return impl_->settings.buffer_count; }
-int AravisCamera::buffers_outstanding() const { return impl_->outstanding.load(); }
+Size AravisCamera::size() const {
+    return impl_->size;
+}
+int AravisCamera::bit_depth() const {
+    return impl_->layout.container_bits;
+}
+const std::string& AravisCamera::name() const {
+    return impl_->name;
+}
+int AravisCamera::buffer_count() const {
+    return impl_->settings.buffer_count;
+}
+int AravisCamera::buffers_outstanding() const {
+    return impl_->outstanding.load();
+}
 
 void AravisCamera::start() {
     Impl& d = *impl_;
-    if (d.streaming) return;
+    if (d.streaming)
+        return;
     d.recycle_queued_buffers();
     d.last_frame_id.reset();
     d.last_camera_timestamp = 0;
@@ -397,7 +425,8 @@ void AravisCamera::start() {
 
 void AravisCamera::stop() {
     Impl& d = *impl_;
-    if (!d.streaming) return;
+    if (!d.streaming)
+        return;
     d.streaming = false;
     if (!d.unreachable && !d.control_lost) {
         glib::Error error;
@@ -407,7 +436,9 @@ void AravisCamera::stop() {
     d.recycle_queued_buffers();
 }
 
-ExposureRange AravisCamera::exposure_range_us() const { return impl_->exposure_range; }
+ExposureRange AravisCamera::exposure_range_us() const {
+    return impl_->exposure_range;
+}
 
 void AravisCamera::set_exposure_us(double exposure_us) {
     Impl& d = *impl_;
@@ -440,8 +471,9 @@ CapturedFrame AravisCamera::next_frame(std::chrono::milliseconds timeout) {
     Impl& d = *impl_;
     if (!d.streaming)
         throw DeviceError(DeviceKind::camera, d.name, "next_frame() while not started");
-    const auto expected = d.last_frame_id ? "frame " + std::to_string(gige_next_frame_id(*d.last_frame_id))
-                                          : std::string("first frame");
+    const auto expected = d.last_frame_id
+                              ? "frame " + std::to_string(gige_next_frame_id(*d.last_frame_id))
+                              : std::string("first frame");
     const auto timeout_us = std::chrono::duration_cast<std::chrono::microseconds>(timeout);
     ArvBuffer* raw = arv_stream_timeout_pop_buffer(
         d.stream.get(), static_cast<guint64>(std::max<std::int64_t>(0, timeout_us.count())));

@@ -31,16 +31,18 @@ struct AravisFakeCamera::Impl {
     std::atomic<std::uint64_t> frames_sent{0};
 
     // Runs on the fake camera's thread for every frame it sends.
-    static void fill(ArvBuffer* buffer, void* user_data, guint32 /*exposure_us*/,
-                     guint32 /*gain*/, ArvPixelFormat format) {
+    static void fill(ArvBuffer* buffer, void* user_data, guint32 /*exposure_us*/, guint32 /*gain*/,
+                     ArvPixelFormat format) {
         auto* self = static_cast<Impl*>(user_data);
         const int width = arv_buffer_get_image_width(buffer);
         const int height = arv_buffer_get_image_height(buffer);
         const int bytes_per_pixel = int(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format)) / 8;
         // The fake camera sizes its buffer from the region and format at
         // stream start; the size Aravis reports here does not include it.
-        auto* out = static_cast<std::uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
-        if (out == nullptr || width <= 0 || height <= 0) return;
+        auto* out =
+            static_cast<std::uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
+        if (out == nullptr || width <= 0 || height <= 0)
+            return;
         const std::size_t n = std::size_t(width) * std::size_t(height);
 
         const std::lock_guard lock(self->mutex);
@@ -53,7 +55,8 @@ struct AravisFakeCamera::Impl {
                 std::memcpy(out, image.u8.data(), n);
             } else {
                 const std::uint16_t* in = image.u16.data();
-                for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<std::uint8_t>(in[i] >> 8);
+                for (std::size_t i = 0; i < n; ++i)
+                    out[i] = static_cast<std::uint8_t>(in[i] >> 8);
             }
         } else if (bytes_per_pixel == 2) {
             // Mono16 on the wire: little-endian samples.
@@ -72,8 +75,7 @@ struct AravisFakeCamera::Impl {
     }
 };
 
-AravisFakeCamera::AravisFakeCamera(Size size, const std::string& address,
-                                   const std::string& serial)
+AravisFakeCamera::AravisFakeCamera(Size size, const std::string& address, const std::string& serial)
     : impl_(std::make_unique<Impl>()) {
     Impl& d = *impl_;
     d.address = address;
@@ -111,19 +113,26 @@ void AravisFakeCamera::set_image(const Frame& frame) {
 }
 
 void AravisFakeCamera::set_trigger_poll_rate(double hz) {
-    if (!(hz > 0.0)) throw std::invalid_argument("trigger poll rate must be positive");
+    if (!(hz > 0.0))
+        throw std::invalid_argument("trigger poll rate must be positive");
     arv_fake_camera_set_trigger_frequency(arv_gv_fake_camera_get_fake_camera(impl_->camera.get()),
                                           hz);
 }
 
-std::uint64_t AravisFakeCamera::frames_sent() const { return impl_->frames_sent.load(); }
-const std::string& AravisFakeCamera::address() const { return impl_->address; }
+std::uint64_t AravisFakeCamera::frames_sent() const {
+    return impl_->frames_sent.load();
+}
+const std::string& AravisFakeCamera::address() const {
+    return impl_->address;
+}
 
 bool enter_private_network_namespace() {
-    if (unshare(CLONE_NEWNET) != 0) return false;
+    if (unshare(CLONE_NEWNET) != 0)
+        return false;
     // A new namespace has only a loopback interface, and it is down.
     const UniqueFd fd(socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
-    if (!fd.valid()) return false;
+    if (!fd.valid())
+        return false;
     ifreq request{};
     std::strncpy(request.ifr_name, "lo", IFNAMSIZ - 1);
     bool up = ioctl(fd.get(), SIOCGIFFLAGS, &request) == 0;

@@ -13,7 +13,8 @@ namespace fpp::drivers::glib {
 
 struct ObjectUnref {
     void operator()(void* object) const noexcept {
-        if (object != nullptr) g_object_unref(object);
+        if (object != nullptr)
+            g_object_unref(object);
     }
 };
 

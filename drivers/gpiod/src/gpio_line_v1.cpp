@@ -37,7 +37,8 @@ public:
                               "no such line on the chip: " + std::string(std::strerror(errno)));
         const int flags = config.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
         const int result =
-            output ? gpiod_line_request_output_flags(line, consumer.c_str(), flags, initial_active ? 1 : 0)
+            output ? gpiod_line_request_output_flags(line, consumer.c_str(), flags,
+                                                     initial_active ? 1 : 0)
                    : gpiod_line_request_both_edges_events_flags(line, consumer.c_str(), flags);
         if (result != 0)
             throw DeviceError(DeviceKind::gpio, name(),
@@ -60,11 +61,13 @@ public:
         const int ready = gpiod_line_event_wait(request_.get(), &ts);
         // A signal (SIGTERM from systemd) ends the wait like a timeout: the
         // caller looks at its stop flag.
-        if (ready < 0 && errno == EINTR) return std::nullopt;
+        if (ready < 0 && errno == EINTR)
+            return std::nullopt;
         if (ready < 0)
             throw DeviceError(DeviceKind::gpio, name(),
                               "waiting for an edge failed: " + std::string(std::strerror(errno)));
-        if (ready == 0) return std::nullopt;
+        if (ready == 0)
+            return std::nullopt;
         gpiod_line_event event{};
         if (gpiod_line_event_read(request_.get(), &event) != 0)
             throw DeviceError(DeviceKind::gpio, name(),

@@ -34,10 +34,10 @@ struct GpiodButtonInput::State {
     Debouncer debouncer;
 };
 
-GpiodButtonInput::GpiodButtonInput(const GpioLineConfig& config,
-                                   std::chrono::milliseconds debounce, const std::string& consumer)
-    : state_(std::make_unique<State>(State{gpio_detail::open_edge_line(config, consumer),
-                                           Debouncer(debounce)})) {}
+GpiodButtonInput::GpiodButtonInput(const GpioLineConfig& config, std::chrono::milliseconds debounce,
+                                   const std::string& consumer)
+    : state_(std::make_unique<State>(
+          State{gpio_detail::open_edge_line(config, consumer), Debouncer(debounce)})) {}
 
 GpiodButtonInput::~GpiodButtonInput() = default;
 
@@ -46,8 +46,10 @@ bool GpiodButtonInput::wait_press(std::chrono::milliseconds timeout) {
     for (;;) {
         const auto left = deadline - std::chrono::steady_clock::now();
         const auto edge = state_->line->wait_edge(std::max(left, std::chrono::nanoseconds(0)));
-        if (!edge) return false;
-        if (state_->debouncer.edge(edge->timestamp_ns, edge->rising)) return true;
+        if (!edge)
+            return false;
+        if (state_->debouncer.edge(edge->timestamp_ns, edge->rising))
+            return true;
     }
 }
 
@@ -71,9 +73,12 @@ struct GpiodStatusLed::State {
     // Half period of the blinking for a state; 0 = steady.
     static std::chrono::milliseconds half_period(LedState s) {
         switch (s) {
-        case LedState::scanning: return std::chrono::milliseconds(125);
-        case LedState::error: return std::chrono::milliseconds(500);
-        default: return std::chrono::milliseconds(0);
+        case LedState::scanning:
+            return std::chrono::milliseconds(125);
+        case LedState::error:
+            return std::chrono::milliseconds(500);
+        default:
+            return std::chrono::milliseconds(0);
         }
     }
 
@@ -120,7 +125,8 @@ void GpiodStatusLed::set(LedState state) {
     {
         const std::lock_guard lock(state_->mutex);
         state_->state = state;
-        if (State::half_period(state).count() == 0) state_->line->set(state == LedState::ready);
+        if (State::half_period(state).count() == 0)
+            state_->line->set(state == LedState::ready);
     }
     state_->changed.notify_all();
 }

@@ -49,7 +49,7 @@ inline double normal_quantile(double p) {
 // in the outermost interpolated bins, far less in the centre); the two
 // extreme bins (p < 1/4096 or p > 4095/4096) use the exact formula.
 class NormalTable {
-  public:
+public:
     static constexpr int kBits = 12;
     static constexpr int kSize = 1 << kBits;
 
@@ -72,7 +72,7 @@ class NormalTable {
         return table_[bin] + frac * (table_[bin + 1] - table_[bin]);
     }
 
-  private:
+private:
     float table_[kSize + 1]{};
 };
 

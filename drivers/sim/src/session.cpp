@@ -27,7 +27,7 @@ constexpr double kSqrt2Fraction = 0.4142135623730951;
 // Deterministic uniform numbers in [0, 1) from a 64-bit seed (splitmix64):
 // the same poses on every platform and standard library.
 class Uniform {
-  public:
+public:
     explicit Uniform(std::uint64_t seed) : state_(seed ^ 0x5DEECE66DULL) {}
     double next() {
         std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
@@ -37,7 +37,7 @@ class Uniform {
         return static_cast<double>(z >> 11) * 0x1.0p-53;
     }
 
-  private:
+private:
     std::uint64_t state_;
 };
 
@@ -106,8 +106,9 @@ std::vector<Pose> checkerboard_poses(const Rig& rig, const SessionOptions& o) {
         // Tilts about the board's x and y axes in every direction (golden
         // angle), the first pose nearly frontal; roll about the normal.
         const double direction = 2 * kPi * fraction(k * (1 - kGoldenFraction) + 0.125);
-        const double magnitude = k == 0 ? 0.15 * o.max_tilt_deg
-                                  : o.max_tilt_deg * (0.6 + 0.4 * fraction(k * kSqrt2Fraction));
+        const double magnitude = k == 0
+                                     ? 0.15 * o.max_tilt_deg
+                                     : o.max_tilt_deg * (0.6 + 0.4 * fraction(k * kSqrt2Fraction));
         const double roll = o.max_roll_deg * (2 * u_roll - 1);
         const double shift_direction = 2 * kPi * fraction(k * kGoldenFraction + 0.3);
         // About the camera's axis first; about the middle of the common field

@@ -162,9 +162,9 @@ drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) 
             ? dark_
             : display_.pattern(static_cast<std::size_t>(p.exposure.pattern));
     drivers::CapturedFrame out;
-    out.frame = renderer_->render(
-        light, Renderer::frame_seed(seed_, static_cast<int>(p.exposure.frame_id)),
-        settings_.exposure_us / nominal_exposure_us_);
+    out.frame =
+        renderer_->render(light, Renderer::frame_seed(seed_, static_cast<int>(p.exposure.frame_id)),
+                          settings_.exposure_us / nominal_exposure_us_);
     out.frame_id = p.exposure.frame_id;
     out.timestamp_ns = p.exposure.start_ns;
     return out;

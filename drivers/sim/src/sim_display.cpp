@@ -14,7 +14,9 @@ const char* const kDevice = "sim display";
 SimDisplay::SimDisplay(Size size, drivers::Clock& clock, std::chrono::nanoseconds flip_latency)
     : size_(size), clock_(clock), latency_ns_(flip_latency.count()) {}
 
-SimDisplay::~SimDisplay() { restore(); }
+SimDisplay::~SimDisplay() {
+    restore();
+}
 
 void SimDisplay::prepare(const std::vector<Image<std::uint8_t>>& patterns) {
     if (pending_)
@@ -68,12 +70,14 @@ drivers::FlipEvent SimDisplay::wait_flip(std::chrono::milliseconds timeout) {
     drivers::FlipEvent event{static_cast<std::size_t>(pending_->index), ++sequence_, delivered};
     pending_.reset();
     flips_.push(event);
-    if (hook_) hook_(event);
+    if (hook_)
+        hook_(event);
     return event;
 }
 
 void SimDisplay::restore() {
-    if (restored_) return;
+    if (restored_)
+        return;
     restored_ = true;
     // A pending flip completes before the console comes back.
     const std::int64_t t =
@@ -85,9 +89,10 @@ void SimDisplay::restore() {
 int SimDisplay::on_screen_at(std::int64_t t_ns) const {
     // The last flip on screen at t_ns (the schedule is chronological).
     const auto& s = schedule_.items();
-    const auto after = std::upper_bound(
-        s.begin(), s.end(), t_ns,
-        [](std::int64_t t, const Scheduled& entry) { return t < entry.on_screen_ns; });
+    const auto after =
+        std::upper_bound(s.begin(), s.end(), t_ns, [](std::int64_t t, const Scheduled& entry) {
+            return t < entry.on_screen_ns;
+        });
     return after == s.begin() ? kNothing : std::prev(after)->index;
 }
 

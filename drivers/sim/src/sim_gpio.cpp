@@ -8,8 +8,10 @@ SimTrigger::SimTrigger(drivers::Clock& clock, std::function<void(std::int64_t)> 
 void SimTrigger::pulse(std::chrono::microseconds width) {
     const std::int64_t rise = clock_.now_ns();
     pulses_.push(rise);
-    if (wire_) wire_(rise);
-    clock_.sleep_until_ns(rise + std::chrono::duration_cast<std::chrono::nanoseconds>(width).count());
+    if (wire_)
+        wire_(rise);
+    clock_.sleep_until_ns(rise +
+                          std::chrono::duration_cast<std::chrono::nanoseconds>(width).count());
 }
 
 SimButton::SimButton(std::chrono::milliseconds debounce) : debounce_(debounce) {}
@@ -18,19 +20,22 @@ void SimButton::press(int bounces) {
     {
         std::lock_guard lock(mutex_);
         const auto now = std::chrono::steady_clock::now();
-        for (int i = 0; i <= bounces; ++i) edges_.push_back(now + std::chrono::microseconds(100 * i));
+        for (int i = 0; i <= bounces; ++i)
+            edges_.push_back(now + std::chrono::microseconds(100 * i));
     }
     edge_.notify_all();
 }
 
 void SimButton::take_press_locked() {
     const auto first = edges_.front();
-    while (!edges_.empty() && edges_.front() - first < debounce_) edges_.pop_front();
+    while (!edges_.empty() && edges_.front() - first < debounce_)
+        edges_.pop_front();
 }
 
 bool SimButton::wait_press(std::chrono::milliseconds timeout) {
     std::unique_lock lock(mutex_);
-    if (!edge_.wait_for(lock, timeout, [&] { return !edges_.empty(); })) return false;
+    if (!edge_.wait_for(lock, timeout, [&] { return !edges_.empty(); }))
+        return false;
     take_press_locked();
     return true;
 }

@@ -235,10 +235,10 @@ std::vector<std::string> remove_interrupted_writes(const fs::path& folder,
         const std::string name = entry.path().filename().string();
         const std::size_t tag = name.find(".tmp-", prefix.size());
         const std::size_t folder_tag = name.find(".partial-", prefix.size());
-        const bool ours = name.size() > 1 && name.starts_with(prefix) &&
-                          (tag != std::string::npos || folder_tag != std::string::npos) &&
-                          (target_name.empty() || tag == prefix.size() ||
-                           folder_tag == prefix.size());
+        const bool ours =
+            name.size() > 1 && name.starts_with(prefix) &&
+            (tag != std::string::npos || folder_tag != std::string::npos) &&
+            (target_name.empty() || tag == prefix.size() || folder_tag == prefix.size());
         if (!ours)
             continue;
         std::error_code remove_ec;

@@ -32,7 +32,7 @@ const std::initializer_list<std::string_view> kPhaseKeysV2 = {
     "pattern",    "axis",         "period",   "fringes",        "steps",
     "shift_sign", "phase_offset", "shifting", "carrier_period", "carrier_steps"};
 const std::initializer_list<std::string_view> kGrayKeysV2 = {
-    "pattern", "axis",   "period", "bits",   "complementary", "inverse",
+    "pattern", "axis",   "period", "bits",   "complementary",  "inverse",
     "code",    "levels", "order",  "offset", "offset_periods", "wrap"};
 
 // Version 0 = a sequence file (no format key): every v2 form is accepted.

@@ -44,7 +44,8 @@ using capture_check::kManifestName;
 // Runs f(0..n-1) on up to four threads (the work is file decoding and
 // fsync, not arithmetic); rethrows the exception of the lowest failing index.
 void for_each_file(std::size_t n, const std::function<void(std::size_t)>& f) {
-    if (n == 0) return;
+    if (n == 0)
+        return;
     const int count = static_cast<int>(n);
     ThreadPool pool(std::min({ThreadPool::resolve_threads(0), 4, count}));
     std::vector<std::exception_ptr> errors(n);
@@ -61,7 +62,8 @@ void for_each_file(std::size_t n, const std::function<void(std::size_t)>& f) {
         }
     });
     for (const auto& e : errors) {
-        if (e) std::rethrow_exception(e);
+        if (e)
+            std::rethrow_exception(e);
     }
 }
 
@@ -70,7 +72,8 @@ void for_each_file(std::size_t n, const std::function<void(std::size_t)>& f) {
 std::string bare_message(const InputError& e) {
     std::string what = e.what();
     std::string prefix = e.file().string() + ": ";
-    if (!e.field().empty()) prefix += e.field() + ": ";
+    if (!e.field().empty())
+        prefix += e.field() + ": ";
     return what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
 }
 
@@ -291,24 +294,25 @@ void write_capture_set(const std::filesystem::path& folder, const CaptureManifes
         const fs::path path = folder / m.frames[i];
         const std::string field = item("frames", i);
         if (f.bit_depth != 8 && f.bit_depth != 16) {
-            throw InputError(path, field, "bit depth " + std::to_string(f.bit_depth) +
-                                              " (frames are 8- or 16-bit)");
+            throw InputError(path, field,
+                             "bit depth " + std::to_string(f.bit_depth) +
+                                 " (frames are 8- or 16-bit)");
         }
         const int channels = f.bit_depth == 8 ? f.u8.channels() : f.u16.channels();
         if (channels != 1) {
             throw InputError(path, field, std::to_string(channels) + " channels (frames are grey)");
         }
         if (f.size() != m.camera) {
-            throw InputError(path, field, "frame is " + std::to_string(f.size().width) + "x" +
-                                              std::to_string(f.size().height) +
-                                              " pixels but camera is " +
-                                              std::to_string(m.camera.width) + "x" +
-                                              std::to_string(m.camera.height));
+            throw InputError(path, field,
+                             "frame is " + std::to_string(f.size().width) + "x" +
+                                 std::to_string(f.size().height) + " pixels but camera is " +
+                                 std::to_string(m.camera.width) + "x" +
+                                 std::to_string(m.camera.height));
         }
         if (f.bit_depth != frames[0].bit_depth) {
-            throw InputError(path, field, "frame is " + std::to_string(f.bit_depth) +
-                                              "-bit but frames[0] is " +
-                                              std::to_string(frames[0].bit_depth) + "-bit");
+            throw InputError(path, field,
+                             "frame is " + std::to_string(f.bit_depth) + "-bit but frames[0] is " +
+                                 std::to_string(frames[0].bit_depth) + "-bit");
         }
     }
     if (!frames.empty()) {
@@ -337,7 +341,8 @@ void write_capture_set(const std::filesystem::path& folder, const CaptureManifes
             check.fail(t.field, t.name.empty() ? "an image is given but the manifest lists no file"
                                                : "listed in the manifest but no image is given");
         }
-        if (!t.image) continue;
+        if (!t.image)
+            continue;
         if (t.image->size() != m.camera || t.image->channels() != t.channels) {
             check.fail(t.field, "image must be " + std::to_string(t.channels) + "-channel at " +
                                     "camera size " + std::to_string(m.camera.width) + "x" +
@@ -351,21 +356,27 @@ void write_capture_set(const std::filesystem::path& folder, const CaptureManifes
         std::set<fs::path> subfolders;
         auto prepare = [&](const std::string& name) {
             const fs::path parent = fs::path(name).parent_path();
-            if (parent.empty()) return;
+            if (parent.empty())
+                return;
             fs::create_directories(temp / parent);
-            for (fs::path p = parent; !p.empty(); p = p.parent_path()) subfolders.insert(temp / p);
+            for (fs::path p = parent; !p.empty(); p = p.parent_path())
+                subfolders.insert(temp / p);
         };
-        for (const auto& name : m.frames) prepare(name);
+        for (const auto& name : m.frames)
+            prepare(name);
         for (const auto& t : truth_entries) {
-            if (t.image) prepare(t.name);
+            if (t.image)
+                prepare(t.name);
         }
         for_each_file(frames.size(),
                       [&](std::size_t i) { write_png_synced(temp / m.frames[i], frames[i]); });
         for (const auto& t : truth_entries) {
-            if (t.image) write_tiff_synced(temp / t.name, *t.image);
+            if (t.image)
+                write_tiff_synced(temp / t.name, *t.image);
         }
         write_file_synced(temp / kManifestName, yaml);
-        for (auto it = subfolders.rbegin(); it != subfolders.rend(); ++it) fsync_path(*it);
+        for (auto it = subfolders.rbegin(); it != subfolders.rend(); ++it)
+            fsync_path(*it);
     });
 }
 

@@ -27,8 +27,10 @@ AxisAccuracy compare_to_truth(const Image<float>& decoded, const Image<float>& t
             const bool has_truth = std::isfinite(t), has_decoded = std::isfinite(d);
             acc.truth_valid += has_truth;
             acc.decoded_valid += has_decoded;
-            if (has_decoded && !has_truth) ++acc.false_valid;
-            if (!(has_truth && has_decoded)) continue;
+            if (has_decoded && !has_truth)
+                ++acc.false_valid;
+            if (!(has_truth && has_decoded))
+                continue;
             ++acc.compared;
             const double e = std::abs(double(d) - double(t));
             if (e > period / 2) {

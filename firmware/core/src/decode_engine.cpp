@@ -629,11 +629,10 @@ void DecodeEngine::finish_span(std::size_t offset, int n, std::byte* local, bool
             flag_row(n, rows[0], sat, checks, first, mask);
             break;
         case UnwrapMethod::code:
-            unwrap_code_row(
-                n, at(code_[static_cast<std::size_t>(ap.gray)], offset, local), k.gray,
-                at(code_modulation_[static_cast<std::size_t>(ap.gray)], offset, local),
-                at(code_doubt_[static_cast<std::size_t>(ap.gray)], offset, local), sat, checks,
-                first, out, mask);
+            unwrap_code_row(n, at(code_[static_cast<std::size_t>(ap.gray)], offset, local), k.gray,
+                            at(code_modulation_[static_cast<std::size_t>(ap.gray)], offset, local),
+                            at(code_doubt_[static_cast<std::size_t>(ap.gray)], offset, local), sat,
+                            checks, first, out, mask);
             break;
         case UnwrapMethod::micro: {
             const PhaseState& ps = phase_state_[static_cast<std::size_t>(ap.phases[0])];

@@ -26,8 +26,8 @@ struct PhaseInfo {
     PhaseKind kind = PhaseKind::standard;
     int sequence_index = 0; // the block's index in the sequence (error messages)
     int first_frame = 0;
-    int frames = 0;           // frames the block occupies
-    int axis = 0;             // 0 = x, 1 = y
+    int frames = 0; // frames the block occupies
+    int axis = 0;   // 0 = x, 1 = y
     // cos(delta_k) and -shift_sign * sin(delta_k), so that
     // theta = atan2(sum sin_w I, sum cos_w I).
     std::vector<float> cos_w;
@@ -189,7 +189,7 @@ struct Plan {
     int slot_count = 0;
     bool needs_full_storage = false; // a stage looks at neighbouring pixels
     bool uses_white_black = false;
-    bool uses_levels = false; // white and black kept (n-ary digits, code-only contrast)
+    bool uses_levels = false;     // white and black kept (n-ary digits, code-only contrast)
     std::filesystem::path origin; // the file InputErrors name (see make_plan)
 };
 

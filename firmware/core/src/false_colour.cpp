@@ -32,14 +32,16 @@ void ramp_colour(float t, std::uint8_t rgb[3]) {
 
 Image<std::uint8_t> false_colour(const Image<float>& values, float lo, float hi) {
     Image<std::uint8_t> out(values.width(), values.height(), 3, 0);
-    if (!(hi > lo)) return out;
+    if (!(hi > lo))
+        return out;
     const float scale = 1.0f / (hi - lo);
     for (int y = 0; y < values.height(); ++y) {
         const float* src = values.row(y);
         std::uint8_t* dst = out.row(y);
         for (int x = 0; x < values.width(); ++x) {
             const float v = src[std::size_t(x) * values.channels()];
-            if (std::isnan(v)) continue;
+            if (std::isnan(v))
+                continue;
             ramp_colour((v - lo) * scale, dst + 3 * x);
         }
     }

@@ -79,15 +79,18 @@ struct PngReadJob {
 struct PngReadGuard {
     PngReadJob* job;
     ~PngReadGuard() {
-        if (job->png) png_destroy_read_struct(&job->png, job->info ? &job->info : nullptr, nullptr);
+        if (job->png)
+            png_destroy_read_struct(&job->png, job->info ? &job->info : nullptr, nullptr);
     }
 };
 
 int png_read_create_c(PngReadJob* job) {
-    if (setjmp(job->error.jump)) return 0;
-    job->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &job->error, on_png_error,
-                                      on_png_warning);
-    if (!job->png) return 0;
+    if (setjmp(job->error.jump))
+        return 0;
+    job->png =
+        png_create_read_struct(PNG_LIBPNG_VER_STRING, &job->error, on_png_error, on_png_warning);
+    if (!job->png)
+        return 0;
     // Every byte of the compressed stream is already checked by its chunk's
     // CRC; zlib's second checksum of the inflated bytes costs about 7 % of
     // the decode (measured) and guards nothing more.
@@ -97,7 +100,8 @@ int png_read_create_c(PngReadJob* job) {
 }
 
 int png_read_header_c(PngReadJob* job) {
-    if (setjmp(job->error.jump)) return 0;
+    if (setjmp(job->error.jump))
+        return 0;
     png_init_io(job->png, job->file);
     png_read_info(job->png, job->info);
     job->width = png_get_image_width(job->png, job->info);
@@ -110,8 +114,10 @@ int png_read_header_c(PngReadJob* job) {
 
 // Decodes the pixels into `rows` (preallocated by the caller, one pointer per row).
 int png_read_pixels_c(PngReadJob* job, png_bytepp rows, int swap_16bit) {
-    if (setjmp(job->error.jump)) return 0;
-    if (swap_16bit) png_set_swap(job->png);
+    if (setjmp(job->error.jump))
+        return 0;
+    if (swap_16bit)
+        png_set_swap(job->png);
     png_set_interlace_handling(job->png);
     png_read_update_info(job->png, job->info);
     png_read_image(job->png, rows);
@@ -135,21 +141,25 @@ struct PngWriteJob {
 struct PngWriteGuard {
     PngWriteJob* job;
     ~PngWriteGuard() {
-        if (job->png) png_destroy_write_struct(&job->png, job->info ? &job->info : nullptr);
+        if (job->png)
+            png_destroy_write_struct(&job->png, job->info ? &job->info : nullptr);
     }
 };
 
 int png_write_create_c(PngWriteJob* job) {
-    if (setjmp(job->error.jump)) return 0;
-    job->png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &job->error, on_png_error,
-                                       on_png_warning);
-    if (!job->png) return 0;
+    if (setjmp(job->error.jump))
+        return 0;
+    job->png =
+        png_create_write_struct(PNG_LIBPNG_VER_STRING, &job->error, on_png_error, on_png_warning);
+    if (!job->png)
+        return 0;
     job->info = png_create_info_struct(job->png);
     return job->info ? 1 : 0;
 }
 
 int png_write_c(PngWriteJob* job) {
-    if (setjmp(job->error.jump)) return 0;
+    if (setjmp(job->error.jump))
+        return 0;
     png_init_io(job->png, job->file);
     png_set_IHDR(job->png, job->info, job->width, job->height, job->bit_depth, job->color_type,
                  PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
@@ -161,7 +171,8 @@ int png_write_c(PngWriteJob* job) {
     png_set_compression_strategy(job->png, Z_RLE);
     png_set_filter(job->png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
     png_write_info(job->png, job->info);
-    if (job->swap_16bit) png_set_swap(job->png);
+    if (job->swap_16bit)
+        png_set_swap(job->png);
     png_write_image(job->png, job->rows);
     png_write_end(job->png, nullptr);
     return 1;
@@ -169,7 +180,8 @@ int png_write_c(PngWriteJob* job) {
 
 UniqueFile open_for_reading(const fs::path& path) {
     UniqueFile file(std::fopen(path.c_str(), "rb"));
-    if (!file) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
+    if (!file)
+        throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
     return file;
 }
 
@@ -186,9 +198,11 @@ void read_png_header(const fs::path& path, PngReadJob& job, UniqueFile& file) {
         throw InputError(path, "", "not a PNG file (bad signature)");
     }
     job.file = file.get();
-    if (!png_read_create_c(&job)) throw std::bad_alloc();
+    if (!png_read_create_c(&job))
+        throw std::bad_alloc();
     png_set_sig_bytes(job.png, sizeof signature);
-    if (!png_read_header_c(&job)) throw InputError(path, "", png_failure(job.error));
+    if (!png_read_header_c(&job))
+        throw InputError(path, "", png_failure(job.error));
 }
 
 void check_writable_image(const fs::path& path, Size size, int channels, bool allow_rgb) {
@@ -196,8 +210,7 @@ void check_writable_image(const fs::path& path, Size size, int channels, bool al
         throw std::invalid_argument("write_png " + path.string() + ": empty image");
     }
     if (channels != 1 && !(allow_rgb && channels == 3)) {
-        throw std::invalid_argument("write_png " + path.string() + ": " +
-                                    std::to_string(channels) +
+        throw std::invalid_argument("write_png " + path.string() + ": " + std::to_string(channels) +
                                     " channels (supported: 1, or 3 for 8-bit)");
     }
 }
@@ -205,16 +218,18 @@ void check_writable_image(const fs::path& path, Size size, int channels, bool al
 // Writes the PNG to `file` (`path` names it in errors).
 void write_png_stream(std::FILE* file, const fs::path& path, const void* pixels, Size size,
                       int channels, int bit_depth) {
-    const std::size_t row_bytes = std::size_t(size.width) * std::size_t(channels) *
-                                  std::size_t(bit_depth / 8);
+    const std::size_t row_bytes =
+        std::size_t(size.width) * std::size_t(channels) * std::size_t(bit_depth / 8);
     std::vector<png_bytep> rows(static_cast<std::size_t>(size.height));
     // libpng takes non-const row pointers but only reads them when writing.
     auto* base = static_cast<png_bytep>(const_cast<void*>(pixels));
-    for (std::size_t y = 0; y < rows.size(); ++y) rows[y] = base + y * row_bytes;
+    for (std::size_t y = 0; y < rows.size(); ++y)
+        rows[y] = base + y * row_bytes;
 
     PngWriteJob job{};
     PngWriteGuard guard{&job};
-    if (!png_write_create_c(&job)) throw std::bad_alloc();
+    if (!png_write_create_c(&job))
+        throw std::bad_alloc();
     job.file = file;
     job.width = static_cast<png_uint_32>(size.width);
     job.height = static_cast<png_uint_32>(size.height);
@@ -236,9 +251,11 @@ void write_png_stream(std::FILE* file, const fs::path& path, const void* pixels,
 void write_png_file(const fs::path& path, const void* pixels, Size size, int channels,
                     int bit_depth) {
     UniqueFile file(std::fopen(path.c_str(), "wb"));
-    if (!file) throw IoError(path, describe_errno("cannot open for writing", errno));
+    if (!file)
+        throw IoError(path, describe_errno("cannot open for writing", errno));
     write_png_stream(file.get(), path, pixels, size, channels, bit_depth);
-    if (std::fflush(file.get()) != 0) throw IoError(path, describe_errno("write failed", errno));
+    if (std::fflush(file.get()) != 0)
+        throw IoError(path, describe_errno("write failed", errno));
     if (::fsync(::fileno(file.get())) != 0) {
         throw IoError(path, describe_errno("fsync failed", errno));
     }
@@ -290,7 +307,9 @@ int on_tiff_error(TIFF*, void* user, const char* module, const char* format, va_
     return 1; // handled: do not print to stderr
 }
 
-int on_tiff_warning(TIFF*, void*, const char*, const char*, va_list) { return 1; }
+int on_tiff_warning(TIFF*, void*, const char*, const char*, va_list) {
+    return 1;
+}
 
 struct TiffCloser {
     void operator()(TIFF* t) const { TIFFClose(t); }
@@ -315,7 +334,8 @@ void require_tiff_exists(const fs::path& path) {
 
 UniqueTiff open_tiff(const fs::path& path, const char* mode, TiffMessages& messages) {
     std::unique_ptr<TIFFOpenOptions, TiffOptionsFree> options(TIFFOpenOptionsAlloc());
-    if (!options) throw std::bad_alloc();
+    if (!options)
+        throw std::bad_alloc();
     TIFFOpenOptionsSetErrorHandlerExtR(options.get(), on_tiff_error, &messages);
     TIFFOpenOptionsSetWarningHandlerExtR(options.get(), on_tiff_warning, nullptr);
     return UniqueTiff(TIFFOpenExt(path.c_str(), mode, options.get()));
@@ -342,7 +362,8 @@ void write_tiff_file(const fs::path& path, const Image<float>& image) {
     TiffMessages messages{};
     errno = 0;
     UniqueTiff tiff = open_tiff(path, "w", messages);
-    if (!tiff) throw IoError(path, describe_errno("cannot open for writing", errno));
+    if (!tiff)
+        throw IoError(path, describe_errno("cannot open for writing", errno));
 
     const auto width = static_cast<std::uint32_t>(image.width());
     const auto height = static_cast<std::uint32_t>(image.height());
@@ -352,25 +373,28 @@ void write_tiff_file(const fs::path& path, const Image<float>& image) {
         1, static_cast<std::uint32_t>((256u * 1024u) / (row_floats * sizeof(float)) + 1));
 
     TIFF* t = tiff.get();
-    bool ok = TIFFSetField(t, TIFFTAG_IMAGEWIDTH, width) &&
-              TIFFSetField(t, TIFFTAG_IMAGELENGTH, height) &&
-              TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, static_cast<std::uint16_t>(channels)) &&
-              TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, static_cast<std::uint16_t>(32)) &&
-              TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, static_cast<std::uint16_t>(SAMPLEFORMAT_IEEEFP)) &&
-              TIFFSetField(t, TIFFTAG_PLANARCONFIG, static_cast<std::uint16_t>(PLANARCONFIG_CONTIG)) &&
-              TIFFSetField(t, TIFFTAG_PHOTOMETRIC,
-                           static_cast<std::uint16_t>(channels >= 3 ? PHOTOMETRIC_RGB
-                                                                    : PHOTOMETRIC_MINISBLACK)) &&
-              TIFFSetField(t, TIFFTAG_COMPRESSION, static_cast<std::uint16_t>(COMPRESSION_ADOBE_DEFLATE)) &&
-              TIFFSetField(t, TIFFTAG_PREDICTOR, static_cast<std::uint16_t>(PREDICTOR_FLOATINGPOINT)) &&
-              TIFFSetField(t, TIFFTAG_ZIPQUALITY, 1) &&
-              TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rows_per_strip);
+    bool ok =
+        TIFFSetField(t, TIFFTAG_IMAGEWIDTH, width) &&
+        TIFFSetField(t, TIFFTAG_IMAGELENGTH, height) &&
+        TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, static_cast<std::uint16_t>(channels)) &&
+        TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, static_cast<std::uint16_t>(32)) &&
+        TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, static_cast<std::uint16_t>(SAMPLEFORMAT_IEEEFP)) &&
+        TIFFSetField(t, TIFFTAG_PLANARCONFIG, static_cast<std::uint16_t>(PLANARCONFIG_CONTIG)) &&
+        TIFFSetField(
+            t, TIFFTAG_PHOTOMETRIC,
+            static_cast<std::uint16_t>(channels >= 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK)) &&
+        TIFFSetField(t, TIFFTAG_COMPRESSION,
+                     static_cast<std::uint16_t>(COMPRESSION_ADOBE_DEFLATE)) &&
+        TIFFSetField(t, TIFFTAG_PREDICTOR, static_cast<std::uint16_t>(PREDICTOR_FLOATINGPOINT)) &&
+        TIFFSetField(t, TIFFTAG_ZIPQUALITY, 1) &&
+        TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rows_per_strip);
     if (ok && (channels == 2 || channels == 4)) {
         // The last channel is neither colour nor alpha: "unspecified" extra sample.
         const std::uint16_t extra[1] = {EXTRASAMPLE_UNSPECIFIED};
         ok = TIFFSetField(t, TIFFTAG_EXTRASAMPLES, static_cast<std::uint16_t>(1), extra);
     }
-    if (!ok) throw IoError(path, "cannot set TIFF fields: " + tiff_reason(messages));
+    if (!ok)
+        throw IoError(path, "cannot set TIFF fields: " + tiff_reason(messages));
 
     // libtiff may modify the buffer it encodes (predictor), so encode a copy.
     const std::uint32_t strips = (height + rows_per_strip - 1) / rows_per_strip;
@@ -384,10 +408,10 @@ void write_tiff_file(const fs::path& path, const Image<float>& image) {
         if (TIFFWriteEncodedStrip(t, s, strip_buffer.data(),
                                   static_cast<tmsize_t>(count * sizeof(float))) < 0) {
             const int err = errno;
-            throw IoError(path, err != 0 ? describe_errno("TIFF write failed (" +
-                                                              tiff_reason(messages) + ")",
-                                                          err)
-                                         : "TIFF write failed: " + tiff_reason(messages));
+            throw IoError(
+                path, err != 0
+                          ? describe_errno("TIFF write failed (" + tiff_reason(messages) + ")", err)
+                          : "TIFF write failed: " + tiff_reason(messages));
         }
     }
     errno = 0;
@@ -396,7 +420,8 @@ void write_tiff_file(const fs::path& path, const Image<float>& image) {
         throw IoError(path, err != 0 ? describe_errno("TIFF write failed", err)
                                      : "TIFF write failed: " + tiff_reason(messages));
     }
-    if (::fsync(TIFFFileno(t)) != 0) throw IoError(path, describe_errno("fsync failed", errno));
+    if (::fsync(TIFFFileno(t)) != 0)
+        throw IoError(path, describe_errno("fsync failed", errno));
     tiff.reset();
 }
 
@@ -427,19 +452,21 @@ Frame read_png_gray(const std::filesystem::path& path) {
                            : job.color_type == PNG_COLOR_TYPE_RGB        ? "an RGB"
                            : job.color_type == PNG_COLOR_TYPE_RGB_ALPHA  ? "an RGBA"
                                                                          : "a non-grey";
-        throw InputError(path, "", std::string("is ") + kind +
-                                       " PNG; frames must be single-channel grey");
+        throw InputError(path, "",
+                         std::string("is ") + kind + " PNG; frames must be single-channel grey");
     }
     if (job.bit_depth != 8 && job.bit_depth != 16) {
-        throw InputError(path, "", "grey PNG of " + std::to_string(job.bit_depth) +
-                                       " bits per sample; frames must be 8 or 16 bits");
+        throw InputError(path, "",
+                         "grey PNG of " + std::to_string(job.bit_depth) +
+                             " bits per sample; frames must be 8 or 16 bits");
     }
     // PNG allows up to 2^31-1 per side; refuse what cannot be a camera frame
     // before allocating for it (a corrupt header could ask for gigabytes).
     if (job.width == 0 || job.height == 0 || job.width > kMaxSide || job.height > kMaxSide ||
         std::uint64_t{job.width} * job.height > kMaxPixels) {
-        throw InputError(path, "", "implausible PNG size " + std::to_string(job.width) + "x" +
-                                       std::to_string(job.height));
+        throw InputError(path, "",
+                         "implausible PNG size " + std::to_string(job.width) + "x" +
+                             std::to_string(job.height));
     }
     // Deflate expands at most 1032:1, so a small file cannot hold a large
     // image: refuse before allocating for what the header claims.
@@ -448,9 +475,10 @@ Frame read_png_gray(const std::filesystem::path& path) {
     const std::uint64_t claimed =
         std::uint64_t{job.height} * (std::uint64_t{job.width} * (job.bit_depth / 8) + 1);
     if (!size_error && claimed > 1032 * file_bytes + (std::uint64_t{1} << 20)) {
-        throw InputError(path, "", "the header claims " + std::to_string(job.width) + "x" +
-                                       std::to_string(job.height) + " pixels, more than a " +
-                                       std::to_string(file_bytes) + "-byte file can hold");
+        throw InputError(path, "",
+                         "the header claims " + std::to_string(job.width) + "x" +
+                             std::to_string(job.height) + " pixels, more than a " +
+                             std::to_string(file_bytes) + "-byte file can hold");
     }
 
     Frame frame;
@@ -460,7 +488,8 @@ Frame read_png_gray(const std::filesystem::path& path) {
     std::vector<png_bytep> rows(static_cast<std::size_t>(height));
     if (job.bit_depth == 8) {
         frame.u8 = Image<std::uint8_t>(width, height);
-        for (int y = 0; y < height; ++y) rows[std::size_t(y)] = frame.u8.row(y);
+        for (int y = 0; y < height; ++y)
+            rows[std::size_t(y)] = frame.u8.row(y);
     } else {
         frame.u16 = Image<std::uint16_t>(width, height);
         for (int y = 0; y < height; ++y) {
@@ -483,14 +512,16 @@ std::string encode_png(const Frame& frame) {
     std::unique_ptr<char, decltype(&std::free)> owned(nullptr, &std::free);
     {
         UniqueFile file(::open_memstream(&buffer, &size));
-        if (!file) throw IoError(name, describe_errno("open_memstream", errno));
+        if (!file)
+            throw IoError(name, describe_errno("open_memstream", errno));
         if (frame.bit_depth == 8)
             write_png_stream(file.get(), name, frame.u8.data(), frame.u8.size(), 1, 8);
         else
             write_png_stream(file.get(), name, frame.u16.data(), frame.u16.size(), 1, 16);
         const int closed = std::fclose(file.release());
         owned.reset(buffer);
-        if (closed != 0) throw IoError(name, describe_errno("PNG in memory", errno));
+        if (closed != 0)
+            throw IoError(name, describe_errno("PNG in memory", errno));
     }
     return std::string(buffer, size);
 }
@@ -531,7 +562,8 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
     require_tiff_exists(path);
     TiffMessages messages{};
     UniqueTiff tiff = open_tiff(path, "r", messages);
-    if (!tiff) throw InputError(path, "", "not a readable TIFF (" + tiff_reason(messages) + ")");
+    if (!tiff)
+        throw InputError(path, "", "not a readable TIFF (" + tiff_reason(messages) + ")");
     TIFF* t = tiff.get();
 
     std::uint32_t width = 0, height = 0;
@@ -543,8 +575,9 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
     TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLEFORMAT, &format);
     TIFFGetFieldDefaulted(t, TIFFTAG_PLANARCONFIG, &planar);
     if (format != SAMPLEFORMAT_IEEEFP || bits != 32) {
-        throw InputError(path, "", "not a float32 TIFF (sample format " + std::to_string(format) +
-                                       ", " + std::to_string(bits) + " bits per sample)");
+        throw InputError(path, "",
+                         "not a float32 TIFF (sample format " + std::to_string(format) + ", " +
+                             std::to_string(bits) + " bits per sample)");
     }
     if (channels < 1 || channels > 4) {
         throw InputError(path, "", std::to_string(channels) + " channels (supported: 1 to 4)");
@@ -554,8 +587,9 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
     }
     if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide ||
         std::uint64_t{width} * height > kMaxPixels) {
-        throw InputError(path, "", "implausible TIFF size " + std::to_string(width) + "x" +
-                                       std::to_string(height));
+        throw InputError(path, "",
+                         "implausible TIFF size " + std::to_string(width) + "x" +
+                             std::to_string(height));
     }
 
     // Not more samples than the file can hold: Deflate or LZW expand a byte
@@ -566,10 +600,11 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
     const std::uint64_t holdable = 4096 * (size_error ? 0 : file_bytes) + (std::uint64_t{1} << 20);
     const std::uint64_t claimed = std::uint64_t{width} * height * channels * sizeof(float);
     if (claimed > holdable) {
-        throw InputError(path, "", "the header claims " + std::to_string(width) + "x" +
-                                       std::to_string(height) + "x" + std::to_string(channels) +
-                                       " floats, more than a " + std::to_string(file_bytes) +
-                                       "-byte file can hold");
+        throw InputError(path, "",
+                         "the header claims " + std::to_string(width) + "x" +
+                             std::to_string(height) + "x" + std::to_string(channels) +
+                             " floats, more than a " + std::to_string(file_bytes) +
+                             "-byte file can hold");
     }
 
     Image<float> image(static_cast<int>(width), static_cast<int>(height), channels);
@@ -585,11 +620,13 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
             std::uint64_t{tile_w} * tile_h * channels * sizeof(float) > holdable)
             throw fail();
         const std::size_t tile_floats = std::size_t(tile_w) * tile_h * channels;
-        if (static_cast<std::size_t>(TIFFTileSize(t)) != tile_floats * sizeof(float)) throw fail();
+        if (static_cast<std::size_t>(TIFFTileSize(t)) != tile_floats * sizeof(float))
+            throw fail();
         std::vector<float> tile(tile_floats);
         for (std::uint32_t ty = 0; ty < height; ty += tile_h) {
             for (std::uint32_t tx = 0; tx < width; tx += tile_w) {
-                if (TIFFReadTile(t, tile.data(), tx, ty, 0, 0) < 0) throw fail();
+                if (TIFFReadTile(t, tile.data(), tx, ty, 0, 0) < 0)
+                    throw fail();
                 const std::uint32_t w = std::min(tile_w, width - tx);
                 const std::uint32_t h = std::min(tile_h, height - ty);
                 for (std::uint32_t y = 0; y < h; ++y) {
@@ -604,7 +641,8 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
         TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
         rows_per_strip = std::min(std::max<std::uint32_t>(rows_per_strip, 1), height);
         const std::uint32_t strips = TIFFNumberOfStrips(t);
-        if (strips != (height + rows_per_strip - 1) / rows_per_strip) throw fail();
+        if (strips != (height + rows_per_strip - 1) / rows_per_strip)
+            throw fail();
         for (std::uint32_t s = 0; s < strips; ++s) {
             const std::uint32_t y0 = s * rows_per_strip;
             const std::uint32_t rows = std::min(rows_per_strip, height - y0);
@@ -614,7 +652,8 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
             }
         }
     }
-    if (messages.has_error) throw fail();
+    if (messages.has_error)
+        throw fail();
     return image;
 }
 

@@ -13,7 +13,8 @@ thread_local int t_worker = 0;
 } // namespace
 
 int ThreadPool::resolve_threads(int requested) {
-    if (requested > 0) return requested;
+    if (requested > 0)
+        return requested;
     const unsigned hw = std::thread::hardware_concurrency();
     return hw == 0 ? 1 : static_cast<int>(hw);
 }
@@ -24,14 +25,16 @@ ThreadPool& ThreadPool::shared(int threads) {
     const int n = resolve_threads(threads);
     std::lock_guard lock(mutex);
     std::unique_ptr<ThreadPool>& pool = pools[n];
-    if (!pool) pool = std::make_unique<ThreadPool>(n);
+    if (!pool)
+        pool = std::make_unique<ThreadPool>(n);
     return *pool;
 }
 
 ThreadPool::ThreadPool(int threads) {
     const int n = resolve_threads(threads);
     workers_.reserve(static_cast<std::size_t>(n - 1));
-    for (int w = 1; w < n; ++w) workers_.emplace_back([this, w] { worker_loop(w); });
+    for (int w = 1; w < n; ++w)
+        workers_.emplace_back([this, w] { worker_loop(w); });
 }
 
 ThreadPool::~ThreadPool() {
@@ -40,7 +43,8 @@ ThreadPool::~ThreadPool() {
         stop_ = true;
     }
     wake_.notify_all();
-    for (auto& t : workers_) t.join();
+    for (auto& t : workers_)
+        t.join();
 }
 
 void ThreadPool::work(int worker) {
@@ -50,13 +54,15 @@ void ThreadPool::work(int worker) {
     t_worker = worker;
     for (;;) {
         const int begin = next_.fetch_add(grain_, std::memory_order_relaxed);
-        if (begin >= count_) break;
+        if (begin >= count_)
+            break;
         const int end = std::min(count_, begin + grain_);
         try {
             invoke_(ctx_, begin, end, worker);
         } catch (...) {
             std::lock_guard lock(mutex_);
-            if (!error_) error_ = std::current_exception();
+            if (!error_)
+                error_ = std::current_exception();
             next_.store(count_, std::memory_order_relaxed); // skip what is left
         }
     }
@@ -70,24 +76,28 @@ void ThreadPool::worker_loop(int worker) {
         {
             std::unique_lock lock(mutex_);
             wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
-            if (stop_) return;
+            if (stop_)
+                return;
             seen = generation_;
         }
         work(worker);
         {
             std::lock_guard lock(mutex_);
-            if (--busy_ == 0) done_.notify_one();
+            if (--busy_ == 0)
+                done_.notify_one();
         }
     }
 }
 
 void ThreadPool::run(int count, int grain, void* ctx, Invoke invoke) {
-    if (count <= 0) return;
+    if (count <= 0)
+        return;
     grain = std::max(1, grain);
     // Inline when there is nothing to share or when called from one of our chunks.
     if (workers_.empty() || count <= grain || t_running_pool == this) {
         const int worker = t_running_pool == this ? t_worker : 0;
-        for (int b = 0; b < count; b += grain) invoke(ctx, b, std::min(count, b + grain), worker);
+        for (int b = 0; b < count; b += grain)
+            invoke(ctx, b, std::min(count, b + grain), worker);
         return;
     }
     std::lock_guard run_lock(run_mutex_);
@@ -111,7 +121,8 @@ void ThreadPool::run(int count, int grain, void* ctx, Invoke invoke) {
         error = error_;
         error_ = nullptr;
     }
-    if (error) std::rethrow_exception(error);
+    if (error)
+        std::rethrow_exception(error);
 }
 
 } // namespace fpp

@@ -8,13 +8,18 @@ struct FrameCounter {
     int operator()(const BlackBlock&) const { return 1; }
     int operator()(const PhaseBlock& b) const {
         switch (b.shifting) {
-        case PhaseShifting::two_plus_one: return 3;
-        case PhaseShifting::modulated: return b.steps * b.carrier_steps;
-        case PhaseShifting::standard: break;
+        case PhaseShifting::two_plus_one:
+            return 3;
+        case PhaseShifting::modulated:
+            return b.steps * b.carrier_steps;
+        case PhaseShifting::standard:
+            break;
         }
         return b.steps;
     }
-    int operator()(const MicroPhaseBlock& b) const { return static_cast<int>(b.periods.size()) + 2; }
+    int operator()(const MicroPhaseBlock& b) const {
+        return static_cast<int>(b.periods.size()) + 2;
+    }
     int operator()(const GrayBlock& b) const {
         const int planes = b.bits + (b.complementary ? 1 : 0);
         return b.inverse ? 2 * planes : planes;
@@ -31,14 +36,19 @@ struct Namer {
 };
 } // namespace
 
-int frame_count(const PatternBlock& block) { return std::visit(FrameCounter{}, block); }
+int frame_count(const PatternBlock& block) {
+    return std::visit(FrameCounter{}, block);
+}
 
 int frame_count(const Sequence& sequence) {
     int n = 0;
-    for (const auto& b : sequence) n += frame_count(b);
+    for (const auto& b : sequence)
+        n += frame_count(b);
     return n;
 }
 
-std::string pattern_name(const PatternBlock& block) { return std::visit(Namer{}, block); }
+std::string pattern_name(const PatternBlock& block) {
+    return std::visit(Namer{}, block);
+}
 
 } // namespace fpp

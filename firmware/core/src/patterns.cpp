@@ -31,9 +31,8 @@ void check_block(const PatternBlock& block) {
             throw std::invalid_argument("phase block: invalid carrier_period or carrier_steps");
         }
     } else if (const auto* m = std::get_if<MicroPhaseBlock>(&block)) {
-        const bool periods_ok = std::all_of(m->periods.begin(), m->periods.end(), [](double v) {
-            return std::isfinite(v) && v > 0.0;
-        });
+        const bool periods_ok = std::all_of(m->periods.begin(), m->periods.end(),
+                                            [](double v) { return std::isfinite(v) && v > 0.0; });
         const bool extra_ok =
             (m->extra_phase_offsets.empty() ||
              m->extra_phase_offsets.size() + 1 == m->periods.size()) &&
@@ -61,19 +60,20 @@ void check_frame(const PatternBlock& block, int frame) {
     check_block(block);
     const int count = frame_count(block);
     if (frame < 0 || frame >= count) {
-        throw std::out_of_range("frame " + std::to_string(frame) + " of a " +
-                                pattern_name(block) + " block with " + std::to_string(count) +
-                                " frames");
+        throw std::out_of_range("frame " + std::to_string(frame) + " of a " + pattern_name(block) +
+                                " block with " + std::to_string(count) + " frames");
     }
 }
 
-double along(Axis axis, double x, double y) { return axis == Axis::x ? x : y; }
+double along(Axis axis, double x, double y) {
+    return axis == Axis::x ? x : y;
+}
 
 // Which code plane a Gray block's frame shows, and whether it is inverted.
 struct GrayPlane {
-    int plane = 0;       // 0 = MSB
-    int planes = 0;      // bits, or bits + 1 when complementary
-    double scale = 1.0;  // the code is g(floor(scale * p / period))
+    int plane = 0;      // 0 = MSB
+    int planes = 0;     // bits, or bits + 1 when complementary
+    double scale = 1.0; // the code is g(floor(scale * p / period))
     bool inverted = false;
 };
 
@@ -97,16 +97,17 @@ GrayPlane gray_plane(const GrayBlock& b, int frame) {
 int code_digit(const GrayBlock& b, int digits, std::int64_t n, int digit) {
     const std::int64_t levels = b.levels;
     std::int64_t count = 1;
-    for (int i = 0; i < digits; ++i) count *= levels;
+    for (int i = 0; i < digits; ++i)
+        count *= levels;
     n = ((n % count) + count) % count;
     std::int64_t place = count / levels;
     int gray_sum = 0;
     for (int i = digits - 1; i >= 0; --i, place /= levels) {
         const auto natural = static_cast<int>((n / place) % levels);
-        const int value = (b.code == CodeKind::gray && (gray_sum % 2) == 1)
-                              ? b.levels - 1 - natural
-                              : natural;
-        if (i == digit) return value;
+        const int value =
+            (b.code == CodeKind::gray && (gray_sum % 2) == 1) ? b.levels - 1 - natural : natural;
+        if (i == digit)
+            return value;
         gray_sum += value;
     }
     return 0;
@@ -115,8 +116,8 @@ int code_digit(const GrayBlock& b, int digits, std::int64_t n, int digit) {
 double gray_intensity(const GrayBlock& b, const GrayPlane& g, double p) {
     const auto n = static_cast<std::int64_t>(std::floor(g.scale * (p - b.offset) / b.period));
     const int digit = b.order == DigitOrder::msb_first ? g.planes - 1 - g.plane : g.plane;
-    const double level = static_cast<double>(code_digit(b, g.planes, n, digit)) /
-                         static_cast<double>(b.levels - 1);
+    const double level =
+        static_cast<double>(code_digit(b, g.planes, n, digit)) / static_cast<double>(b.levels - 1);
     return g.inverted ? 1.0 - level : level;
 }
 
@@ -136,7 +137,8 @@ struct IntensityAt {
         switch (b.shifting) {
         case PhaseShifting::two_plus_one: {
             const double phi = kTwoPi * p / b.period + b.phase_offset;
-            if (frame == 0) return 0.5 + 0.5 * sign * std::sin(phi);
+            if (frame == 0)
+                return 0.5 + 0.5 * sign * std::sin(phi);
             return frame == 1 ? 0.5 + 0.5 * std::cos(phi) : 0.5;
         }
         case PhaseShifting::modulated: {
@@ -148,7 +150,8 @@ struct IntensityAt {
                    fringe(q, b.carrier_period,
                           kTwoPi * carrier_shift / static_cast<double>(b.carrier_steps));
         }
-        case PhaseShifting::standard: break;
+        case PhaseShifting::standard:
+            break;
         }
         return fringe(p, b.period,
                       b.phase_offset + sign * kTwoPi * static_cast<double>(frame) /
@@ -173,10 +176,14 @@ struct IntensityAt {
 };
 
 Axis block_axis(const PatternBlock& block) {
-    if (const auto* p = std::get_if<PhaseBlock>(&block)) return p->axis;
-    if (const auto* g = std::get_if<GrayBlock>(&block)) return g->axis;
-    if (const auto* c = std::get_if<CenterlineBlock>(&block)) return c->axis;
-    if (const auto* m = std::get_if<MicroPhaseBlock>(&block)) return m->axis;
+    if (const auto* p = std::get_if<PhaseBlock>(&block))
+        return p->axis;
+    if (const auto* g = std::get_if<GrayBlock>(&block))
+        return g->axis;
+    if (const auto* c = std::get_if<CenterlineBlock>(&block))
+        return c->axis;
+    if (const auto* m = std::get_if<MicroPhaseBlock>(&block))
+        return m->axis;
     return Axis::x; // white and black are uniform
 }
 
@@ -195,7 +202,8 @@ double pattern_intensity(const PatternBlock& block, int frame, double x, double 
 
 GammaLut GammaLut::identity() {
     GammaLut lut;
-    for (std::size_t i = 0; i < lut.level.size(); ++i) lut.level[i] = static_cast<std::uint8_t>(i);
+    for (std::size_t i = 0; i < lut.level.size(); ++i)
+        lut.level[i] = static_cast<std::uint8_t>(i);
     return lut;
 }
 
@@ -218,9 +226,8 @@ GammaLut GammaLut::precompensate(double projector_gamma) {
         const int below = std::clamp(static_cast<int>(std::floor(exact)), 0, 255);
         const int above = std::min(below + 1, 255);
         const double target = static_cast<double>(v);
-        const int best = std::abs(emitted(above) - target) < std::abs(emitted(below) - target)
-                             ? above
-                             : below;
+        const int best =
+            std::abs(emitted(above) - target) < std::abs(emitted(below) - target) ? above : below;
         lut.level[std::size_t(v)] = static_cast<std::uint8_t>(best);
     }
     return lut;
@@ -234,15 +241,16 @@ GammaLut GammaLut::from_response(const ProjectorResponse& response, double emitt
     }
     response.validate();
     std::array<double, 256> emitted{}; // non-decreasing in the level
-    for (std::size_t c = 0; c < emitted.size(); ++c) emitted[c] = response.at(double(c));
+    for (std::size_t c = 0; c < emitted.size(); ++c)
+        emitted[c] = response.at(double(c));
     GammaLut lut;
     for (std::size_t v = 0; v < lut.level.size(); ++v) {
         const double target = std::pow(static_cast<double>(v) / 255.0, emitted_gamma);
         // The nearest emitted light is at the first level reaching the
         // target or at the one before it.
         const auto above = std::lower_bound(emitted.begin(), emitted.end(), target);
-        std::size_t best = above == emitted.end() ? emitted.size() - 1
-                                                  : std::size_t(above - emitted.begin());
+        std::size_t best =
+            above == emitted.end() ? emitted.size() - 1 : std::size_t(above - emitted.begin());
         if (best > 0 && std::abs(emitted[best - 1] - target) <= std::abs(emitted[best] - target)) {
             best -= 1;
         }
@@ -253,7 +261,8 @@ GammaLut GammaLut::from_response(const ProjectorResponse& response, double emitt
 
 double compensation_emitted_gamma(const Sequence& sequence) {
     for (const PatternBlock& block : sequence) {
-        if (const auto* p = std::get_if<PhaseBlock>(&block); p && p->steps < 4) return 1.0;
+        if (const auto* p = std::get_if<PhaseBlock>(&block); p && p->steps < 4)
+            return 1.0;
     }
     return 2.0;
 }
@@ -306,7 +315,8 @@ std::vector<Image<std::uint8_t>> render_sequence(const Sequence& sequence, Size 
     frames.reserve(std::size_t(frame_count(sequence)));
     for (const auto& block : sequence) {
         const int count = frame_count(block);
-        for (int k = 0; k < count; ++k) frames.push_back(render_pattern(block, k, projector, lut));
+        for (int k = 0; k < count; ++k)
+            frames.push_back(render_pattern(block, k, projector, lut));
     }
     return frames;
 }

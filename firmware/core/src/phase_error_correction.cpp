@@ -578,8 +578,9 @@ PhaseErrorSummary estimate_phase_error(const Image<float>& proj, const Image<std
         s.box_radius = box_radius(proj, mask, unit);
         // The first estimate's sine part only: the stand-in then carries no
         // cosine error, so the cosine part of the sampling bias is seen whole.
-        const SecondPass two = second_pass(proj, mask, fold, correction_table(s.sine, nullptr, unit),
-                                           s.box_radius, unit, harmonics, pool);
+        const SecondPass two =
+            second_pass(proj, mask, fold, correction_table(s.sine, nullptr, unit), s.box_radius,
+                        unit, harmonics, pool);
         std::vector<double> sine_d, cosine_d, sine_s, cosine_s;
         moments(two.decoded_counts, harmonics, sine_d, cosine_d);
         moments(two.stand_in_counts, harmonics, sine_s, cosine_s);

@@ -62,9 +62,13 @@ FPP_KERNEL float floor_fast(float x) {
     const std::int32_t i = static_cast<std::int32_t>(x);
     return static_cast<float>(i - static_cast<std::int32_t>(static_cast<float>(i) > x));
 }
-FPP_KERNEL float ceil_fast(float x) { return -floor_fast(-x); }
+FPP_KERNEL float ceil_fast(float x) {
+    return -floor_fast(-x);
+}
 // Nearest integer, halves rounded up.
-FPP_KERNEL float round_fast(float x) { return floor_fast(x + 0.5f); }
+FPP_KERNEL float round_fast(float x) {
+    return floor_fast(x + 0.5f);
+}
 // Nearest integer, halves to even, for |x| < 2^22: adding 1.5 * 2^23 leaves
 // no fraction bits, so the addition itself rounds (IEEE round to nearest, the
 // default mode; valid without -ffast-math, which could fold the two
@@ -73,7 +77,9 @@ FPP_KERNEL float round_nearest(float x) {
     constexpr float kShift = 12582912.0f; // 1.5 * 2^23
     return (x + kShift) - kShift;
 }
-FPP_KERNEL float abs_fast(float x) { return __builtin_fabsf(x); }
+FPP_KERNEL float abs_fast(float x) {
+    return __builtin_fabsf(x);
+}
 
 // atan2(y, x) in [-pi, pi], max error about 2e-7 rad (float rounding; the
 // polynomial alone is good to 4e-9). Range reduction: a = min/max of |x|, |y|

@@ -54,7 +54,8 @@ int gray_bits_needed(double period, int extent) {
     }
     const double last_index = std::floor(static_cast<double>(extent - 1) / period);
     int bits = 1;
-    while (bits < 30 && std::ldexp(1.0, bits) <= last_index) ++bits;
+    while (bits < 30 && std::ldexp(1.0, bits) <= last_index)
+        ++bits;
     return bits;
 }
 
@@ -73,7 +74,8 @@ Sequence standard_sequence(const std::string& name, Size projector) {
         s.push_back(WhiteBlock{});
         s.push_back(BlackBlock{});
         add_phase_gray(s, Axis::x, projector, true, false);
-        if (name == "gray-xy") add_phase_gray(s, Axis::y, projector, true, false);
+        if (name == "gray-xy")
+            add_phase_gray(s, Axis::y, projector, true, false);
     } else if (name == "plain-gray-x") {
         s.push_back(WhiteBlock{});
         s.push_back(BlackBlock{});
@@ -85,7 +87,8 @@ Sequence standard_sequence(const std::string& name, Size projector) {
         s.push_back(phase(Axis::x, 160.0));
         s.push_back(phase(Axis::x, width));
     } else if (name == "heterodyne-x") {
-        for (const double fringes : {64.0, 63.0, 56.0}) s.push_back(phase(Axis::x, width / fringes));
+        for (const double fringes : {64.0, 63.0, 56.0})
+            s.push_back(phase(Axis::x, width / fringes));
     } else if (name == "centerline-xy") {
         s.push_back(WhiteBlock{});
         for (const Axis axis : {Axis::x, Axis::y}) {
@@ -97,7 +100,8 @@ Sequence standard_sequence(const std::string& name, Size projector) {
         s.push_back(phase(Axis::x, width, 3, -1));
     } else {
         std::string known;
-        for (const auto& n : standard_sequence_names()) known += (known.empty() ? "" : ", ") + n;
+        for (const auto& n : standard_sequence_names())
+            known += (known.empty() ? "" : ", ") + n;
         throw std::invalid_argument("unknown sequence name '" + name + "' (known: " + known + ")");
     }
     return s;

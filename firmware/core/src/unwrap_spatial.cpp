@@ -31,7 +31,8 @@ void repair_plain_gray_rows(Size size, int y0, int y1, const float* estimate,
             const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
                                   static_cast<std::size_t>(x);
             const float p = estimate[i];
-            if (edge[i] == 0 || !(p == p)) continue;
+            if (edge[i] == 0 || !(p == p))
+                continue;
             int votes[3] = {0, 0, 0}; // p - period, p, p + period
             for (int d = 0; d < 4; ++d) {
                 // The first two non-edge pixels in this direction extrapolate
@@ -41,20 +42,26 @@ void repair_plain_gray_rows(Size size, int y0, int y1, const float* estimate,
                 int n = 0;
                 for (int step = 1; step <= reach && n < 2; ++step) {
                     const int u = x + dx[d] * step, v = y + dy[d] * step;
-                    if (u < 0 || u >= w || v < 0 || v >= h) break;
-                    const std::size_t j = static_cast<std::size_t>(v) * static_cast<std::size_t>(w) +
-                                          static_cast<std::size_t>(u);
+                    if (u < 0 || u >= w || v < 0 || v >= h)
+                        break;
+                    const std::size_t j =
+                        static_cast<std::size_t>(v) * static_cast<std::size_t>(w) +
+                        static_cast<std::size_t>(u);
                     const float q = estimate[j];
-                    if (!(q == q)) break; // no surface: the walk ends
-                    if (edge[j] != 0) continue;
+                    if (!(q == q))
+                        break; // no surface: the walk ends
+                    if (edge[j] != 0)
+                        continue;
                     found[n] = q;
                     dist[n] = step;
                     ++n;
                 }
-                if (n < 2) continue;
+                if (n < 2)
+                    continue;
                 const float gap = static_cast<float>(dist[1] - dist[0]);
                 const float slope = (found[0] - found[1]) / gap;
-                if (abs_fast(slope) > max_step) continue; // the two straddle a step
+                if (abs_fast(slope) > max_step)
+                    continue; // the two straddle a step
                 const float predicted = found[0] + slope * static_cast<float>(dist[0]);
                 for (int c = 0; c < 3; ++c)
                     if (abs_fast(predicted - (p + static_cast<float>(c - 1) * period)) <= tol)
@@ -80,8 +87,10 @@ namespace {
 struct OffsetForest {
     std::vector<std::int32_t> parent;
     std::vector<std::int32_t> offset;
-    explicit OffsetForest(std::int32_t n) : parent(static_cast<std::size_t>(n)), offset(static_cast<std::size_t>(n), 0) {
-        for (std::int32_t i = 0; i < n; ++i) parent[static_cast<std::size_t>(i)] = i;
+    explicit OffsetForest(std::int32_t n)
+        : parent(static_cast<std::size_t>(n)), offset(static_cast<std::size_t>(n), 0) {
+        for (std::int32_t i = 0; i < n; ++i)
+            parent[static_cast<std::size_t>(i)] = i;
     }
     // Root of x and x's offset to it.
     std::pair<std::int32_t, std::int32_t> find(std::int32_t x) {
@@ -107,7 +116,8 @@ struct OffsetForest {
     bool join(std::int32_t p, std::int32_t q, std::int32_t k) {
         const auto [rp, op] = find(p);
         const auto [rq, oq] = find(q);
-        if (rp == rq) return oq == k + op;
+        if (rp == rq)
+            return oq == k + op;
         parent[static_cast<std::size_t>(rq)] = rp;
         offset[static_cast<std::size_t>(rq)] = k + op - oq;
         return true;
@@ -119,9 +129,12 @@ struct PatchLink {
     std::int32_t k = 0;        // q shifted by k periods continues p
     bool pass = false;
     friend bool operator<(const PatchLink& a, const PatchLink& b) {
-        if (a.p != b.p) return a.p < b.p;
-        if (a.q != b.q) return a.q < b.q;
-        if (a.pass != b.pass) return a.pass > b.pass;
+        if (a.p != b.p)
+            return a.p < b.p;
+        if (a.q != b.q)
+            return a.q < b.q;
+        if (a.pass != b.pass)
+            return a.pass > b.pass;
         return a.k < b.k;
     }
 };
@@ -129,9 +142,9 @@ struct PatchLink {
 } // namespace
 
 void unwrap_centerline(Size size, const float* fraction, const float* other,
-                       const float* modulation, const std::uint8_t* sat,
-                       const std::uint8_t* line, const CenterlineParams& params,
-                       std::int32_t* state, std::int32_t* next, float* out, std::uint8_t* mask) {
+                       const float* modulation, const std::uint8_t* sat, const std::uint8_t* line,
+                       const CenterlineParams& params, std::int32_t* state, std::int32_t* next,
+                       float* out, std::uint8_t* mask) {
     const int w = size.width;
     const int h = size.height;
     const std::int32_t count = static_cast<std::int32_t>(size.area());
@@ -152,10 +165,14 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
     auto step = [&](std::int32_t i, int dir) -> std::int32_t {
         const int x = i % w, y = i / w;
         switch (dir) {
-        case 0: return x > 0 ? i - 1 : -1;
-        case 1: return x + 1 < w ? i + 1 : -1;
-        case 2: return y > 0 ? i - w : -1;
-        default: return y + 1 < h ? i + w : -1;
+        case 0:
+            return x > 0 ? i - 1 : -1;
+        case 1:
+            return x + 1 < w ? i + 1 : -1;
+        case 2:
+            return y > 0 ? i - w : -1;
+        default:
+            return y + 1 < h ? i + w : -1;
         }
     };
     auto usable = [&](std::int32_t i) { return i >= 0 && state[i] != kInvalid; };
@@ -164,18 +181,22 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
     auto curvature_of = [&](const float* f, std::int32_t a, std::int32_t b, int dir, float d) {
         float c = -1.0f;
         const std::int32_t before = step(a, dir ^ 1);
-        if (usable(before)) c = abs_fast(d - wrapped_in(f, before, a));
+        if (usable(before))
+            c = abs_fast(d - wrapped_in(f, before, a));
         const std::int32_t after = step(b, dir);
-        if (usable(after)) c = std::max(c, abs_fast(wrapped_in(f, b, after) - d));
+        if (usable(after))
+            c = std::max(c, abs_fast(wrapped_in(f, b, after) - d));
         return c;
     };
     // A link is smooth if the wrapped step is small and steady in this axis's
     // phase and in the other axis's (a depth step moves both coordinates).
     auto smooth = [&](std::int32_t a, std::int32_t b, int dir, float gate, float& d) {
         d = wrapped_in(fraction, a, b);
-        if (abs_fast(d) > params.jump_gate) return false;
+        if (abs_fast(d) > params.jump_gate)
+            return false;
         const float c = curvature_of(fraction, a, b, dir, d);
-        if (c < 0.0f || c > gate) return false;
+        if (c < 0.0f || c > gate)
+            return false;
         if (other != nullptr) {
             const float od = wrapped_in(other, a, b);
             if (abs_fast(od) > params.jump_gate || curvature_of(other, a, b, dir, od) > gate)
@@ -188,7 +209,8 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
     //    to their first pixel (breadth first; `next` is the queue).
     std::int32_t patches = 0;
     for (std::int32_t seed = 0; seed < count; ++seed) {
-        if (state[seed] != kUnvisited) continue;
+        if (state[seed] != kUnvisited)
+            continue;
         const std::int32_t id = patches++;
         state[seed] = id;
         out[seed] = fraction[seed] * period;
@@ -215,10 +237,12 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
     //    and only a few look smooth by chance.
     std::vector<PatchLink> links;
     for (std::int32_t a = 0; a < count; ++a) {
-        if (state[a] < 0) continue;
+        if (state[a] < 0)
+            continue;
         for (int dir : {1, 3}) {
             const std::int32_t b = step(a, dir);
-            if (b < 0 || state[b] < 0 || state[b] == state[a]) continue;
+            if (b < 0 || state[b] < 0 || state[b] == state[a])
+                continue;
             PatchLink link;
             float d = 0;
             link.pass = smooth(a, b, dir, params.merge_gate, d);
@@ -266,7 +290,8 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
     std::stable_sort(candidates.begin(), candidates.end(),
                      [](const Candidate& x, const Candidate& y) { return x.support > y.support; });
     OffsetForest forest(patches);
-    for (const Candidate& c : candidates) forest.join(c.p, c.q, c.k);
+    for (const Candidate& c : candidates)
+        forest.join(c.p, c.q, c.k);
 
     // 3. Seeds: pixels lit by the centerline whose wrapped position matches
     //    the line, in runs (at least two such 8-neighbours) so that a stray
@@ -275,14 +300,16 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
     const double period_d = static_cast<double>(period);
     const double reach = params.half_width + 1.0;
     auto on_line = [&](std::int32_t i) {
-        if (line[i] == 0 || state[i] < 0) return false;
+        if (line[i] == 0 || state[i] < 0)
+            return false;
         double offset = static_cast<double>(fraction[i]) * period_d - position;
         offset -= period_d * std::floor(offset / period_d + 0.5);
         return std::abs(offset) <= reach;
     };
     std::vector<std::pair<std::int32_t, std::int32_t>> votes; // (root, fringe-order shift)
     for (std::int32_t i = 0; i < count; ++i) {
-        if (!on_line(i)) continue;
+        if (!on_line(i))
+            continue;
         const int x = i % w, y = i / w;
         int neighbours = 0;
         for (int dy = -1; dy <= 1; ++dy)
@@ -291,10 +318,12 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
                     continue;
                 neighbours += on_line(i + dy * w + dx) ? 1 : 0;
             }
-        if (neighbours < 2) continue;
+        if (neighbours < 2)
+            continue;
         const auto [root, offset] = forest.find(state[i]);
         const double value = static_cast<double>(out[i]) + offset * period_d;
-        votes.emplace_back(root, static_cast<std::int32_t>(std::lround((position - value) / period_d)));
+        votes.emplace_back(root,
+                           static_cast<std::int32_t>(std::lround((position - value) / period_d)));
     }
     std::sort(votes.begin(), votes.end());
     std::vector<std::int32_t> shift(static_cast<std::size_t>(patches), 0);
@@ -306,7 +335,8 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
         std::int32_t best_k = 0;
         while (e < votes.size() && votes[e].first == root) {
             std::size_t f = e;
-            while (f < votes.size() && votes[f] == votes[e]) ++f;
+            while (f < votes.size() && votes[f] == votes[e])
+                ++f;
             const int n = static_cast<int>(f - e);
             total += n;
             if (n > best) {

@@ -63,8 +63,8 @@ struct CenterlineParams {
     float highest = 1e30f; // projector extent + 0.5: larger results are flagged inconsistent
 };
 void unwrap_centerline(Size size, const float* fraction, const float* other,
-                       const float* modulation, const std::uint8_t* sat,
-                       const std::uint8_t* line, const CenterlineParams& params,
-                       std::int32_t* state, std::int32_t* next, float* out, std::uint8_t* mask);
+                       const float* modulation, const std::uint8_t* sat, const std::uint8_t* line,
+                       const CenterlineParams& params, std::int32_t* state, std::int32_t* next,
+                       float* out, std::uint8_t* mask);
 
 } // namespace fpp::detail

@@ -204,8 +204,8 @@ FPP_KERNEL void plain_gray(int n, const float* __restrict fraction,
             hi += shift;
         }
         const bool unused = Table ? kf > max_step : kf > static_cast<float>(max_code);
-        store<MaskFirst>(p, base_flags(modulation[x], sat[x], c) | (unused ? kBad : 0u), c,
-                         out[x], mask[x]);
+        store<MaskFirst>(p, base_flags(modulation[x], sat[x], c) | (unused ? kBad : 0u), c, out[x],
+                         mask[x]);
         estimate[x] = out[x];
         edge[x] = ((p - lo < band) | (hi - p < band)) ? std::uint8_t{1} : std::uint8_t{0};
     }

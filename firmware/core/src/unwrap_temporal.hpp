@@ -11,9 +11,9 @@ namespace fpp::detail {
 
 // What every kernel needs about validity.
 struct PixelChecks {
-    float min_modulation = 0; // DN
+    float min_modulation = 0;       // DN
     float max_disagreement = 0.35f; // fine periods
-    std::uint8_t sat_bit = 1; // this axis's saturation bit
+    std::uint8_t sat_bit = 1;       // this axis's saturation bit
     // kDecodeValid when this kernel alone decides validity (one coded axis,
     // no neighbourhood stage): set where no flag is raised. Else 0.
     std::uint8_t valid_flag = 0;
@@ -33,8 +33,7 @@ struct PhaseRow {
 // One block covering the extent: p = fraction * period, moved into the window
 // [lo, lo + period) with lo = -0.5 - (period - extent) / 2 (centred on the projector).
 void unwrap_direct_row(int n, const PhaseRow& phase, double extent, const std::uint8_t* sat,
-                       const PixelChecks& checks, bool mask_first, float* out,
-                       std::uint8_t* mask);
+                       const PixelChecks& checks, bool mask_first, float* out, std::uint8_t* mask);
 
 // Hierarchical: blocks[0] covers the extent, each next block is unwrapped with
 // the previous estimate (coarse to fine).
@@ -75,7 +74,7 @@ struct GrayRowParams {
     const float* step_of_code = nullptr; // null: plain Gray, K = gray_to_binary(code)
     float offset = 0;
     float max_step = 0;
-    bool resolve_carries = false; // code-only natural binary: see unwrap_code_row
+    bool resolve_carries = false;           // code-only natural binary: see unwrap_code_row
     const float* code_coordinate = nullptr; // code-only: GrayInfo::code_coordinate
     std::uint32_t code_count = 0;           // code values (half the table)
     std::uint32_t max_carry_run = 0;        // resolve_carries: longest run (2^(j+1) - 1)

@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -20,11 +20,16 @@ namespace {
 
 const char* describe_type(const YAML::Node& node) {
     switch (node.Type()) {
-    case YAML::NodeType::Null: return "nothing (null)";
-    case YAML::NodeType::Scalar: return "a scalar";
-    case YAML::NodeType::Sequence: return "a list";
-    case YAML::NodeType::Map: return "a map";
-    case YAML::NodeType::Undefined: break;
+    case YAML::NodeType::Null:
+        return "nothing (null)";
+    case YAML::NodeType::Scalar:
+        return "a scalar";
+    case YAML::NodeType::Sequence:
+        return "a list";
+    case YAML::NodeType::Map:
+        return "a map";
+    case YAML::NodeType::Undefined:
+        break;
     }
     return "nothing";
 }
@@ -35,14 +40,18 @@ std::string lower(std::string s) {
     return s;
 }
 
-bool is_digit(char c) { return c >= '0' && c <= '9'; }
+bool is_digit(char c) {
+    return c >= '0' && c <= '9';
+}
 
 // YAML 1.2 core-schema decimal integer: [-+]?[0-9]+
 bool is_decimal_integer(const std::string& s) {
     std::size_t i = (!s.empty() && (s[0] == '-' || s[0] == '+')) ? 1 : 0;
-    if (i == s.size()) return false;
+    if (i == s.size())
+        return false;
     for (; i < s.size(); ++i) {
-        if (!is_digit(s[i])) return false;
+        if (!is_digit(s[i]))
+            return false;
     }
     return true;
 }
@@ -51,44 +60,57 @@ bool is_decimal_integer(const std::string& s) {
 // [-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?
 bool is_finite_real_syntax(const std::string& s) {
     std::size_t i = 0;
-    if (i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+    if (i < s.size() && (s[i] == '-' || s[i] == '+'))
+        ++i;
     std::size_t digits = 0;
-    while (i < s.size() && is_digit(s[i])) ++i, ++digits;
+    while (i < s.size() && is_digit(s[i]))
+        ++i, ++digits;
     if (i < s.size() && s[i] == '.') {
         ++i;
-        while (i < s.size() && is_digit(s[i])) ++i, ++digits;
+        while (i < s.size() && is_digit(s[i]))
+            ++i, ++digits;
     }
-    if (digits == 0) return false;
+    if (digits == 0)
+        return false;
     if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
         ++i;
-        if (i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+        if (i < s.size() && (s[i] == '-' || s[i] == '+'))
+            ++i;
         std::size_t exponent_digits = 0;
-        while (i < s.size() && is_digit(s[i])) ++i, ++exponent_digits;
-        if (exponent_digits == 0) return false;
+        while (i < s.size() && is_digit(s[i]))
+            ++i, ++exponent_digits;
+        if (exponent_digits == 0)
+            return false;
     }
     return i == s.size();
 }
 
 bool is_non_finite_word(const std::string& s) {
     std::string t = lower(s);
-    if (!t.empty() && (t[0] == '-' || t[0] == '+')) t.erase(0, 1);
+    if (!t.empty() && (t[0] == '-' || t[0] == '+'))
+        t.erase(0, 1);
     return t == ".inf" || t == ".nan" || t == "inf" || t == "nan" || t == "infinity";
 }
 
 // True if `s` can be written unquoted and reads back as the same string.
 bool is_plain_safe(const std::string& s) {
-    if (s.empty()) return false;
+    if (s.empty())
+        return false;
     for (const char c : s) {
         const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || is_digit(c) ||
                         c == '_' || c == '.' || c == '-' || c == '/' || c == '+';
-        if (!ok) return false;
+        if (!ok)
+            return false;
     }
-    if (s[0] == '-' || s[0] == '+' || s[0] == '.') return false;
+    if (s[0] == '-' || s[0] == '+' || s[0] == '.')
+        return false;
     // Would read back as a number, boolean or null in other YAML readers.
     static const std::set<std::string> words = {"true", "false", "null", "yes", "no",
                                                 "on",   "off",   "y",    "n"};
-    if (words.count(lower(s))) return false;
-    if (std::all_of(s.begin(), s.end(), is_digit)) return false;
+    if (words.count(lower(s)))
+        return false;
+    if (std::all_of(s.begin(), s.end(), is_digit))
+        return false;
     double ignored = 0;
     const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), ignored);
     return !(ec == std::errc() && end == s.data() + s.size());
@@ -110,10 +132,12 @@ std::string read_text_file(const std::filesystem::path& path) {
         throw InputError(path, "", "is a folder, not a file");
     }
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
+    if (!in)
+        throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
     std::ostringstream text;
     text << in.rdbuf();
-    if (in.bad()) throw InputError(path, "", "read error");
+    if (in.bad())
+        throw InputError(path, "", "read error");
     return text.str();
 }
 
@@ -130,7 +154,9 @@ YAML::Node Reader::load(const std::string& text) const {
     }
 }
 
-YAML::Node Reader::load_file() const { return load(read_text_file(origin_)); }
+YAML::Node Reader::load_file() const {
+    return load(read_text_file(origin_));
+}
 
 void Reader::fail(const YAML::Node& node, const std::string& field,
                   const std::string& message) const {
@@ -153,13 +179,16 @@ void Reader::check_keys(const YAML::Node& node, const std::string& field,
     std::set<std::string> seen;
     for (auto it = node.begin(); it != node.end(); ++it) {
         const YAML::Node key = it->first; // a copy: `it->` points into a temporary
-        if (!key.IsScalar()) fail(key, field, "map keys must be plain names");
+        if (!key.IsScalar())
+            fail(key, field, "map keys must be plain names");
         const std::string& name = key.Scalar();
-        if (!seen.insert(name).second) fail(key, child(field, name), "key given twice");
+        if (!seen.insert(name).second)
+            fail(key, child(field, name), "key given twice");
         if (allowed &&
             std::find(allowed->begin(), allowed->end(), std::string_view(name)) == allowed->end()) {
             std::string list;
-            for (auto a : *allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+            for (auto a : *allowed)
+                list += (list.empty() ? "" : ", ") + std::string(a);
             fail(key, child(field, name), "unknown key (allowed here: " + list + ")");
         }
     }
@@ -180,19 +209,20 @@ void Reader::expect_list(const YAML::Node& node, const std::string& field) const
     }
 }
 
-void Reader::expect_list(const YAML::Node& node, const std::string& field,
-                         std::size_t size) const {
+void Reader::expect_list(const YAML::Node& node, const std::string& field, std::size_t size) const {
     expect_list(node, field);
     if (node.size() != size) {
-        fail(node, field, "must be a list of " + std::to_string(size) + " values, got " +
-                              std::to_string(node.size()));
+        fail(node, field,
+             "must be a list of " + std::to_string(size) + " values, got " +
+                 std::to_string(node.size()));
     }
 }
 
 YAML::Node Reader::require(const YAML::Node& map, const std::string& parent,
                            std::string_view key) const {
     const YAML::Node value = map[std::string(key)];
-    if (!value.IsDefined()) fail(map, child(parent, key), "missing field");
+    if (!value.IsDefined())
+        fail(map, child(parent, key), "missing field");
     return value;
 }
 
@@ -202,21 +232,24 @@ std::string Reader::plain_scalar(const YAML::Node& node, const std::string& fiel
         fail(node, field, std::string("must be ") + kind + ", got " + describe_type(node));
     }
     if (node.Tag() != "?") {
-        fail(node, field, std::string("must be ") + kind + ", got the quoted or tagged text '" +
-                              node.Scalar() + "'");
+        fail(node, field,
+             std::string("must be ") + kind + ", got the quoted or tagged text '" + node.Scalar() +
+                 "'");
     }
     return node.Scalar();
 }
 
 std::string Reader::string_value(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) fail(node, field, std::string("must be text, got ") + describe_type(node));
+    if (!node.IsScalar())
+        fail(node, field, std::string("must be text, got ") + describe_type(node));
     return node.Scalar();
 }
 
 int Reader::int_value(const YAML::Node& node, const std::string& field) const {
     const std::string text = plain_scalar(node, field, "an integer");
     if (!is_decimal_integer(text)) {
-        if (is_non_finite_word(text)) fail(node, field, "non-finite number '" + text + "'");
+        if (is_non_finite_word(text))
+            fail(node, field, "non-finite number '" + text + "'");
         fail(node, field, "must be an integer, got '" + text + "'");
     }
     const std::size_t start = text[0] == '+' ? 1 : 0;
@@ -231,8 +264,10 @@ int Reader::int_value(const YAML::Node& node, const std::string& field) const {
 
 double Reader::real_value(const YAML::Node& node, const std::string& field) const {
     const std::string text = plain_scalar(node, field, "a number");
-    if (is_non_finite_word(text)) fail(node, field, "non-finite number '" + text + "'");
-    if (!is_finite_real_syntax(text)) fail(node, field, "must be a number, got '" + text + "'");
+    if (is_non_finite_word(text))
+        fail(node, field, "non-finite number '" + text + "'");
+    if (!is_finite_real_syntax(text))
+        fail(node, field, "must be a number, got '" + text + "'");
     const std::size_t start = text[0] == '+' ? 1 : 0;
     double value = 0;
     const auto [end, ec] = std::from_chars(text.data() + start, text.data() + text.size(), value);
@@ -275,14 +310,16 @@ bool Reader::bool_value(const YAML::Node& node, const std::string& field) const 
     const std::string text = plain_scalar(node, field, "true or false");
     if (text == "true" || text == "True" || text == "TRUE")
         return true;
-    if (text == "false" || text == "False" || text == "FALSE") return false;
+    if (text == "false" || text == "False" || text == "FALSE")
+        return false;
     fail(node, field, "must be true or false, got '" + text + "'");
 }
 
-double Reader::real_value_or(const YAML::Node& map, const std::string& parent,
-                             std::string_view key, double fallback) const {
+double Reader::real_value_or(const YAML::Node& map, const std::string& parent, std::string_view key,
+                             double fallback) const {
     const YAML::Node value = map[std::string(key)];
-    if (!value.IsDefined()) return fallback;
+    if (!value.IsDefined())
+        return fallback;
     return real_value(value, child(parent, key));
 }
 
@@ -290,12 +327,14 @@ std::string format_real(double value) {
     char buffer[64];
     const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
     std::string text(buffer, result.ptr);
-    if (text.find_first_of(".eEn") == std::string::npos) text += ".0";
+    if (text.find_first_of(".eEn") == std::string::npos)
+        text += ".0";
     return text;
 }
 
 std::string format_string(const std::string& text) {
-    if (is_plain_safe(text)) return text;
+    if (is_plain_safe(text))
+        return text;
     std::string out = "\"";
     for (const char c : text) {
         const auto u = static_cast<unsigned char>(c);

@@ -219,7 +219,8 @@ private:
     void parse_points(const YAML::Node& n, BoardConfig& c) const {
         r_.expect_map(n, "points", {"max_sigma_z_mm"});
         if (n["max_sigma_z_mm"]) {
-            c.points.max_sigma_z_mm = real_in(n, "points", "max_sigma_z_mm", 1e-6, 1e3, "(0, 1000]");
+            c.points.max_sigma_z_mm =
+                real_in(n, "points", "max_sigma_z_mm", 1e-6, 1e3, "(0, 1000]");
             if (!c.camera.noise)
                 r_.fail(n["max_sigma_z_mm"], "points.max_sigma_z_mm",
                         "needs camera.noise (the prediction of sigma_z comes from it)");

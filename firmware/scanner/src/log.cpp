@@ -8,10 +8,14 @@ namespace fpp::scanner {
 namespace {
 const char* level_name(LogLevel level) {
     switch (level) {
-    case LogLevel::error: return "error";
-    case LogLevel::warning: return "warning";
-    case LogLevel::info: return "info";
-    case LogLevel::debug: return "debug";
+    case LogLevel::error:
+        return "error";
+    case LogLevel::warning:
+        return "warning";
+    case LogLevel::info:
+        return "info";
+    case LogLevel::debug:
+        return "debug";
     }
     return "info";
 }
@@ -21,18 +25,22 @@ Logger::Logger() {
     const bool journal = std::getenv("JOURNAL_STREAM") != nullptr;
     sink_ = [journal](LogLevel level, const std::string& message) {
         char prefix[16];
-        if (journal) std::snprintf(prefix, sizeof prefix, "<%d>", static_cast<int>(level));
-        else std::snprintf(prefix, sizeof prefix, "%s: ", level_name(level));
+        if (journal)
+            std::snprintf(prefix, sizeof prefix, "<%d>", static_cast<int>(level));
+        else
+            std::snprintf(prefix, sizeof prefix, "%s: ", level_name(level));
         std::string line(prefix);
         line.reserve(line.size() + message.size() + 1);
-        for (char c : message) line += (c == '\n' ? ' ' : c); // one event, one line
+        for (char c : message)
+            line += (c == '\n' ? ' ' : c); // one event, one line
         line += '\n';
         std::fputs(line.c_str(), stderr); // one write per line: lines do not interleave
     };
 }
 
 void Logger::log(LogLevel level, const std::string& message) const {
-    if (sink_) sink_(level, message);
+    if (sink_)
+        sink_(level, message);
 }
 
 } // namespace fpp::scanner

@@ -33,12 +33,12 @@ drivers::Camera& ReconnectingCamera::live() {
         return *camera_;
     std::unique_ptr<drivers::Camera> camera = open_(); // DeviceError while still away
     if (!(camera->size() == size_) || camera->bit_depth() != bit_depth_)
-        throw drivers::DeviceError(drivers::DeviceKind::camera, 
-            name_, "came back as " + std::to_string(camera->size().width) + "x" +
-                       std::to_string(camera->size().height) + " " +
-                       std::to_string(camera->bit_depth()) + "-bit, was " +
-                       std::to_string(size_.width) + "x" + std::to_string(size_.height) + " " +
-                       std::to_string(bit_depth_) + "-bit: restart the scanner for another camera");
+        throw drivers::DeviceError(
+            drivers::DeviceKind::camera, name_,
+            "came back as " + std::to_string(camera->size().width) + "x" +
+                std::to_string(camera->size().height) + " " + std::to_string(camera->bit_depth()) +
+                "-bit, was " + std::to_string(size_.width) + "x" + std::to_string(size_.height) +
+                " " + std::to_string(bit_depth_) + "-bit: restart the scanner for another camera");
     if (exposure_us_)
         camera->set_exposure_us(*exposure_us_);
     range_ = camera->exposure_range_us();

@@ -99,12 +99,9 @@ std::string scan_json(const ScanMetadata& m) {
     if (m.board.points.max_sigma_z_mm)
         j["dropped_by_sigma"] = {{"max_sigma_z_mm", *m.board.points.max_sigma_z_mm},
                                  {"points", m.outcome.dropped_by_sigma}};
-    j["timings_ms"] = {{"capture", t.capture_ms},
-                       {"push_mean", t.push_mean_ms},
-                       {"push_max", t.push_max_ms},
-                       {"finish", t.finish_ms},
-                       {"fuse", t.fuse_ms},
-                       {"apply", t.apply_ms}};
+    j["timings_ms"] = {{"capture", t.capture_ms},   {"push_mean", t.push_mean_ms},
+                       {"push_max", t.push_max_ms}, {"finish", t.finish_ms},
+                       {"fuse", t.fuse_ms},         {"apply", t.apply_ms}};
     j["flips"] = std::move(flips);
     return j.dump(2) + "\n";
 }

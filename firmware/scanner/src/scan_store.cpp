@@ -18,7 +18,8 @@ namespace fs = std::filesystem;
 void prepare_store(const fs::path& directory) {
     std::error_code ec;
     fs::create_directories(directory, ec);
-    if (ec) throw IoError(directory, "cannot create the scan store: " + ec.message());
+    if (ec)
+        throw IoError(directory, "cannot create the scan store: " + ec.message());
     if (::access(directory.c_str(), W_OK | X_OK) != 0)
         throw IoError(directory, describe_errno("scan store not writable", errno));
 }
@@ -29,7 +30,9 @@ fs::path new_scan_folder(const fs::path& directory) {
 
 fs::path new_scan_folder(const fs::path& directory, std::chrono::system_clock::time_point now) {
     const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
-    const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+    const auto ms =
+        std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() %
+        1000;
     std::tm utc{};
     gmtime_r(&seconds, &utc);
     char name[64];
@@ -48,8 +51,8 @@ fs::path new_scan_folder(const fs::path& directory, std::chrono::system_clock::t
     long sequence = 1;
     if (newest.size() > kTimeLength + 1 && newest[kTimeLength] == '-') {
         const std::string digits = newest.substr(kTimeLength + 1);
-        if (digits.size() <= 6 && std::all_of(digits.begin(), digits.end(),
-                                              [](char c) { return c >= '0' && c <= '9'; }))
+        if (digits.size() <= 6 &&
+            std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
             sequence = std::stol(digits);
     }
     if (sequence >= 999999)
@@ -84,7 +87,8 @@ std::uint64_t folder_bytes(const fs::path& folder) {
     std::uint64_t total = 0;
     std::error_code ec;
     for (const auto& entry : fs::recursive_directory_iterator(folder, ec))
-        if (entry.is_regular_file()) total += entry.file_size();
+        if (entry.is_regular_file())
+            total += entry.file_size();
     return total;
 }
 
@@ -93,13 +97,16 @@ std::vector<fs::path> prune_store(const fs::path& directory, std::uint64_t max_b
     const auto scans = list_scans(directory);
     std::vector<std::uint64_t> sizes;
     std::uint64_t total = 0;
-    for (const auto& s : scans) total += sizes.emplace_back(folder_bytes(s));
+    for (const auto& s : scans)
+        total += sizes.emplace_back(folder_bytes(s));
     std::vector<fs::path> removed;
     for (std::size_t i = 0; i < scans.size() && total > max_bytes; ++i) {
-        if (scans[i] == keep) continue;
+        if (scans[i] == keep)
+            continue;
         std::error_code ec;
         fs::remove_all(scans[i], ec);
-        if (ec) throw IoError(scans[i], "cannot prune: " + ec.message());
+        if (ec)
+            throw IoError(scans[i], "cannot prune: " + ec.message());
         total -= sizes[i];
         removed.push_back(scans[i]);
     }

@@ -1,5 +1,6 @@
 #include "fpp/scanner/scanner.hpp"
 
+#include "exposure_plan.hpp"
 #include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/drivers/device_error.hpp"
@@ -11,7 +12,6 @@
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/table_kernel.hpp"
 #include "fpp/yaml_fields.hpp"
-#include "exposure_plan.hpp"
 #include "scan_metadata.hpp"
 
 #include <algorithm>
@@ -92,7 +92,8 @@ Scanner::Scanner(const BoardConfig& board, Devices devices, const Logger& log)
 
 void Scanner::prepare_patterns() {
     const Size projector = dev_.display.size();
-    auto patterns = render_sequence(sequence_, projector, response_lut_ ? &*response_lut_ : nullptr);
+    auto patterns =
+        render_sequence(sequence_, projector, response_lut_ ? &*response_lut_ : nullptr);
     patterns_ = patterns.size();
     patterns.emplace_back(projector, 1, std::uint8_t{255}); // white, for previews
     dev_.display.prepare(patterns);
@@ -108,8 +109,7 @@ std::vector<Frame> Scanner::grab_prepared(std::size_t first, std::size_t count) 
             const drivers::FlipEvent flip = dev_.display.wait_flip(board_.timing.flip_timeout);
             dev_.clock.sleep_until_ns(
                 flip.timestamp_ns +
-                std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle)
-                    .count());
+                std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count());
             if (software)
                 dev_.camera.software_trigger();
             else
@@ -156,8 +156,8 @@ CoefficientTable Scanner::load_checked_table(const fs::path& path) const {
         throw InputError(path, "projector_size",
                          "table made for a " + std::to_string(table.info().projector.width) + "x" +
                              std::to_string(table.info().projector.height) +
-                             " projector, the display is " + std::to_string(projector.width) +
-                             "x" + std::to_string(projector.height));
+                             " projector, the display is " + std::to_string(projector.width) + "x" +
+                             std::to_string(projector.height));
     return table;
 }
 
@@ -312,8 +312,7 @@ private:
 
 } // namespace
 
-ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop,
-                             const fs::path& folder) {
+ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop, const fs::path& folder) {
     if (mode == ScanMode::scan && table_.empty())
         throw InputError(board_.file, "table", "scan mode needs a table (or use capture mode)");
     prepare_store(folder.parent_path());
@@ -536,12 +535,18 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
     const DecodeStatistics statistics =
         fused ? fused_decode_statistics(decoded, pass_results, full_scale)
               : decode_statistics(decoded, full_scale);
-    const ScanMetadata metadata{board_,           mode,
-                                captured.started_utc, camera,
-                                dev_.camera.bit_depth(), projector,
-                                table,            decoded.method_x,
-                                decoded.method_y, outcome,
-                                captured.records, statistics,
+    const ScanMetadata metadata{board_,
+                                mode,
+                                captured.started_utc,
+                                camera,
+                                dev_.camera.bit_depth(),
+                                projector,
+                                table,
+                                decoded.method_x,
+                                decoded.method_y,
+                                outcome,
+                                captured.records,
+                                statistics,
                                 fused ? "fused" : "pass"};
     write_file_synced(temp / "scan.json", scan_json(metadata));
 }

@@ -123,10 +123,10 @@ void ScannerService::refresh_table_json() {
 
 void ScannerService::publish_table_event() {
     const json t = table_json();
-    events_.publish("table", t.is_null() ? json(nullptr).dump()
-                                         : json{{"model", t["model"]},
-                                                {"file_fnv1a64", t["file_fnv1a64"]}}
-                                               .dump());
+    events_.publish("table",
+                    t.is_null()
+                        ? json(nullptr).dump()
+                        : json{{"model", t["model"]}, {"file_fnv1a64", t["file_fnv1a64"]}}.dump());
 }
 
 // ---------------------------------------------------------------- scanning thread

@@ -95,7 +95,8 @@ SimBoard::SimBoard(const BoardConfig& board, const Logger& log) {
         drivers::CameraSettings sensor = board.camera.settings;
         sensor.trigger = drivers::TriggerMode::software;
         camera_ = std::make_unique<sim::SimCamera>(*renderer_, *screen, *clock_, sensor, s.seed);
-        gige_camera_ = make_sim_gige_camera(*camera_, board.camera.device, board.camera.settings, log);
+        gige_camera_ =
+            make_sim_gige_camera(*camera_, board.camera.device, board.camera.settings, log);
     } else {
         camera_ = std::make_unique<sim::SimCamera>(*renderer_, *screen, *clock_,
                                                    board.camera.settings, s.seed);

@@ -99,8 +99,7 @@ std::unique_ptr<SimGigeCamera> make_sim_gige_camera(sim::SimCamera& sensor,
 }
 #else
 std::unique_ptr<SimGigeCamera> make_sim_gige_camera(sim::SimCamera&, const std::string& address,
-                                                    const drivers::CameraSettings&,
-                                                    const Logger&) {
+                                                    const drivers::CameraSettings&, const Logger&) {
     throw drivers::DeviceError(drivers::DeviceKind::camera, "camera " + address,
                                "Aravis support is not built into this binary (aravis-0.8 was "
                                "not found at build time)");

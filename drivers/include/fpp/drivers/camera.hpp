@@ -22,8 +22,8 @@ struct CameraSettings {
     double exposure_us = 10000.0;       // exposure time, microseconds
     TriggerMode trigger = TriggerMode::line;
     std::string trigger_source = "Line0"; // GenICam TriggerSource for TriggerMode::line
-    int packet_size = 0;                // GigE stream packet size in bytes; 0 = driver default
-    int buffer_count = 4;               // buffers in the stream pool
+    int packet_size = 0;                  // GigE stream packet size in bytes; 0 = driver default
+    int buffer_count = 4;                 // buffers in the stream pool
     std::chrono::milliseconds frame_timeout{1000}; // default wait in next_frame()
 };
 
@@ -38,8 +38,8 @@ struct ExposureRange {
 
 struct CapturedFrame {
     Frame frame;
-    std::uint64_t frame_id = 0;      // camera's frame counter (consecutive while streaming)
-    std::int64_t timestamp_ns = 0;   // exposure start (CLOCK_MONOTONIC, ns) when known
+    std::uint64_t frame_id = 0;    // camera's frame counter (consecutive while streaming)
+    std::int64_t timestamp_ns = 0; // exposure start (CLOCK_MONOTONIC, ns) when known
 };
 
 class Camera {

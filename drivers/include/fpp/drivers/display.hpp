@@ -15,8 +15,8 @@ namespace fpp::drivers {
 
 // A completed page flip.
 struct FlipEvent {
-    std::size_t index = 0;       // pattern index passed to show()
-    std::uint64_t sequence = 0;  // display vblank sequence number of the flip
+    std::size_t index = 0;         // pattern index passed to show()
+    std::uint64_t sequence = 0;    // display vblank sequence number of the flip
     std::int64_t timestamp_ns = 0; // when the pattern went on screen (CLOCK_MONOTONIC, ns)
 };
 

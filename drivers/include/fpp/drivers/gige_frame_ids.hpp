@@ -12,7 +12,8 @@ namespace fpp::drivers {
 
 // The id the camera gives the frame after `previous`.
 constexpr std::uint64_t gige_next_frame_id(std::uint64_t previous) {
-    if (previous == 0xFFFFu) return 1; // 16-bit wrap skips the reserved 0
+    if (previous == 0xFFFFu)
+        return 1; // 16-bit wrap skips the reserved 0
     return previous + 1;
 }
 
@@ -22,10 +23,12 @@ constexpr std::uint64_t gige_next_frame_id(std::uint64_t previous) {
 constexpr std::uint64_t gige_frames_missed(std::uint64_t previous, std::uint64_t id) {
     if (previous <= 0xFFFFu && id <= 0xFFFFu && id < previous && previous - id > 0x8000u) {
         // 16-bit wrap: ids previous+1 .. 65535 and 1 .. id-1 are missing.
-        if (id == 0) return UINT64_MAX;
+        if (id == 0)
+            return UINT64_MAX;
         return (0xFFFFu - previous) + (id - 1);
     }
-    if (id <= previous) return UINT64_MAX;
+    if (id <= previous)
+        return UINT64_MAX;
     return id - previous - 1;
 }
 

@@ -59,10 +59,14 @@ protected:
 // "off", "ready", "scanning", "error" (log lines).
 inline const char* to_string(LedState state) {
     switch (state) {
-    case LedState::off: return "off";
-    case LedState::ready: return "ready";
-    case LedState::scanning: return "scanning";
-    case LedState::error: return "error";
+    case LedState::off:
+        return "off";
+    case LedState::ready:
+        return "ready";
+    case LedState::scanning:
+        return "scanning";
+    case LedState::error:
+        return "error";
     }
     return "?";
 }

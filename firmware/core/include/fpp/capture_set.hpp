@@ -99,8 +99,8 @@ CaptureSet read_capture_set(const std::filesystem::path& folder,
 // projector, bit_depth (when non-zero), frames, sequence (every field
 // written, defaults included), truth if any, metadata. The format is
 // fpp-capture/1 when the manifest uses nothing of version 2, else
-// fpp-capture/2 (whose blocks then list every v2 field too). Numbers are written so that they read back bit-exactly.
-// Throws InputError (origin "capture.yaml") if the manifest is invalid.
+// fpp-capture/2 (whose blocks then list every v2 field too). Numbers are written so that they read
+// back bit-exactly. Throws InputError (origin "capture.yaml") if the manifest is invalid.
 std::string manifest_to_yaml(const CaptureManifest& manifest);
 
 // Throws InputError(origin, field, ...) for anything the reader would reject
@@ -109,8 +109,9 @@ void validate_manifest(const CaptureManifest& manifest, const std::filesystem::p
 
 // Ground-truth images written along with a simulated capture set.
 struct TruthImages {
-    const Image<float>* xyz = nullptr;       // 3 channels, camera size; to manifest.truth->xyz
-    const Image<float>* projector = nullptr; // 2 channels, camera size; to manifest.truth->projector
+    const Image<float>* xyz = nullptr; // 3 channels, camera size; to manifest.truth->xyz
+    const Image<float>* projector =
+        nullptr; // 2 channels, camera size; to manifest.truth->projector
 };
 
 // Writes a whole capture set atomically: frames and manifest go to a temporary

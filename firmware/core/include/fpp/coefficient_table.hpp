@@ -89,7 +89,7 @@ struct TableInfo {
 std::uint64_t fnv1a64(const void* data, std::size_t size);
 
 class CoefficientTable {
-  public:
+public:
     CoefficientTable() = default;
     // A table of the given layout, every pixel without a model (centre NaN,
     // other planes 0). Throws std::invalid_argument for a bad layout (sizes
@@ -115,7 +115,7 @@ class CoefficientTable {
     // Tile (tx, ty): its first float; plane p starts p * tile_pixels() later.
     const float* tile(int tx, int ty) const;
 
-  private:
+private:
     friend CoefficientTable load_table(const std::filesystem::path&, const Size*, bool);
     // Frees a 64-byte aligned coefficient block (cache-line aligned tiles).
     struct AlignedFree {

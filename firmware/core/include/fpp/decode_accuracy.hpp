@@ -16,8 +16,8 @@ struct AxisAccuracy {
     double rms_px = 0;             // over compared pixels without unwrap errors
     double mean_abs_px = 0;
     double p99_abs_px = 0;
-    double max_abs_px = 0;         // over compared pixels without unwrap errors
-    double coverage() const {      // share of truth-valid pixels decoded
+    double max_abs_px = 0;    // over compared pixels without unwrap errors
+    double coverage() const { // share of truth-valid pixels decoded
         return truth_valid ? double(compared) / double(truth_valid) : 0.0;
     }
     double unwrap_error_rate() const {

@@ -144,7 +144,7 @@ enum DecodeFlag : std::uint8_t {
     kDecodeLowModulation = 1 << 1,
     kDecodeSaturated = 1 << 2,
     kDecodeUnwrapInconsistent = 1 << 3,
-    kDecodeNoCue = 1 << 4, // e.g. spatial unwrapping region without a centerline
+    kDecodeNoCue = 1 << 4,      // e.g. spatial unwrapping region without a centerline
     kDecodeOutOfRange = 1 << 5, // decoded coordinate outside the projector (beyond the margin)
 };
 

@@ -21,7 +21,8 @@ private:
     static std::string format(const std::filesystem::path& file, const std::string& field,
                               const std::string& what) {
         std::string s = file.string();
-        if (!field.empty()) s += ": " + field;
+        if (!field.empty())
+            s += ": " + field;
         return s + ": " + what;
     }
 

@@ -58,7 +58,7 @@ FrameInfo read_bmp_gray_info(const std::filesystem::path& path);
 
 // PNG writers: fast zlib level (frames are written during capture and read by
 // tests), lossless. 16-bit samples are stored big-endian as PNG requires.
-void write_png(const std::filesystem::path& path, const Image<std::uint8_t>& image); // 1 or 3 ch
+void write_png(const std::filesystem::path& path, const Image<std::uint8_t>& image);  // 1 or 3 ch
 void write_png(const std::filesystem::path& path, const Image<std::uint16_t>& image); // 1 ch
 void write_png(const std::filesystem::path& path, const Frame& frame);
 // The same PNG bytes in memory (a preview served over the network).

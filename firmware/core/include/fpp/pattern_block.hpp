@@ -12,7 +12,9 @@ namespace fpp {
 
 enum class Axis { x, y };
 
-inline const char* to_string(Axis a) { return a == Axis::x ? "x" : "y"; }
+inline const char* to_string(Axis a) {
+    return a == Axis::x ? "x" : "y";
+}
 
 // Projector full on (texture image): 1 frame.
 struct WhiteBlock {
@@ -34,9 +36,12 @@ enum class PhaseShifting {
 // The spec's name: "standard", "two_plus_one", "modulated".
 inline const char* to_string(PhaseShifting s) {
     switch (s) {
-    case PhaseShifting::two_plus_one: return "two_plus_one";
-    case PhaseShifting::modulated: return "modulated";
-    case PhaseShifting::standard: break;
+    case PhaseShifting::two_plus_one:
+        return "two_plus_one";
+    case PhaseShifting::modulated:
+        return "modulated";
+    case PhaseShifting::standard:
+        break;
     }
     return "standard";
 }
@@ -71,7 +76,7 @@ struct MicroPhaseBlock {
     friend bool operator==(const MicroPhaseBlock&, const MicroPhaseBlock&) = default;
 };
 
-enum class CodeKind { gray, binary }; // v2: binary = natural binary
+enum class CodeKind { gray, binary };           // v2: binary = natural binary
 enum class DigitOrder { msb_first, lsb_first }; // v2
 
 // Code planes (Gray by default), MSB first (see the spec for complementary,
@@ -84,9 +89,9 @@ struct GrayBlock {
     int bits = 0;      // code digits (planes without inverse or complementary)
     bool complementary = false;
     bool inverse = false;
-    CodeKind code = CodeKind::gray;              // v2
-    int levels = 2;                              // v2: intensity levels per digit (n-ary)
-    DigitOrder order = DigitOrder::msb_first;    // v2
+    CodeKind code = CodeKind::gray;           // v2
+    int levels = 2;                           // v2: intensity levels per digit (n-ary)
+    DigitOrder order = DigitOrder::msb_first; // v2
     double offset = 0; // v2: projector pixels; code step n covers [offset + n period, ...)
     // v2: the code may number one step fewer than the projector touches, its
     // last step showing the first step's code again (SLMaster's shift-Gray);

@@ -12,10 +12,10 @@ namespace fpp {
 
 // Names (W, H = projector width and height; every Gray block has the fewest
 // bits that cover the projector's extent on its axis, see gray_bits_needed):
-//   "gray-xy"         white, black, 8-step phase (period 20) + complementary Gray, x then y (default)
-//   "gray-x"          the same, x only
-//   "plain-gray-x"    white, black, 8-step phase + plain Gray code, x
-//   "inverse-gray-x"  8-step phase + complementary Gray code with inverse frames, x
+//   "gray-xy"         white, black, 8-step phase (period 20) + complementary Gray, x then y
+//   (default) "gray-x"          the same, x only "plain-gray-x"    white, black, 8-step phase +
+//   plain Gray code, x "inverse-gray-x"  8-step phase + complementary Gray code with inverse
+//   frames, x
 //                     (no white/black: each bit is thresholded against its inverse)
 //   "multi-period-x"  8-step phase at periods 20, 160 and W (one period over the
 //                     whole projector), x

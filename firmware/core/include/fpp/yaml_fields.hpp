@@ -72,7 +72,8 @@ public:
     std::array<double, N> real_array(const YAML::Node& node, const std::string& field) const {
         expect_list(node, field, N);
         std::array<double, N> values{};
-        for (std::size_t i = 0; i < N; ++i) values[i] = real_value(node[i], item(field, i));
+        for (std::size_t i = 0; i < N; ++i)
+            values[i] = real_value(node[i], item(field, i));
         return values;
     }
 

@@ -36,7 +36,7 @@ double bright_fraction(const DecodeResult& decoded, const Image<std::uint8_t>& m
 
 // Dense samples for the stereo calibration: the masked pixels on a square
 // grid of `step` px (camera pixel, decoded projector pixel x and y).
-void dense_projector_samples(const DecodeResult& decoded, const Image<std::uint8_t>& mask,
-                             int step, std::vector<Vec2>& camera, std::vector<Vec2>& projector);
+void dense_projector_samples(const DecodeResult& decoded, const Image<std::uint8_t>& mask, int step,
+                             std::vector<Vec2>& camera, std::vector<Vec2>& projector);
 
 } // namespace fpp::calib

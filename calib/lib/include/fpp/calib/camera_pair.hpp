@@ -21,8 +21,8 @@ struct CameraPairCalibration {
     LensModel first;
     LensModel second;
     Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
-    Vec3 T{0, 0, 0}; // mm
-    double rms = -1; // stereo reprojection RMS, px (< 0 unknown)
+    Vec3 T{0, 0, 0};    // mm
+    double rms = -1;    // stereo reprojection RMS, px (< 0 unknown)
     std::string origin; // where it was read from, and in which format
 
     double baseline() const; // |T|, mm: the distance between the optical centres

@@ -25,7 +25,7 @@
 namespace fpp::calib {
 
 class CorrectionGrid {
-  public:
+public:
     static constexpr int kSupport = 16; // control points that move one pixel
 
     CorrectionGrid() = default; // empty: no correction
@@ -67,7 +67,7 @@ class CorrectionGrid {
     // not converge to 1e-9 px.
     bool remove(Vec2 observed, Vec2& model_pixel) const;
 
-  private:
+private:
     // Spline coordinates of a pixel: first control point index and the
     // fraction within the interval, per axis.
     void locate(double pixel, double spacing, int intervals, int& first, double& f) const;

@@ -25,12 +25,12 @@ namespace fpp::calib {
 
 struct HeldOutPose {
     std::string name;
-    int corners = 0;              // measured (triangulated) corners
-    double fit_rms_mm = 0;        // rigid fit of the board to them
-    double scale_error = 0;       // similarity scale - 1
-    double length_rms_mm = 0;     // over the corner pairs
-    double length_max_mm = 0;     // largest |error|
-    double distance_mm = 0;       // the board's centre from the camera
+    int corners = 0;          // measured (triangulated) corners
+    double fit_rms_mm = 0;    // rigid fit of the board to them
+    double scale_error = 0;   // similarity scale - 1
+    double length_rms_mm = 0; // over the corner pairs
+    double length_max_mm = 0; // largest |error|
+    double distance_mm = 0;   // the board's centre from the camera
 };
 
 struct HeldOutCheck {

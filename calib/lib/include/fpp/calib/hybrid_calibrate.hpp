@@ -91,7 +91,8 @@ HybridSamples parse_hybrid_samples(const std::string& name);
 struct HybridOptions {
     TableModel model = TableModel::rational;
     int min_poses = 6; // per pixel
-    int phase_smoothing_radius = 7; // px; 0 = off: samples for a cubic (4 coefficients) with room to spare
+    int phase_smoothing_radius =
+        7; // px; 0 = off: samples for a cubic (4 coefficients) with room to spare
     // Per pixel: largest ratio of the normal equations' largest to smallest
     // pivot (t normalised to [-1, 1]).
     double max_condition = 1e7;
@@ -107,7 +108,7 @@ struct HybridOptions {
     // fitted too (min_poses when the boards' alone are): enough to show
     // that the boards reached the pixel and over which depths.
     int min_board_samples = 3;
-    int model_samples = 8;            // per pixel, evenly over its boards' depth range
+    int model_samples = 8; // per pixel, evenly over its boards' depth range
     // The rational model's range extended by this on each side: the stereo
     // model is a model of rays, as good beyond the boards' depths as between
     // them (unlike beyond the projector pixels they lit), and a pixel at the
@@ -118,7 +119,7 @@ struct HybridOptions {
     double model_depth_margin_mm = 60;
     BrightBoardOptions bright;
     double max_sample_deviation_px = 1.0; // from the stereo model's column: not on the board
-    double min_lit_fraction = 0.5;    // of the board's white squares' area decoded, else rejected
+    double min_lit_fraction = 0.5; // of the board's white squares' area decoded, else rejected
     double square_size_tolerance = 0.002; // relative, against the calibration's board
     int tile_width = 32;
     int tile_height = 8;
@@ -156,12 +157,12 @@ struct HybridPose {
     // SV puts the board further away) and the angle between the normals.
     double sv_offset_mm = 0;
     double sv_angle_deg = 0;
-    double corner_rms_px = 0;  // the camera's reprojection RMS of the corners at this pose
-    double lit_fraction = 0;   // of the board's white squares' area decoded (half the squares')
-    std::size_t samples = 0;   // pixels given a sample
-    double distance_mm = 0;  // plane's depth on the optical axis, d / n_z
-    double tilt_deg = 0;     // angle between the normal and the optical axis
-    double seconds = 0;      // read, decode, SV and plane fit
+    double corner_rms_px = 0; // the camera's reprojection RMS of the corners at this pose
+    double lit_fraction = 0;  // of the board's white squares' area decoded (half the squares')
+    std::size_t samples = 0;  // pixels given a sample
+    double distance_mm = 0;   // plane's depth on the optical axis, d / n_z
+    double tilt_deg = 0;      // angle between the normal and the optical axis
+    double seconds = 0;       // read, decode, SV and plane fit
 };
 
 struct HybridResult {
@@ -195,8 +196,8 @@ struct HybridResult {
 // fewer than min_usable_poses usable poses), std::invalid_argument for bad
 // options.
 HybridResult calibrate_hybrid(const std::filesystem::path& session,
-                              const StereoCalibration& calibration,
-                              std::uint64_t calibration_hash, const HybridOptions& options = {});
+                              const StereoCalibration& calibration, std::uint64_t calibration_hash,
+                              const HybridOptions& options = {});
 
 // The same for several models at once (options.model is ignored): the poses
 // are read, decoded and reconstructed once, and each model is fitted to
@@ -237,12 +238,10 @@ void keep_board_views(const std::filesystem::path& session, const HybridOptions&
 // the same options. Reads no frames. Throws InputError as calibrate_hybrid
 // (and for a session of another board kind), std::invalid_argument when
 // the views do not match the session's poses in number or size.
-std::vector<HybridResult> calibrate_hybrid(const std::filesystem::path& session,
-                                           const StereoCalibration& calibration,
-                                           std::uint64_t calibration_hash,
-                                           const HybridOptions& options,
-                                           const std::vector<TableModel>& models,
-                                           const std::vector<BoardView>& views);
+std::vector<HybridResult>
+calibrate_hybrid(const std::filesystem::path& session, const StereoCalibration& calibration,
+                 std::uint64_t calibration_hash, const HybridOptions& options,
+                 const std::vector<TableModel>& models, const std::vector<BoardView>& views);
 
 // The robust plane of a pose's points (3-channel image, NaN = no point):
 // points off the plane get NaN in `xyz` when `drop_outliers`. Returns false

@@ -120,7 +120,7 @@ struct PaperTarget {
 struct PaperExperimentResult {
     std::vector<std::string> methods; // every method's key, e.g. "sv-paper", "boards-rational"
     std::string default_method;       // the tools' default procedure and model
-    std::vector<Figure> figures;     // as in report/figures.csv
+    std::vector<Figure> figures;      // as in report/figures.csv
     std::vector<PaperTarget> targets;
     std::string summary_markdown; // report/summary.md
     double seconds = 0;

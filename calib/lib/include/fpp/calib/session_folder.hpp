@@ -27,13 +27,12 @@ struct SessionFolder {
 // `kind` is the board that `purpose` (e.g. "stereo calibration") needs (any
 // when empty),
 // every pose has the same camera and projector sizes and a phase block along
-// each axis in `axes` (`axes_reason` says why, for the message). Throws InputError naming the file and the
-// field: no folder, no board.yaml, another board kind, no capture sets,
-// differing sizes, a missing phase axis.
+// each axis in `axes` (`axes_reason` says why, for the message). Throws InputError naming the file
+// and the field: no folder, no board.yaml, another board kind, no capture sets, differing sizes, a
+// missing phase axis.
 SessionFolder read_session_folder(const std::filesystem::path& session,
                                   std::optional<BoardDescription::Kind> kind,
-                                  const std::vector<Axis>& axes,
-                                  const std::string& purpose,
+                                  const std::vector<Axis>& axes, const std::string& purpose,
                                   const std::string& axes_reason);
 
 // The capture set folders of `session` (sub/ or sub/capture/), by name.

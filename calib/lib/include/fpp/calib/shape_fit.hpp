@@ -62,15 +62,15 @@ struct FitOptions {
 
 // What every fit reports.
 struct FitResiduals {
-    std::vector<double> residuals;      // signed, one per input point (outliers included)
-    std::vector<std::uint8_t> inlier;   // 1 = used by the final fit
-    std::size_t used = 0;               // points used by the final fit
-    std::size_t rejected = 0;           // points rejected as outliers
-    int rejection_rounds = 0;           // refits after rejections
-    int iterations = 0;                 // Levenberg-Marquardt steps of the final fit (0 for a plane)
-    double rms = 0;                     // RMS of the used points' residuals
-    double min = 0, max = 0;            // extreme signed residuals of the used points
-    std::string message;                // one-line summary of the fit
+    std::vector<double> residuals;    // signed, one per input point (outliers included)
+    std::vector<std::uint8_t> inlier; // 1 = used by the final fit
+    std::size_t used = 0;             // points used by the final fit
+    std::size_t rejected = 0;         // points rejected as outliers
+    int rejection_rounds = 0;         // refits after rejections
+    int iterations = 0;               // Levenberg-Marquardt steps of the final fit (0 for a plane)
+    double rms = 0;                   // RMS of the used points' residuals
+    double min = 0, max = 0;          // extreme signed residuals of the used points
+    std::string message;              // one-line summary of the fit
 };
 
 struct PlaneFit {

@@ -93,7 +93,7 @@ struct StereoOptions {
     std::vector<double> camera_grid_smoothness_choices{1e4, 1e3, 1e2};
     int camera_grid_softer_steps = 4;
     double projector_grid_smoothness = 1e3;
-    double grid_ridge = 1e-4; // weight of each squared control value (px^-2)
+    double grid_ridge = 1e-4;   // weight of each squared control value (px^-2)
     bool skew = true;           // estimate skew for both devices (else fixed at 0)
     bool drop_outliers = false; // drop outlying poses and refine again
     // A pose is an outlier when its RMS (camera and projector together)

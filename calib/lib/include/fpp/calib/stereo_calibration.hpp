@@ -51,7 +51,7 @@ enum class CalibrationFormat {
 // scanning (fpp-calib reconstruct with two capture sets), not a
 // camera-projector table. The pair is read in full.
 class CameraPairFileError : public InputError {
-  public:
+public:
     CameraPairFileError(const std::filesystem::path& file, CameraPairCalibration pair_);
     CameraPairCalibration pair;
 };
@@ -76,8 +76,8 @@ struct StereoCalibration {
     Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
     Vec3 T{0, 0, 0};
     double board_square_size = 0; // mm; 0 = unknown
-    double camera_rms = -1;    // px, < 0 if unknown
-    double projector_rms = -1; // px, < 0 if unknown
+    double camera_rms = -1;       // px, < 0 if unknown
+    double projector_rms = -1;    // px, < 0 if unknown
     std::vector<PoseResidual> poses;
     std::string origin;                                // where it was read from or how it was made
     CalibrationFormat format = CalibrationFormat::fpp; // the format it was read from
@@ -99,7 +99,8 @@ struct StereoCalibration {
 // model. Pose list empty, RMS unknown.
 StereoCalibration calibration_from_rig(const sim::Rig& rig);
 
-// "auto", "fpp", "slstudio", "slmaster", "opencv-stereo", "bouguet", "matlab"; throws std::invalid_argument otherwise.
+// "auto", "fpp", "slstudio", "slmaster", "opencv-stereo", "bouguet", "matlab"; throws
+// std::invalid_argument otherwise.
 CalibrationFormat parse_calibration_format(const std::string& name);
 const char* to_string(CalibrationFormat format);
 

@@ -38,7 +38,7 @@ constexpr int kCornerMethods = 3; // indexed by static_cast<int>(CornerMethod)
 struct StereoSessionOptions {
     ProjectorCornerOptions corners; // corners.method feeds the calibration
     CornerFinderOptions finder;
-    StereoOptions stereo;     // skew, outliers; progress is set from `progress`
+    StereoOptions stereo; // skew, outliers; progress is set from `progress`
     // Also calibrate with the other skew setting, for the report (on its own
     // thread alongside: about 6 s of CPU at full size, 30 poses).
     bool compare_skew = false;
@@ -88,11 +88,11 @@ struct SessionResult {
     BoardDescription board;
     Size camera_size;
     Size projector_size;
-    std::vector<SessionPose> poses;         // every capture set found
-    std::vector<int> calibrated;            // indices into poses fed to the calibration
+    std::vector<SessionPose> poses;             // every capture set found
+    std::vector<int> calibrated;                // indices into poses fed to the calibration
     std::vector<PoseObservations> observations; // what each of them fed it, in that order
-    StereoResult stereo;                    // with options.stereo.skew
-    std::optional<StereoResult> other_skew; // with the other skew setting (compare_skew)
+    StereoResult stereo;                        // with options.stereo.skew
+    std::optional<StereoResult> other_skew;     // with the other skew setting (compare_skew)
     CornerMethod method = CornerMethod::poly;
     double seconds_decode = 0, seconds_corners = 0, seconds_calibration = 0, seconds_total = 0;
     TimeSplit time_split; // reading, decoding, corners, ..., the calibration's stages

@@ -95,7 +95,7 @@ struct SvStats {
 };
 
 class SvReconstructor {
-  public:
+public:
     // Throws std::invalid_argument if the calibration's sizes are unknown or
     // its lenses are not usable (non-positive focal lengths).
     explicit SvReconstructor(const StereoCalibration& calibration, const SvOptions& options = {});
@@ -127,7 +127,7 @@ class SvReconstructor {
     // camera-size decode result.
     bool triangulate_pixel_x(int u, int v, double proj_x, Vec3& point) const;
 
-  private:
+private:
     StereoCalibration calibration_;
     SvOptions options_;
     Image<float> rays_;

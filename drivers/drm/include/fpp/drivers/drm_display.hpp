@@ -23,9 +23,10 @@
 namespace fpp::drivers {
 
 struct DrmDisplaySettings {
-    std::string card = "auto"; // "/dev/dri/card0", or "auto": the first card with an output that fits
-    DrmOutputRequest output;   // connector and mode
-    bool allow_atomic = true;  // false forces the legacy path
+    std::string card =
+        "auto";              // "/dev/dri/card0", or "auto": the first card with an output that fits
+    DrmOutputRequest output; // connector and mode
+    bool allow_atomic = true; // false forces the legacy path
 };
 
 class DrmDisplay final : public Display {

@@ -9,7 +9,7 @@
 namespace fpp::drivers {
 
 struct DrmModeInfo {
-    int width = 0;  // active pixels
+    int width = 0; // active pixels
     int height = 0;
     double refresh_hz = 0.0;
     bool preferred = false; // the sink's preferred mode (EDID)

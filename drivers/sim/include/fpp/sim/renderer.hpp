@@ -33,7 +33,7 @@
 namespace fpp::sim {
 
 class Renderer {
-  public:
+public:
     // `threads`: workers for ray casting and rendering (rows are split among
     // them); 0 = the machine's cores. Results do not depend on it. Copies of a
     // renderer share its workers.
@@ -74,7 +74,7 @@ class Renderer {
     // Noise seed of frame `frame` of a capture seeded with `seed`.
     static std::uint64_t frame_seed(std::uint64_t seed, int frame);
 
-  private:
+private:
     // Radiance (DN, camera size) into `radiance`; `light` and `blur` are scratch.
     void radiance_into(const Image<std::uint8_t>& projector_image, std::vector<float>& radiance,
                        std::vector<float>& light, std::vector<float>& blur) const;
@@ -89,7 +89,7 @@ class Renderer {
     Image<std::int32_t> truth_object_;
     std::vector<std::string> object_names_;
     Image<float>
-        radiance_gain_;    // DN per unit projector light (reflectance, shading, falloff); 0 if unlit
+        radiance_gain_; // DN per unit projector light (reflectance, shading, falloff); 0 if unlit
     Image<float> ambient_; // DN of ambient light
     Image<float> albedo_;
     // Bilinear sample of the projector light per camera pixel: top-left

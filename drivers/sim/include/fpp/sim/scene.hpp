@@ -50,7 +50,7 @@ struct SpecularLobe {
 };
 
 class Shape {
-  public:
+public:
     virtual ~Shape() = default;
     // Nearest intersection with t in (tmin, tmax) of the ray o + t d (|d| = 1).
     virtual bool intersect(const Vec3& o, const Vec3& d, double tmin, double tmax,
@@ -79,12 +79,12 @@ struct Pose {
 // Finite rectangle of `width` x `height` mm in its local xy plane, centred on
 // the pose's centre (normal = local z).
 class Plane : public Shape {
-  public:
+public:
     Plane(const Pose& pose, double width, double height, double albedo);
     bool intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, Hit& hit) const override;
     const Pose& pose() const { return pose_; }
 
-  protected:
+protected:
     // Local (x, y) of the hit of o + t d with the plane, without bounds checks.
     bool hit_plane(const Vec3& o, const Vec3& d, double tmin, double tmax, double& t, double& x,
                    double& y) const;
@@ -109,7 +109,7 @@ struct CheckerboardSpec {
 };
 
 class Checkerboard : public Plane {
-  public:
+public:
     Checkerboard(const Pose& pose, const CheckerboardSpec& spec);
     bool intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, Hit& hit) const override;
     double footprint_albedo(const Hit& hit, const Vec3& dpdu, const Vec3& dpdv) const override;
@@ -119,16 +119,16 @@ class Checkerboard : public Plane {
     // Albedo at local (x, y) (point sample).
     double albedo_at(double x, double y) const;
 
-  private:
+private:
     CheckerboardSpec spec_;
 };
 
 class Sphere : public Shape {
-  public:
+public:
     Sphere(const Vec3& centre, double radius, double albedo);
     bool intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, Hit& hit) const override;
 
-  private:
+private:
     Vec3 centre_;
     double radius_, albedo_;
 };
@@ -136,11 +136,11 @@ class Sphere : public Shape {
 // Closed finite cylinder: lateral surface of `radius` around the axis through
 // `centre` along unit `axis`, from -length/2 to +length/2, with flat end caps.
 class Cylinder : public Shape {
-  public:
+public:
     Cylinder(const Vec3& centre, const Vec3& axis, double radius, double length, double albedo);
     bool intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, Hit& hit) const override;
 
-  private:
+private:
     Vec3 centre_, axis_;
     double radius_, half_length_, albedo_;
 };
@@ -163,7 +163,7 @@ struct ReliefBump {
 // bound), which can never pass the first crossing, then brackets it and
 // refines by safeguarded Newton to 1e-9 mm.
 class Relief : public Shape {
-  public:
+public:
     Relief(const Pose& pose, double width, double height, std::vector<ReliefBump> bumps,
            double albedo);
     bool intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, Hit& hit) const override;
@@ -178,7 +178,7 @@ class Relief : public Shape {
     // (width 160 mm, height 220 mm, heights 0..~55 mm).
     static std::vector<ReliefBump> face_bumps();
 
-  private:
+private:
     // Height, and optionally gradient, at local (x, y).
     double eval(double x, double y, double* gx, double* gy) const;
     // Strict bounds of h and |grad h| over one cell of a uniform grid on the
@@ -238,7 +238,7 @@ class Relief : public Shape {
 // each with a name (labels for per-part figures: Renderer::truth_object) and a
 // specular lobe. Several objects may share a name (a part made of shapes).
 class Scene {
-  public:
+public:
     // Adds `shape` as object size(). An empty `name` becomes "object<i>".
     // Throws std::invalid_argument for a null shape or an invalid lobe.
     void add(std::unique_ptr<Shape> shape, std::string name = {},
@@ -253,7 +253,7 @@ class Scene {
     // Smallest ray parameter that counts as a hit (mm): rays start on surfaces.
     static constexpr double kEpsilon = 1e-7;
 
-  private:
+private:
     std::vector<std::unique_ptr<Shape>> shapes_;
     std::vector<std::string> names_;
     std::vector<SpecularLobe> specular_;

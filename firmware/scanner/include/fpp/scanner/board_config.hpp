@@ -53,9 +53,9 @@ struct CameraConfig {
 struct HdrConfig {
     std::vector<double> exposures_us; // fixed passes, in capture order; empty with automatic
     bool automatic = false;
-    double max_saturated = 0.01; // automatic: fraction of lit pixels the longest may saturate
-    int passes = 3;              // automatic: at most this many
-    double ratio = 4;            // automatic: each shorter exposure is this many times less
+    double max_saturated = 0.01;      // automatic: fraction of lit pixels the longest may saturate
+    int passes = 3;                   // automatic: at most this many
+    double ratio = 4;                 // automatic: each shorter exposure is this many times less
     std::optional<double> longest_us; // automatic: where the search starts
 };
 
@@ -76,10 +76,10 @@ struct TimingConfig {
 
 // The HTTP API and page (firmware/scanner/http-api.md).
 struct HttpConfig {
-    std::string listen;                  // "ADDRESS:PORT"; port 0 = any free port
-    std::filesystem::path token_file;    // the API's bearer token, first line
+    std::string listen;               // "ADDRESS:PORT"; port 0 = any free port
+    std::filesystem::path token_file; // the API's bearer token, first line
     int max_connections = 64;
-    std::chrono::seconds timeout{30};    // an idle connection is closed after this
+    std::chrono::seconds timeout{30};              // an idle connection is closed after this
     std::optional<std::filesystem::path> web_root; // the page's files
 };
 

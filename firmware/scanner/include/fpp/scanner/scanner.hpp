@@ -69,7 +69,7 @@ struct ScanOutcome {
     std::size_t points = 0;
     int frames = 0;
     int attempts = 1;
-    std::vector<double> exposures_us; // one pass of the sequence per exposure, in capture order
+    std::vector<double> exposures_us;  // one pass of the sequence per exposure, in capture order
     std::optional<FusionStats> fusion; // HDR scans
     bool has_sigma = false;            // points carry sigma_z (the board gives camera.noise)
     std::size_t dropped_by_sigma = 0;  // points over points.max_sigma_z_mm
@@ -132,15 +132,15 @@ public:
 
     void set_observer(ScanObserver* observer) { observer_ = observer; }
 
-
     // Frames of one pass of the sequence (an HDR scan takes one pass per exposure).
     int frames_per_scan() const { return static_cast<int>(patterns_); }
     // Frames a scan takes: one pass per fixed HDR exposure, at most hdr.passes
     // with automatic exposures (the previews not counted).
     int planned_frames() const {
-        const int passes = !board_.hdr                ? 1
-                           : board_.hdr->automatic ? board_.hdr->passes
-                                                   : static_cast<int>(board_.hdr->exposures_us.size());
+        const int passes = !board_.hdr ? 1
+                           : board_.hdr->automatic
+                               ? board_.hdr->passes
+                               : static_cast<int>(board_.hdr->exposures_us.size());
         return static_cast<int>(patterns_) * passes;
     }
     const Sequence& sequence() const { return sequence_; }
