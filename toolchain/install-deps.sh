@@ -60,6 +60,8 @@ test_packages=(
   # the fuzz preset (tests/fuzz): clang 14 with libFuzzer and the sanitizers'
   # runtimes (Debian ships them in libclang-rt-14-dev, not with clang)
   clang-14 libclang-rt-14-dev
+  # the ci preset's FormatCheck (tests/format/check-format.sh)
+  clang-format-14
   # packet loss on the GigE link in a test's network namespace
   # (iptables-legacy's statistic match)
   iptables
