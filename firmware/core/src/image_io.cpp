@@ -558,6 +558,57 @@ void write_tiff_synced(const std::filesystem::path& path, const Image<float>& im
     write_tiff_file(path, image);
 }
 
+namespace {
+
+// Reads every pixel of an open TIFF, tiled or in strips, into `pixels` (rows
+// of width * pixel_bytes, contiguous). False when the layout is not what the
+// header says or a read fails (the caller names the file); `holdable` bounds
+// a tile's size as it bounds the image's.
+bool read_tiff_pixels(TIFF* t, std::uint32_t width, std::uint32_t height, std::size_t pixel_bytes,
+                      std::uint64_t holdable, std::uint8_t* pixels) {
+    const std::size_t row_bytes = std::size_t(width) * pixel_bytes;
+    if (TIFFIsTiled(t)) {
+        std::uint32_t tile_w = 0, tile_h = 0;
+        TIFFGetField(t, TIFFTAG_TILEWIDTH, &tile_w);
+        TIFFGetField(t, TIFFTAG_TILELENGTH, &tile_h);
+        if (tile_w == 0 || tile_h == 0 || tile_w > kMaxSide || tile_h > kMaxSide ||
+            std::uint64_t{tile_w} * tile_h * pixel_bytes > holdable)
+            return false;
+        const std::size_t tile_bytes = std::size_t(tile_w) * tile_h * pixel_bytes;
+        if (static_cast<std::size_t>(TIFFTileSize(t)) != tile_bytes)
+            return false;
+        std::vector<std::uint8_t> tile(tile_bytes);
+        for (std::uint32_t ty = 0; ty < height; ty += tile_h)
+            for (std::uint32_t tx = 0; tx < width; tx += tile_w) {
+                if (TIFFReadTile(t, tile.data(), tx, ty, 0, 0) < 0)
+                    return false;
+                const std::uint32_t w = std::min(tile_w, width - tx);
+                const std::uint32_t h = std::min(tile_h, height - ty);
+                for (std::uint32_t y = 0; y < h; ++y)
+                    std::memcpy(pixels + std::size_t(ty + y) * row_bytes + tx * pixel_bytes,
+                                tile.data() + std::size_t(y) * tile_w * pixel_bytes,
+                                std::size_t(w) * pixel_bytes);
+            }
+        return true;
+    }
+    std::uint32_t rows_per_strip = height;
+    TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
+    rows_per_strip = std::min(std::max<std::uint32_t>(rows_per_strip, 1), height);
+    const std::uint32_t strips = TIFFNumberOfStrips(t);
+    if (strips != (height + rows_per_strip - 1) / rows_per_strip)
+        return false;
+    for (std::uint32_t s = 0; s < strips; ++s) {
+        const std::uint32_t y0 = s * rows_per_strip;
+        const std::uint32_t rows = std::min(rows_per_strip, height - y0);
+        const auto bytes = static_cast<tmsize_t>(row_bytes * rows);
+        if (TIFFReadEncodedStrip(t, s, pixels + std::size_t(y0) * row_bytes, bytes) != bytes)
+            return false;
+    }
+    return true;
+}
+
+} // namespace
+
 Image<float> read_tiff_float(const std::filesystem::path& path) {
     require_tiff_exists(path);
     TiffMessages messages{};
@@ -608,50 +659,12 @@ Image<float> read_tiff_float(const std::filesystem::path& path) {
     }
 
     Image<float> image(static_cast<int>(width), static_cast<int>(height), channels);
-    const std::size_t row_floats = std::size_t(width) * channels;
     auto fail = [&]() {
         return InputError(path, "", "corrupt or truncated TIFF (" + tiff_reason(messages) + ")");
     };
-    if (TIFFIsTiled(t)) {
-        std::uint32_t tile_w = 0, tile_h = 0;
-        TIFFGetField(t, TIFFTAG_TILEWIDTH, &tile_w);
-        TIFFGetField(t, TIFFTAG_TILELENGTH, &tile_h);
-        if (tile_w == 0 || tile_h == 0 || tile_w > kMaxSide || tile_h > kMaxSide ||
-            std::uint64_t{tile_w} * tile_h * channels * sizeof(float) > holdable)
-            throw fail();
-        const std::size_t tile_floats = std::size_t(tile_w) * tile_h * channels;
-        if (static_cast<std::size_t>(TIFFTileSize(t)) != tile_floats * sizeof(float))
-            throw fail();
-        std::vector<float> tile(tile_floats);
-        for (std::uint32_t ty = 0; ty < height; ty += tile_h) {
-            for (std::uint32_t tx = 0; tx < width; tx += tile_w) {
-                if (TIFFReadTile(t, tile.data(), tx, ty, 0, 0) < 0)
-                    throw fail();
-                const std::uint32_t w = std::min(tile_w, width - tx);
-                const std::uint32_t h = std::min(tile_h, height - ty);
-                for (std::uint32_t y = 0; y < h; ++y) {
-                    std::memcpy(image.row(static_cast<int>(ty + y)) + std::size_t(tx) * channels,
-                                tile.data() + std::size_t(y) * tile_w * channels,
-                                std::size_t(w) * channels * sizeof(float));
-                }
-            }
-        }
-    } else {
-        std::uint32_t rows_per_strip = height;
-        TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
-        rows_per_strip = std::min(std::max<std::uint32_t>(rows_per_strip, 1), height);
-        const std::uint32_t strips = TIFFNumberOfStrips(t);
-        if (strips != (height + rows_per_strip - 1) / rows_per_strip)
-            throw fail();
-        for (std::uint32_t s = 0; s < strips; ++s) {
-            const std::uint32_t y0 = s * rows_per_strip;
-            const std::uint32_t rows = std::min(rows_per_strip, height - y0);
-            const auto bytes = static_cast<tmsize_t>(row_floats * rows * sizeof(float));
-            if (TIFFReadEncodedStrip(t, s, image.row(static_cast<int>(y0)), bytes) != bytes) {
-                throw fail();
-            }
-        }
-    }
+    if (!read_tiff_pixels(t, width, height, channels * sizeof(float), holdable,
+                          reinterpret_cast<std::uint8_t*>(image.data())))
+        throw fail();
     if (messages.has_error)
         throw fail();
     return image;
@@ -745,50 +758,11 @@ Frame read_tiff_gray(const std::filesystem::path& path) {
         frame.u16 = Image<std::uint16_t>(info.size);
         pixels = reinterpret_cast<std::uint8_t*>(frame.u16.data());
     }
-    const std::size_t row_bytes = std::size_t(width) * sample_bytes;
     auto fail = [&]() {
         return InputError(path, "", "corrupt or truncated TIFF (" + tiff_reason(messages) + ")");
     };
-    if (TIFFIsTiled(t)) {
-        std::uint32_t tile_w = 0, tile_h = 0;
-        TIFFGetField(t, TIFFTAG_TILEWIDTH, &tile_w);
-        TIFFGetField(t, TIFFTAG_TILELENGTH, &tile_h);
-        if (tile_w == 0 || tile_h == 0 || tile_w > kMaxSide || tile_h > kMaxSide ||
-            std::uint64_t{tile_w} * tile_h * sample_bytes > holdable)
-            throw fail();
-        const std::size_t tile_bytes = std::size_t(tile_w) * tile_h * sample_bytes;
-        if (static_cast<std::size_t>(TIFFTileSize(t)) != tile_bytes)
-            throw fail();
-        std::vector<std::uint8_t> tile(tile_bytes);
-        for (std::uint32_t ty = 0; ty < height; ty += tile_h) {
-            for (std::uint32_t tx = 0; tx < width; tx += tile_w) {
-                if (TIFFReadTile(t, tile.data(), tx, ty, 0, 0) < 0)
-                    throw fail();
-                const std::uint32_t w = std::min(tile_w, width - tx);
-                const std::uint32_t h = std::min(tile_h, height - ty);
-                for (std::uint32_t y = 0; y < h; ++y) {
-                    std::memcpy(pixels + std::size_t(ty + y) * row_bytes + tx * sample_bytes,
-                                tile.data() + std::size_t(y) * tile_w * sample_bytes,
-                                std::size_t(w) * sample_bytes);
-                }
-            }
-        }
-    } else {
-        std::uint32_t rows_per_strip = height;
-        TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
-        rows_per_strip = std::min(std::max<std::uint32_t>(rows_per_strip, 1), height);
-        const std::uint32_t strips = TIFFNumberOfStrips(t);
-        if (strips != (height + rows_per_strip - 1) / rows_per_strip)
-            throw fail();
-        for (std::uint32_t s = 0; s < strips; ++s) {
-            const std::uint32_t y0 = s * rows_per_strip;
-            const std::uint32_t rows = std::min(rows_per_strip, height - y0);
-            const auto bytes = static_cast<tmsize_t>(row_bytes * rows);
-            if (TIFFReadEncodedStrip(t, s, pixels + std::size_t(y0) * row_bytes, bytes) != bytes) {
-                throw fail();
-            }
-        }
-    }
+    if (!read_tiff_pixels(t, width, height, sample_bytes, holdable, pixels))
+        throw fail();
     if (messages.has_error)
         throw fail();
     return frame;
