@@ -6,10 +6,12 @@ set -euo pipefail
 source_dir=$1
 clang_format=${2:-clang-format-14}
 cd "$source_dir"
-if [ -d .git ] || git rev-parse --git-dir >/dev/null 2>&1; then
+files=()
+if git rev-parse --git-dir >/dev/null 2>&1; then
   mapfile -t files < <(git ls-files -- '*.cpp' '*.hpp' '*.c' '*.h')
-else
-  # A source tree without git (an unpacked release): the same folders.
+fi
+if [ ${#files[@]} -eq 0 ]; then
+  # No git, or git refuses the tree (another owner): the same folders.
   mapfile -t files < <(find firmware drivers calib tests board toolchain \
     -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.c' -o -name '*.h' \) | sort)
 fi
