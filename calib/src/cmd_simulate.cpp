@@ -27,13 +27,7 @@ struct SimulateArgs {
 int run_simulate(const SimulateArgs& args) {
     if (std::filesystem::exists(args.out))
         throw std::runtime_error(args.out + ": already exists; a capture set is never overwritten");
-    sim::Rig rig = sim::load_rig(args.rig);
-    if (args.no_effects)
-        rig = rig.without_effects();
-    if (args.read_noise >= 0)
-        rig.sensor.read_noise_dn = args.read_noise;
-    if (args.binning > 1)
-        rig = rig.binned_camera(args.binning);
+    const sim::Rig rig = rig_from_options(args.rig, args.no_effects, args.read_noise, args.binning);
     const sim::Scene scene = sim::scene_from_argument(args.scene);
     const Sequence sequence = sequence_from_argument(args.sequence, rig.projector_size);
     std::cerr << "simulating " << frame_count(sequence) << " frames of scene '" << args.scene

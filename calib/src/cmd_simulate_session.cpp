@@ -54,13 +54,7 @@ ResponseRamp simulate_response_ramp(const sim::Rig& rig, const sim::SessionOptio
 int run_simulate_session(const SimulateSessionArgs& args) {
     if (std::filesystem::exists(args.out))
         throw std::runtime_error(args.out + ": already exists; a session is never overwritten");
-    sim::Rig rig = sim::load_rig(args.rig);
-    if (args.no_effects)
-        rig = rig.without_effects();
-    if (args.read_noise >= 0)
-        rig.sensor.read_noise_dn = args.read_noise;
-    if (args.binning > 1)
-        rig = rig.binned_camera(args.binning);
+    const sim::Rig rig = rig_from_options(args.rig, args.no_effects, args.read_noise, args.binning);
     const Sequence sequence = sequence_from_argument(args.sequence, rig.projector_size);
     sim::SessionOptions options;
     options.kind = args.kind == "plane" ? sim::SessionKind::plane : sim::SessionKind::checkerboard;

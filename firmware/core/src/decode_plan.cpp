@@ -100,6 +100,18 @@ void check_centerline(const Plan& plan, const CenterlineBlock& b, int index) {
 }
 
 // A micro phase block as a phase block of its first period (3 shifted
+
+// The weights of `steps` frames shifted by shift_sign 2 pi k / steps, and the
+// block's phase offset as a fraction of a turn.
+void add_shift_weights(PhaseInfo& info, int steps, int shift_sign, double phase_offset) {
+    for (int k = 0; k < steps; ++k) {
+        const double delta = 2.0 * std::numbers::pi * k / steps;
+        info.cos_w.push_back(static_cast<float>(std::cos(delta)));
+        info.sin_w.push_back(static_cast<float>(-shift_sign * std::sin(delta)));
+    }
+    info.offset_fraction = static_cast<float>(phase_offset / (2.0 * std::numbers::pi));
+}
+
 // frames) followed by one frame of each other period.
 PhaseInfo micro_info(const MicroPhaseBlock& m, int first_frame, int frames) {
     PhaseInfo info;
@@ -116,12 +128,7 @@ PhaseInfo micro_info(const MicroPhaseBlock& m, int first_frame, int frames) {
     info.micro_extra_offsets.assign(m.periods.size() - 1, 0.0f);
     for (std::size_t f = 0; f < m.extra_phase_offsets.size() && f + 1 < m.periods.size(); ++f)
         info.micro_extra_offsets[f] = static_cast<float>(m.extra_phase_offsets[f]);
-    for (int k = 0; k < 3; ++k) {
-        const double delta = 2.0 * std::numbers::pi * k / 3.0;
-        info.cos_w.push_back(static_cast<float>(std::cos(delta)));
-        info.sin_w.push_back(static_cast<float>(-m.shift_sign * std::sin(delta)));
-    }
-    info.offset_fraction = static_cast<float>(m.phase_offset / (2.0 * std::numbers::pi));
+    add_shift_weights(info, 3, m.shift_sign, m.phase_offset);
     return info;
 }
 
@@ -142,11 +149,7 @@ PhaseInfo phase_info(const PhaseBlock& p, int first_frame, int frames) {
             info.carrier_sin.push_back(static_cast<float>(std::sin(delta)));
         }
     }
-    for (int k = 0; k < p.steps; ++k) {
-        const double delta = 2.0 * std::numbers::pi * k / p.steps;
-        info.cos_w.push_back(static_cast<float>(std::cos(delta)));
-        info.sin_w.push_back(static_cast<float>(-p.shift_sign * std::sin(delta)));
-    }
+    add_shift_weights(info, p.steps, p.shift_sign, p.phase_offset);
     if (p.steps <= kMaxClassSteps) {
         const double step = 2.0 * std::numbers::pi / p.steps;
         for (int j = 0; j < cos_class_count(p.steps); ++j)
@@ -155,7 +158,6 @@ PhaseInfo phase_info(const PhaseBlock& p, int first_frame, int frames) {
             info.class_sin_w.push_back(
                 static_cast<float>(-p.shift_sign * std::sin(step * (j + 1))));
     }
-    info.offset_fraction = static_cast<float>(p.phase_offset / (2.0 * std::numbers::pi));
     return info;
 }
 
