@@ -104,6 +104,8 @@ FPP_VECTOR_CLONES void DecodeEngine::run_family_block(const Step& step, std::siz
         m.highest = static_cast<float>(plan_.axes[p.axis].extent + 0.5);
         m.extra_offsets = p.micro_extra_offsets.data();
         m.min_gap = kMicroMinGap * full_scale_ * full_scale_;
+        m.min_modulation = min_modulation_dn_;
+        m.every_order = options_.micro_every_order;
         micro_base_row<T>(in, n, p.cos_w.data(), p.sin_w.data(), m, c, sn, a, scratch, span_);
         micro_search(n, m, c, sn, at(ps.ambiguous, offset, local), scratch, span_);
         return;

@@ -11,7 +11,8 @@
 // candidate, so only the F - 1 other frames are summed per candidate.
 // A pixel is ambiguous (kDecodeUnwrapInconsistent) when the second-best
 // order's residual exceeds the best's by less than kMicroMinGap full scale
-// squared: the noise could have swapped them.
+// squared: the noise could have swapped them. Unless every_order is set,
+// most pixels try only the orders of sampled neighbours (micro_search).
 
 #include "decode_family_kernels.hpp"
 #include "decode_kernels.hpp"
@@ -43,11 +44,13 @@ struct MicroParams {
     float sign = 1;                       // -shift_sign weights are in cos_w / sin_w already
     const float* extra_offsets = nullptr; // per other period, rad (added to offset)
     float min_gap = 0;                    // kMicroMinGap * full scale^2, DN^2
+    float min_modulation = 0;             // DN: below it a pixel is masked whatever its order
+    bool every_order = false;             // DecodeOptions::micro_every_order
 };
 
 // Scratch floats per pixel that micro_search needs.
 inline int micro_scratch_floats(int others) {
-    return 3 * others + 7;
+    return 3 * others + 2;
 }
 
 // Pass 1: A, B, wrapped fraction of the first period (into fraction,
