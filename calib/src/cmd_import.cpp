@@ -29,7 +29,8 @@ struct ImportArgs {
 
 int run_import(ImportArgs args) {
     // OpenCV's Gray code always codes both axes.
-    if (args.tool == "opencv" && args.direction_option->count() == 0)
+    if (args.tool == "opencv" && args.options.codec == "graycode" &&
+        args.direction_option->count() == 0)
         args.options.direction = "both";
     args.options.tool = parse_import_tool(args.tool);
     args.options.projector = parse_size_text(args.projector, "--projector");
@@ -61,12 +62,13 @@ Action add_import_command(CLI::App& app) {
     cmd->add_option("--codec", args->options.codec,
                     "slstudio: 2x3, 3, nstep, 2p1, modulated, graycode, micro; slmaster: "
                     "complementary, shift-gray; "
-                    "opencv: graycode")
+                    "opencv: graycode, sinusoidal")
         ->required();
     args->direction_option =
         cmd->add_option("--direction", args->options.direction,
-                        "coded axis: x (columns; SLStudio 'horizontal', SLMaster horizontal = "
-                        "false), y, or both (x then y; OpenCV's Gray code is always both)")
+                        "coded axis: x (columns; SLStudio 'horizontal', SLMaster and OpenCV "
+                        "SinusoidalPattern horizontal = false), y, or both (x then y; OpenCV's "
+                        "Gray code is always both)")
             ->capture_default_str();
     cmd->add_option("--phases", args->options.slstudio_2x3_phases,
                     "slstudio 2x3: fringes across the projector (nPhases)")
@@ -93,6 +95,10 @@ Action add_import_command(CLI::App& app) {
                     "opencv: where the white and black frames of getImagesForShadowMasks are: "
                     "last (after the patterns, as the module's capture sample), first, none")
         ->capture_default_str();
+    cmd->add_option("--fringe-counts", args->options.fringe_counts,
+                    "opencv sinusoidal: nbrOfPeriods of each set of three patterns, in capture "
+                    "order, comma-separated (e.g. 1,4,16)")
+        ->delimiter(',');
     cmd->add_option("--bit-depth", args->options.bit_depth,
                     "bits in use of 16-bit frames (9..16; default: found from the frames)");
     return action;

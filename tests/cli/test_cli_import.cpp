@@ -2,8 +2,9 @@
 // become capture sets. On the real captures in ../shared/datasets the import
 // from the bare frames and the tool's parameters must give the hand-written
 // manifests there; on frames rendered here from each tool's own pattern
-// formula (imports.md), our rendering of the imported sequence must match the
-// tool's frames and the decode must find every projector column.
+// formula (imports.md), or by the tool itself where it is installed
+// (OpenCV's), our rendering of the imported sequence must match the tool's
+// frames and the decode must find every projector column.
 
 #include "test_support.hpp"
 
@@ -15,10 +16,12 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/structured_light.hpp>
 
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <initializer_list>
 #include <map>
 #include <numbers>
 #include <string>
@@ -211,6 +214,25 @@ Frames opencv_graycode(int w, int h) {
     return f;
 }
 
+// OpenCV SinusoidalPattern, by libopencv_structured_light itself: the three
+// PSP patterns (the same for FTP and FAPS) for each of `counts` periods
+// across the width (horizontal = false) or the height.
+Frames opencv_sinusoidal(int w, int h, bool horizontal, std::initializer_list<int> counts) {
+    Frames f;
+    for (int count : counts) {
+        auto params = cv::makePtr<cv::structured_light::SinusoidalPattern::Params>();
+        params->width = w;
+        params->height = h;
+        params->nbrOfPeriods = count;
+        params->methodId = cv::structured_light::PSP;
+        params->horizontal = horizontal;
+        Frames set;
+        cv::structured_light::SinusoidalPattern::create(params)->generate(set);
+        f.insert(f.end(), set.begin(), set.end());
+    }
+    return f;
+}
+
 struct RenderedCase {
     const char* name;
     const char* options;    // fpp-calib import options (projector added)
@@ -220,6 +242,7 @@ struct RenderedCase {
     double max_level_difference; // our render of the imported sequence vs the tool's frames
     double decode_tolerance;     // px, |decoded - column| for every decoded pixel
     bool decodes_y;
+    bool decodes_x = true;
 };
 
 std::vector<RenderedCase> rendered_cases() {
@@ -245,6 +268,19 @@ std::vector<RenderedCase> rendered_cases() {
          320, 96, [](int w, int h) { return slmaster(w, h, 4, 8, true); }, 1, 0.05, false},
         {"opencv_graycode", "opencv --codec graycode --direction both", "pattern_%02d.png", 320, 96,
          opencv_graycode, 0, 0.5, true},
+        // 20 px fringes: one 8-bit level (1/127.5 rad) is 0.025 px.
+        {"opencv_sinusoidal", "opencv --codec sinusoidal --fringe-counts 1,4,16",
+         "pattern_%02d.png", 320, 96,
+         [](int w, int h) {
+             return opencv_sinusoidal(w, h, false, {1, 4, 16});
+         },
+         1, 0.05, false},
+        {"opencv_sinusoidal_y", "opencv --codec sinusoidal --direction y --fringe-counts 1,4",
+         "pattern_%02d.png", 320, 96,
+         [](int w, int h) {
+             return opencv_sinusoidal(w, h, true, {1, 4});
+         },
+         1, 0.05, true, false},
     };
 }
 
@@ -292,18 +328,21 @@ TEST_P(ImportRendered, MatchesTheToolAndDecodes) {
 
     // Decoded as camera frames (camera = projector): every pixel finds its column.
     const fpp::DecodeResult r = fpp::decode(set);
-    ASSERT_FALSE(r.proj_x.empty());
+    ASSERT_EQ(r.proj_x.empty(), !c.decodes_x);
+    ASSERT_EQ(r.proj_y.empty(), !c.decodes_y);
     std::size_t valid = 0, wrong = 0;
     double sum2 = 0;
     for (int y = 0; y < c.height; ++y)
         for (int x = 0; x < c.width; ++x) {
-            const double u = r.proj_x.at(x, y);
+            // The first coded axis decides validity and carries the RMS.
+            const double u = c.decodes_x ? r.proj_x.at(x, y) : r.proj_y.at(x, y);
+            const int truth = c.decodes_x ? x : y;
             if (std::isnan(u))
                 continue;
             ++valid;
-            sum2 += (u - x) * (u - x);
-            wrong += std::fabs(u - x) > c.decode_tolerance;
-            if (c.decodes_y) {
+            sum2 += (u - truth) * (u - truth);
+            wrong += std::fabs(u - truth) > c.decode_tolerance;
+            if (c.decodes_x && c.decodes_y) {
                 const double v = r.proj_y.at(x, y);
                 wrong += std::isnan(v) || std::fabs(v - y) > c.decode_tolerance;
             }
@@ -352,6 +391,31 @@ TEST(CliImport, RefusesWithNamedErrors) {
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find("fringes: SLMaster needs a fringe count"), std::string::npos)
         << r.output;
+
+    const std::string sinusoidal =
+        "import opencv --projector 320x96 --codec sinusoidal " + quote(frames) + " --out ";
+    r = run_calib(sinusoidal + quote(dir / "e") + " --fringe-counts 16", dir);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("fringe-counts: one set of 16 fringes tells the position within a "
+                            "fringe only"),
+              std::string::npos)
+        << r.output;
+    r = run_calib(sinusoidal + quote(dir / "f") + " --fringe-counts 1,200", dir);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("fringe-counts: 200 fringes across 320 pixels: need 1 .. 106"),
+              std::string::npos)
+        << r.output;
+    r = run_calib(sinusoidal + quote(dir / "g") + " --fringe-counts 1 --direction both", dir);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("direction: OpenCV's SinusoidalPattern codes one axis per set"),
+              std::string::npos)
+        << r.output;
+    r = run_calib(sinusoidal + quote(dir / "h"), dir);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("fringe-counts: give nbrOfPeriods of each set"), std::string::npos)
+        << r.output;
+    for (const char* name : {"e", "f", "g", "h"})
+        EXPECT_FALSE(fs::exists(dir / name));
 }
 
 } // namespace

@@ -236,11 +236,55 @@ Sequence slmaster_sequence(const ImportOptions& o, const fs::path& origin) {
     return {phase, gray};
 }
 
+// SinusoidalPattern::generate() gives the same three patterns for FTP, PSP
+// and FAPS: I_k = 127.5 (1 + sin(2 pi p / P + 2 pi k / 3)), p the pixel index
+// along the coded axis, P = extent / nbrOfPeriods in integer division.
+// sin t = cos(t - pi/2): shift_sign +1, phase_offset -pi/2. The module
+// unwraps spatially, relative to nothing; an absolute coordinate needs a set
+// with one period across the axis (or sets the decoder can unwrap from).
+Sequence opencv_sinusoidal(const ImportOptions& o, const fs::path& origin) {
+    const Axes axes = axes_of(o, origin, true);
+    if (axes.x && axes.y)
+        throw InputError(origin, "direction",
+                         "OpenCV's SinusoidalPattern codes one axis per set (its `horizontal` "
+                         "flag): x or y");
+    const Axis axis = axes.x ? Axis::x : Axis::y;
+    const int e = extent(o, axis);
+    if (o.fringe_counts.empty())
+        throw InputError(origin, "fringe-counts",
+                         "give nbrOfPeriods of each set of three patterns, in capture order "
+                         "(e.g. 1,4,16)");
+    Sequence s;
+    for (const int count : o.fringe_counts) {
+        if (count < 1 || e / count < 3)
+            throw InputError(origin, "fringe-counts",
+                             std::to_string(count) + " fringes across " + std::to_string(e) +
+                                 " pixels: need 1 .. " + std::to_string(e / 3) +
+                                 " (periods of at least 3 pixels)");
+        PhaseBlock b;
+        b.axis = axis;
+        b.period = e / count; // integer division, as the module does
+        b.steps = 3;
+        b.shift_sign = 1;
+        b.phase_offset = -kPi / 2;
+        s.push_back(b);
+    }
+    if (o.fringe_counts.size() == 1 && o.fringe_counts[0] != 1)
+        throw InputError(origin, "fringe-counts",
+                         "one set of " + std::to_string(o.fringe_counts[0]) +
+                             " fringes tells the position within a fringe only (OpenCV unwraps "
+                             "it relative to nothing); capture a set with nbrOfPeriods 1 too "
+                             "(and sets between for a large ratio) and list them all");
+    return s;
+}
+
 Sequence opencv_sequence(const ImportOptions& o, const fs::path& origin) {
+    if (o.codec == "sinusoidal")
+        return opencv_sinusoidal(o, origin);
     if (o.codec != "graycode")
         throw InputError(origin, "codec",
                          "unknown OpenCV structured_light pattern '" + o.codec +
-                             "' (graycode; SinusoidalPattern is not supported: imports.md)");
+                             "' (graycode, sinusoidal)");
     if (o.direction != "both")
         throw InputError(origin, "direction",
                          "OpenCV's GrayCodePattern codes columns and rows: direction both");

@@ -21,7 +21,7 @@ struct ImportOptions {
     ImportTool tool = ImportTool::slstudio;
     // slstudio: 2x3, 3, nstep, 2p1, modulated, graycode, micro;
     //   slmaster: complementary, shift-gray (a wrapping code: imports.md);
-    // opencv: graycode.
+    // opencv: graycode, sinusoidal (SinusoidalPattern).
     std::string codec;
     Size projector;              // the projector's resolution, pixels
     std::string direction = "x"; // x (columns coded: SLStudio "horizontal", SLMaster
@@ -40,6 +40,9 @@ struct ImportOptions {
     // getImagesForShadowMasks were captured: "last" (white, black after the
     // patterns, as the module's capture sample does), "first", or "none".
     std::string shadow_images = "last";
+    // OpenCV's SinusoidalPattern: nbrOfPeriods of each set of three patterns,
+    // in capture order (one set with 1, or sets the decoder can unwrap from).
+    std::vector<int> fringe_counts;
     int bit_depth = 0; // manifest bit_depth for 16-bit frames (0 = found from the frames)
 };
 
