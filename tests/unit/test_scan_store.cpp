@@ -7,10 +7,13 @@
 #include "fpp/scanner/scan_store.hpp"
 #include "test_support.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 
 namespace fs = std::filesystem;
 using namespace std::chrono;
@@ -71,4 +74,38 @@ TEST(ScanStore, SequenceOfTheNewestContinues) {
     EXPECT_EQ(new_scan_folder(dir.path(), at(-1s)).filename(), "scan-20261127-030000-250-000042");
     make_scan(dir / "scan-20261127-030000-250-999999", 1);
     EXPECT_THROW(new_scan_folder(dir.path(), at(-1s)), fpp::IoError);
+}
+
+// GET /scans sizes every scan folder while a DELETE or the store's pruning
+// may remove one: a file that vanishes between the directory listing and its
+// size counts as 0 bytes rather than failing the whole listing (Api.Load once
+// answered 500 "cannot get file size" for a scan.json removed under it).
+TEST(ScanStore, FolderBytesToleratesFilesRemovedWhileCounting) {
+    fpp::test::TempDir dir;
+    const fs::path folder = dir / "scan-20261127-030000-250";
+    fs::create_directories(folder);
+    std::atomic<bool> done{false};
+    std::thread churn([&] {
+        for (int i = 0; i < 4000; ++i) {
+            static const char* const kNames[] = {"f0", "f1", "f2", "f3", "f4", "f5", "f6", "f7"};
+            const fs::path file = folder / kNames[i % 8];
+            std::ofstream(file) << "0123456789";
+            std::error_code ec;
+            fs::remove(file, ec);
+        }
+        done = true;
+    });
+    int counts = 0;
+    std::uint64_t most = 0;
+    while (!done) {
+        std::uint64_t bytes = 0;
+        EXPECT_NO_THROW(bytes = fpp::scanner::folder_bytes(folder));
+        most = std::max(most, bytes);
+        ++counts;
+    }
+    churn.join();
+    EXPECT_GT(counts, 0);
+    EXPECT_LE(most, 10u); // at most one 10-byte file exists at a time
+    EXPECT_EQ(fpp::scanner::folder_bytes(folder), 0u);
+    EXPECT_EQ(fpp::scanner::folder_bytes(dir / "no-such-scan"), 0u);
 }

@@ -319,8 +319,12 @@ HttpResponse Api::scans(HttpRequest& request, const std::vector<std::string>& pa
         auto folders = list_scans(service_.store());
         std::reverse(folders.begin(), folders.end()); // newest first
         json list = json::array();
-        for (const auto& f : folders)
-            list.push_back(scan_summary(f));
+        for (const auto& f : folders) {
+            json entry = scan_summary(f);
+            std::error_code ec;
+            if (fs::is_directory(f, ec)) // not deleted or pruned meanwhile
+                list.push_back(std::move(entry));
+        }
         return HttpResponse::json(200, json{{"scans", list}}.dump());
     }
     if (!is_scan_id(parts[3]))

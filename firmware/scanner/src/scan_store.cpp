@@ -86,9 +86,16 @@ std::vector<fs::path> list_scans(const fs::path& directory) {
 std::uint64_t folder_bytes(const fs::path& folder) {
     std::uint64_t total = 0;
     std::error_code ec;
-    for (const auto& entry : fs::recursive_directory_iterator(folder, ec))
-        if (entry.is_regular_file())
-            total += entry.file_size();
+    for (const auto& entry : fs::recursive_directory_iterator(folder, ec)) {
+        // A DELETE or the pruning may remove a file between the listing and
+        // its size: it then counts as nothing.
+        std::error_code gone;
+        if (!entry.is_regular_file(gone))
+            continue;
+        const std::uintmax_t bytes = entry.file_size(gone);
+        if (!gone)
+            total += bytes;
+    }
     return total;
 }
 

@@ -28,7 +28,8 @@ std::vector<std::string> remove_interrupted_scans(const std::filesystem::path& d
 // Scan folders in the store, oldest first.
 std::vector<std::filesystem::path> list_scans(const std::filesystem::path& directory);
 
-// Bytes held by the files under `folder`.
+// Bytes held by the files under `folder` (0 for a missing folder; a file
+// removed while counting counts as 0).
 std::uint64_t folder_bytes(const std::filesystem::path& folder);
 
 // Removes the oldest scans until the store holds at most `max_bytes`, never
