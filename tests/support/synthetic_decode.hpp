@@ -6,6 +6,7 @@
 
 #include "fpp/capture_set.hpp"
 #include "fpp/decoder.hpp"
+#include "pattern_blocks.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -154,26 +155,8 @@ struct Synth {
     }
 };
 
-inline fpp::PhaseBlock phase(Axis axis, double period, int steps, int sign = 1, double offset = 0) {
-    fpp::PhaseBlock b;
-    b.axis = axis;
-    b.period = period;
-    b.steps = steps;
-    b.shift_sign = sign;
-    b.phase_offset = offset;
-    return b;
-}
-
-inline fpp::GrayBlock gray(Axis axis, double period, int bits, bool complementary,
-                           bool inverse = false) {
-    fpp::GrayBlock g;
-    g.axis = axis;
-    g.period = period;
-    g.bits = bits;
-    g.complementary = complementary;
-    g.inverse = inverse;
-    return g;
-}
+using fpp::test::gray;
+using fpp::test::phase;
 
 inline fpp::CenterlineBlock centerline(Axis axis, double position) {
     fpp::CenterlineBlock c;

@@ -3,6 +3,8 @@
 
 #include "fpp/patterns.hpp"
 
+#include "pattern_blocks.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -41,25 +43,8 @@ bool spec_complementary_bit(double period, int bits, int j, int p) {
     return ((gray_code(n) >> (bits - j)) & 1) != 0;
 }
 
-fpp::PhaseBlock phase(fpp::Axis axis, double period, int steps, int sign, double offset) {
-    fpp::PhaseBlock b;
-    b.axis = axis;
-    b.period = period;
-    b.steps = steps;
-    b.shift_sign = sign;
-    b.phase_offset = offset;
-    return b;
-}
-
-fpp::GrayBlock gray(fpp::Axis axis, double period, int bits, bool complementary, bool inverse) {
-    fpp::GrayBlock b;
-    b.axis = axis;
-    b.period = period;
-    b.bits = bits;
-    b.complementary = complementary;
-    b.inverse = inverse;
-    return b;
-}
+using fpp::test::gray;
+using fpp::test::phase;
 
 // Profile of an x-axis pattern (row 0), checking that every row equals it.
 std::string row_bits(const fpp::Image<std::uint8_t>& image) {

@@ -230,24 +230,24 @@ FPP_KERNEL void resolve_chunk(const MicroParams& m, const ChunkSamples& in, cons
                               const Window* windows, int count, bool every, ChunkVerdict& out) {
     float inside[kLanes]; // 0 or 1
     for (int l = 0; l < kLanes; ++l)
-        inside[l] = every ? 1.0f : 0.0f;
-    for (int w = 0; w < count && !every; ++w) {
+        inside[l] = 0.0f;
+    for (int w = 0; w < count; ++w) {
         const auto lo = static_cast<float>(windows[w].first + (windows[w].first > 0 ? 1 : 0));
         const auto hi = static_cast<float>(windows[w].last - (windows[w].last < m.orders ? 1 : 0));
         for (int l = 0; l < kLanes; ++l)
             inside[l] = select((fit.order[l] >= lo) & (fit.order[l] < hi), 1.0f, inside[l]);
     }
-    // Every pixel qualifies as strong and well fitted when every order was searched.
-    const float strong = every ? 0.0f : kStrong * kStrong * m.min_gap;
-    const float noise = every ? 3.0e38f : kFitShare * m.min_gap;
-    const float floor = every ? 3.0e38f : m.min_modulation;
+    const float strong = kStrong * kStrong * m.min_gap;
+    const float noise = kFitShare * m.min_gap;
     const auto first_order = static_cast<float>(m.first_order);
     for (int l = 0; l < kLanes; ++l) {
         const float b = in.modulation[l];
         const float b2 = b * b;
-        const bool keep = (inside[l] > 0.5f) & ((fit.best[l] - fit.second[l]) * b2 >= m.min_gap) &
-                          (b2 >= strong) & ((fit.total[l] - fit.best[l]) * b2 <= noise);
-        const bool again = !keep & (b >= floor);
+        const bool clear = (fit.best[l] - fit.second[l]) * b2 >= m.min_gap;
+        const bool trusted =
+            (inside[l] > 0.5f) & (b2 >= strong) & ((fit.total[l] - fit.best[l]) * b2 <= noise);
+        const bool keep = clear & (every | trusted);
+        const bool again = !every & !keep & (b >= m.min_modulation);
         const float k = first_order + fit.order[l]; // exact: small integers
         out.column[l] = select(again, in.frac[l], (in.frac[l] + k) * m.period);
         out.flags[l] = static_cast<std::uint8_t>((keep ? 0 : ChunkVerdict::kAmbiguous) |
