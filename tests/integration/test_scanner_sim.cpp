@@ -303,6 +303,44 @@ TEST(ScannerSim, FrameTimeoutAndDroppedFrameAreRetriedOnce) {
     }
 }
 
+TEST(ScannerSim, ATriggerThatFiresTwiceIsSeenAndTheScanRetried) {
+    // One trigger, two exposures (a software trigger command sent again after
+    // its acknowledgement was lost on the link; a glitch on the trigger line):
+    // every later frame comes one pattern late, and its frame id follows on.
+    // Mid-scan (seen before the next trigger) and at the last of the 17
+    // triggers (seen as a frame left over).
+    for (const auto& [trigger, at] : {std::pair<std::string, int>{"line", 4}, {"software", 16}}) {
+        SCOPED_TRACE(trigger + " trigger, fault at trigger " + std::to_string(at));
+        Fixture f;
+        std::string text = board_yaml(f.store, "table.fpt");
+        text.replace(text.find("trigger: line"), 13, "trigger: " + trigger);
+        write_text(f.board_file, text);
+        f.board = read_board_config(f.board_file);
+        SimBoard sim(f.board);
+        f.make_table(sim.rig());
+        Scanner scanner(f.board, sim.devices(), f.log);
+        sim.camera().inject_fault(sim::CameraFault::doubled, at);
+        const ScanOutcome out = scanner.scan(ScanMode::scan);
+        EXPECT_EQ(out.attempts, 2);
+        EXPECT_TRUE(f.logged("a trigger fired twice"));
+        // The scan written is the retried one, every frame of it taken
+        // under its own pattern.
+        const auto& exposures = sim.camera().exposures();
+        ASSERT_EQ(exposures.size(), std::size_t(at + 2 + 17));
+        for (std::size_t i = 0; i < 17; ++i)
+            EXPECT_EQ(exposures[exposures.size() - 17 + i].pattern, int(i)) << i;
+        EXPECT_EQ(list_scans(f.store).size(), 1u);
+        // Nothing of the failed attempt stays in the decoder.
+        std::size_t compared = 0;
+        const double rms = fpp::test::ply_rms_against_truth(out.folder / "cloud.ply",
+                                                            sim.renderer().truth_xyz(), compared);
+        std::printf("%s trigger doubled at %d: RMS %.4f mm over %zu points\n", trigger.c_str(), at,
+                    rms, compared);
+        EXPECT_LT(rms, 0.1);
+        EXPECT_GT(out.points, 60000u);
+    }
+}
+
 TEST(ScannerSim, FrameIdsWrappingAt16BitsFollowEachOtherAndAGapAcrossTheWrapIsSeen) {
     // A GigE Vision 1.x camera's block id goes 65534, 65535, 1, 2: one scan
     // every 65,535 frames (3,855 scans of 17) crosses it.

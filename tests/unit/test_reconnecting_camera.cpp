@@ -51,6 +51,7 @@ public:
         f.frame_id = static_cast<std::uint64_t>(++bench_.frames);
         return f;
     }
+    std::size_t frames_waiting() const override { return 0; }
 
 private:
     void check() const {

@@ -500,4 +500,11 @@ CapturedFrame AravisCamera::next_frame(std::chrono::milliseconds timeout) {
     return captured;
 }
 
+std::size_t AravisCamera::frames_waiting() const {
+    gint n_input = 0;
+    gint n_output = 0;
+    arv_stream_get_n_buffers(impl_->stream.get(), &n_input, &n_output);
+    return static_cast<std::size_t>(std::max(n_output, 0));
+}
+
 } // namespace fpp::drivers

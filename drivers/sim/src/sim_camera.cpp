@@ -139,6 +139,16 @@ void SimCamera::expose(std::int64_t t_ns) {
     if (fault == CameraFault::timeout)
         return;
     queue_.push_back({e, fault == CameraFault::incomplete});
+    if (fault == CameraFault::doubled) {
+        // The repeated trigger exposes again as soon as the sensor is free.
+        Exposure again = e;
+        again.frame_id = advance();
+        again.start_ns = t_ns + exposure_ns;
+        again.pattern = e.pattern_at_end;
+        again.pattern_at_end = display_.on_screen_at(again.start_ns + exposure_ns);
+        exposures_.push(again);
+        queue_.push_back({again, false});
+    }
 }
 
 drivers::CapturedFrame SimCamera::next_frame(std::chrono::milliseconds timeout) {

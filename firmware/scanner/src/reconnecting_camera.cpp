@@ -82,4 +82,8 @@ drivers::CapturedFrame ReconnectingCamera::next_frame(std::chrono::milliseconds 
     return guarded([timeout](drivers::Camera& c) { return c.next_frame(timeout); });
 }
 
+std::size_t ReconnectingCamera::frames_waiting() const {
+    return camera_ ? camera_->frames_waiting() : 0;
+}
+
 } // namespace fpp::scanner

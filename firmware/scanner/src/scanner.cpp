@@ -100,22 +100,15 @@ void Scanner::prepare_patterns() {
 }
 
 std::vector<Frame> Scanner::grab_prepared(std::size_t first, std::size_t count) {
-    const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
     std::vector<Frame> frames;
     dev_.camera.start();
     try {
         for (std::size_t i = first; i < first + count; ++i) {
             dev_.display.show(i);
             const drivers::FlipEvent flip = dev_.display.wait_flip(board_.timing.flip_timeout);
-            dev_.clock.sleep_until_ns(
-                flip.timestamp_ns +
-                std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count());
-            if (software)
-                dev_.camera.software_trigger();
-            else
-                dev_.trigger.pulse(board_.timing.trigger_pulse);
-            frames.push_back(dev_.camera.next_frame(board_.camera.settings.frame_timeout).frame);
+            frames.push_back(trigger_and_take(flip, i).frame);
         }
+        check_no_frame_left(count);
         dev_.camera.stop();
         return frames;
     } catch (...) {
@@ -374,13 +367,52 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop, const
     return outcome;
 }
 
+drivers::CapturedFrame Scanner::trigger_and_take(const drivers::FlipEvent& flip,
+                                                 std::size_t pattern) {
+    const std::string name = "pattern " + std::to_string(pattern);
+    dev_.clock.sleep_until_ns(
+        flip.timestamp_ns +
+        std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count());
+    if (const std::size_t extra = dev_.camera.frames_waiting(); extra != 0)
+        throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
+                                   std::to_string(extra) +
+                                       " frame(s) that no trigger asked for arrived before " +
+                                       name + "'s trigger (a trigger fired twice)");
+    const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
+    const std::int64_t triggered_ns = dev_.clock.now_ns();
+    if (software)
+        dev_.camera.software_trigger();
+    else
+        dev_.trigger.pulse(board_.timing.trigger_pulse);
+    drivers::CapturedFrame frame = dev_.camera.next_frame(board_.camera.settings.frame_timeout);
+    // Timestamps are on the scan clock; a camera that cannot tell reports 0.
+    // A software-triggered frame whose exposure started before its trigger
+    // was sent belongs to an earlier, repeated trigger (its frame id follows
+    // on, so only the time tells).
+    if (software && frame.timestamp_ns != 0 && frame.timestamp_ns < triggered_ns)
+        throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
+                                   "frame " + std::to_string(frame.frame_id) +
+                                       " was exposed before " + name +
+                                       "'s trigger was sent (a trigger fired twice)");
+    // A line-triggered frame exposed before its pattern was on screen: the
+    // trigger line is not the one the board file names, or fires early.
+    if (frame.timestamp_ns != 0 && frame.timestamp_ns < flip.timestamp_ns)
+        throw PatternMismatch("frame " + std::to_string(frame.frame_id) + " exposed before " +
+                              name + " was on screen");
+    return frame;
+}
+
+void Scanner::check_no_frame_left(std::size_t patterns) const {
+    if (const std::size_t extra = dev_.camera.frames_waiting(); extra != 0)
+        throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
+                                   std::to_string(extra) + " frame(s) more than the " +
+                                       std::to_string(patterns) +
+                                       " triggers asked for (a trigger fired twice)");
+}
+
 void Scanner::capture_pass(int pass, int passes, ScanMode mode, const std::atomic<bool>* stop,
                            Captured& captured, ScanOutcome& outcome, double& push_total) {
-    auto& clock = dev_.clock;
     const Size camera = dev_.camera.size();
-    const std::int64_t settle_ns =
-        std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count();
-    const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
     const int total = static_cast<int>(patterns_) * passes;
     StreamingDecoder& decoder = *decoder_;
     if (mode == ScanMode::capture)
@@ -394,24 +426,13 @@ void Scanner::capture_pass(int pass, int passes, ScanMode mode, const std::atomi
         if (flip.index != i)
             throw PatternMismatch("flip event for pattern " + std::to_string(flip.index) +
                                   ", expected " + std::to_string(i));
-        clock.sleep_until_ns(flip.timestamp_ns + settle_ns);
-        if (software)
-            dev_.camera.software_trigger();
-        else
-            dev_.trigger.pulse(board_.timing.trigger_pulse);
-        drivers::CapturedFrame frame = dev_.camera.next_frame(board_.camera.settings.frame_timeout);
+        drivers::CapturedFrame frame = trigger_and_take(flip, i);
         // (A 16-bit GigE Vision counter goes from 65535 to 1.)
         if (i > 0 && drivers::gige_frames_missed(previous_id, frame.frame_id) != 0)
             throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
                                        "frame id " + std::to_string(frame.frame_id) + " after " +
                                            std::to_string(previous_id) + ": a frame was dropped");
         previous_id = frame.frame_id;
-        // The exposure must start after the pattern is on screen (both on the
-        // scan clock; a camera that cannot tell reports 0).
-        if (frame.timestamp_ns != 0 && frame.timestamp_ns < flip.timestamp_ns)
-            throw PatternMismatch("frame " + std::to_string(frame.frame_id) +
-                                  " exposed before pattern " + std::to_string(i) +
-                                  " was on screen");
         if (frame.frame.size() != camera)
             throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
                                        "frame of the wrong size");
@@ -432,6 +453,7 @@ void Scanner::capture_pass(int pass, int passes, ScanMode mode, const std::atomi
         if (stop && stop->load())
             throw ScanAborted();
     }
+    check_no_frame_left(patterns_);
     dev_.camera.stop();
 }
 

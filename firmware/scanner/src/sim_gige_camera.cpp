@@ -80,6 +80,7 @@ public:
     drivers::CapturedFrame next_frame(std::chrono::milliseconds timeout) override {
         return driver_.next_frame(timeout);
     }
+    std::size_t frames_waiting() const override { return driver_.frames_waiting(); }
 
 private:
     sim::SimCamera& sensor_;

@@ -5,6 +5,7 @@
 //
 // Threading: one thread owns a Camera.
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -75,6 +76,11 @@ public:
     // Wait up to `timeout` for the next frame. Throws DeviceError on timeout,
     // camera gone or an incomplete frame.
     virtual CapturedFrame next_frame(std::chrono::milliseconds timeout) = 0;
+    // Frames arrived (complete or not) that next_frame() has not taken yet.
+    // Before a trigger it is 0: a frame there is one no trigger of the scan
+    // asked for (a software trigger command repeated after its lost
+    // acknowledgement fires the camera twice; so does a glitch on the line).
+    virtual std::size_t frames_waiting() const = 0;
 
 protected:
     Camera() = default;

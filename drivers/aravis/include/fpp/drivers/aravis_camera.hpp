@@ -48,6 +48,7 @@ public:
     void set_exposure_us(double exposure_us) override;
     void software_trigger() override;
     CapturedFrame next_frame(std::chrono::milliseconds timeout) override;
+    std::size_t frames_waiting() const override;
 
     // "camera <device>", the name used in DeviceError messages.
     const std::string& name() const;

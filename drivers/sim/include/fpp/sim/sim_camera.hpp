@@ -26,6 +26,7 @@ enum class CameraFault {
     timeout,    // the frame of this trigger never arrives
     dropped,    // a frame was lost inside the camera: this one arrives with its id one too far
     incomplete, // the frame arrives with missing packets
+    doubled,    // the trigger fires twice (a software trigger repeated on a lossy link)
 };
 
 // What the sensor saw for one trigger.
@@ -56,6 +57,7 @@ public:
     void set_exposure_us(double exposure_us) override;
     void software_trigger() override;
     drivers::CapturedFrame next_frame(std::chrono::milliseconds timeout) override;
+    std::size_t frames_waiting() const override { return queue_.size(); }
 
     // --- simulation side ---
     // The exposure times of a typical machine-vision sensor, microseconds.

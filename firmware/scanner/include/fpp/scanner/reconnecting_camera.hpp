@@ -42,6 +42,8 @@ public:
     void set_exposure_us(double exposure_us) override;
     void software_trigger() override;
     drivers::CapturedFrame next_frame(std::chrono::milliseconds timeout) override;
+    // 0 while the camera is closed (a closed camera holds no frame).
+    std::size_t frames_waiting() const override;
 
     // False between a loss and the next successful open.
     bool connected() const { return camera_ != nullptr; }

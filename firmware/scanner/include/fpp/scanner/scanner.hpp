@@ -158,6 +158,16 @@ private:
     std::vector<double> scan_exposures();
     void capture_pass(int pass, int passes, ScanMode mode, const std::atomic<bool>* stop,
                       Captured& captured, ScanOutcome& outcome, double& push_total);
+    // Waits out the settle time after `flip` of pattern `pattern`, triggers
+    // the camera and takes the frame. A frame that no trigger asked for
+    // (one waiting before the trigger, or a software-triggered one that
+    // arrived before its trigger was sent) fails the attempt with a camera
+    // DeviceError, which retries it; a line-triggered frame exposed before
+    // the flip throws PatternMismatch.
+    drivers::CapturedFrame trigger_and_take(const drivers::FlipEvent& flip, std::size_t pattern);
+    // After the last frame of a capture: none may be left over (an extra
+    // frame earlier shifts every later one by one, and leaves one behind).
+    void check_no_frame_left(std::size_t patterns) const;
     // The decoded coordinate and its predicted sigma for the table: the one
     // pass, or the passes fused.
     DecodeResult& combine_passes(ScanOutcome& outcome);
