@@ -369,7 +369,8 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop, const
 
 drivers::CapturedFrame Scanner::trigger_and_take(const drivers::FlipEvent& flip,
                                                  std::size_t pattern) {
-    const std::string name = "pattern " + std::to_string(pattern);
+    // (Named only when refused: no string is built for a good frame.)
+    const auto name = [pattern] { return "pattern " + std::to_string(pattern); };
     dev_.clock.sleep_until_ns(
         flip.timestamp_ns +
         std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count());
@@ -377,7 +378,7 @@ drivers::CapturedFrame Scanner::trigger_and_take(const drivers::FlipEvent& flip,
         throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
                                    std::to_string(extra) +
                                        " frame(s) that no trigger asked for arrived before " +
-                                       name + "'s trigger (a trigger fired twice)");
+                                       name() + "'s trigger (a trigger fired twice)");
     const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
     const std::int64_t triggered_ns = dev_.clock.now_ns();
     if (software)
@@ -392,13 +393,13 @@ drivers::CapturedFrame Scanner::trigger_and_take(const drivers::FlipEvent& flip,
     if (software && frame.timestamp_ns != 0 && frame.timestamp_ns < triggered_ns)
         throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
                                    "frame " + std::to_string(frame.frame_id) +
-                                       " was exposed before " + name +
+                                       " was exposed before " + name() +
                                        "'s trigger was sent (a trigger fired twice)");
     // A line-triggered frame exposed before its pattern was on screen: the
     // trigger line is not the one the board file names, or fires early.
     if (frame.timestamp_ns != 0 && frame.timestamp_ns < flip.timestamp_ns)
         throw PatternMismatch("frame " + std::to_string(frame.frame_id) + " exposed before " +
-                              name + " was on screen");
+                              name() + " was on screen");
     return frame;
 }
 
