@@ -174,11 +174,17 @@ TEST(ScannerGige, PacketLossRetriesOrFailsCleanlyAndNeverDecodesOnePatternAsAnot
                     retried += out.attempts > 1 ? 1 : 0;
                     EXPECT_LE(out.attempts, 2);
                     // Every frame decoded under its own pattern: one frame
-                    // of another pattern would put the cloud far off truth.
-                    std::size_t compared = 0;
-                    const double rms = fpp::test::ply_rms_against_truth(
-                        out.folder / "cloud.ply", sim.renderer().truth_xyz(), compared);
-                    EXPECT_LT(rms, 0.1) << "loss " << loss << ", scan " << k;
+                    // of another pattern would put thousands of points far
+                    // off the truth. The sensor's noise differs with the
+                    // frame ids that the failed attempts used up, and one
+                    // noise draw in a few hundred decodes a pixel to a wrong
+                    // fringe order (one point 85 mm off, RMS 0.265 mm; the
+                    // same draw on the sim board without any link does too).
+                    const fpp::test::TruthErrors errors = fpp::test::ply_errors_against_truth(
+                        out.folder / "cloud.ply", sim.renderer().truth_xyz(), 5.0);
+                    EXPECT_LE(errors.gross, 5u) << "loss " << loss << ", scan " << k;
+                    EXPECT_LT(errors.rms_without_gross_mm, 0.1)
+                        << "loss " << loss << ", scan " << k;
                     EXPECT_GT(out.points, 60000u);
                 } catch (const drivers::DeviceError& e) {
                     if (failed++ == 0)

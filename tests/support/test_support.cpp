@@ -100,22 +100,37 @@ std::map<std::string, double> read_figures_csv(const std::filesystem::path& file
     return figures;
 }
 
-double ply_rms_against_truth(const std::filesystem::path& ply, const Image<float>& truth_xyz,
-                             std::size_t& compared) {
+TruthErrors ply_errors_against_truth(const std::filesystem::path& ply,
+                                     const Image<float>& truth_xyz, double gross_mm) {
     const PlyPoints pts = read_ply(ply);
     const auto width = static_cast<std::uint32_t>(truth_xyz.width());
-    double sum = 0;
-    compared = 0;
+    double sum = 0, sum_fine = 0;
+    TruthErrors e;
     for (std::size_t i = 0; i < pts.size(); ++i) {
         const float* t = &truth_xyz.at(static_cast<int>(pts.pixel[i] % width),
                                        static_cast<int>(pts.pixel[i] / width), 0);
         if (!std::isfinite(t[2]))
             continue;
         const double dx = pts.x[i] - t[0], dy = pts.y[i] - t[1], dz = pts.z[i] - t[2];
-        sum += dx * dx + dy * dy + dz * dz;
-        ++compared;
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        sum += d2;
+        ++e.compared;
+        if (d2 > gross_mm * gross_mm)
+            ++e.gross;
+        else
+            sum_fine += d2;
     }
-    return compared ? std::sqrt(sum / static_cast<double>(compared)) : std::nan("");
+    const std::size_t fine = e.compared - e.gross;
+    e.rms_mm = e.compared ? std::sqrt(sum / static_cast<double>(e.compared)) : std::nan("");
+    e.rms_without_gross_mm = fine ? std::sqrt(sum_fine / static_cast<double>(fine)) : std::nan("");
+    return e;
+}
+
+double ply_rms_against_truth(const std::filesystem::path& ply, const Image<float>& truth_xyz,
+                             std::size_t& compared) {
+    const TruthErrors e = ply_errors_against_truth(ply, truth_xyz, HUGE_VAL);
+    compared = e.compared;
+    return e.rms_mm;
 }
 
 } // namespace fpp::test

@@ -77,6 +77,19 @@ std::map<std::string, double> read_figures_csv(const std::filesystem::path& file
 double ply_rms_against_truth(const std::filesystem::path& ply, const Image<float>& truth_xyz,
                              std::size_t& compared);
 
+// The same comparison with the gross errors apart: a point farther than
+// `gross_mm` from the truth is counted, not summed. One pixel decoded to a
+// wrong fringe order (80 mm off) lifts the RMS of 100,000 points by 0.25 mm;
+// one frame decoded under another pattern's name puts thousands off.
+struct TruthErrors {
+    std::size_t compared = 0; // points with a true surface
+    std::size_t gross = 0;    // of them, farther than gross_mm
+    double rms_mm = 0;        // RMS over all compared points
+    double rms_without_gross_mm = 0;
+};
+TruthErrors ply_errors_against_truth(const std::filesystem::path& ply,
+                                     const Image<float>& truth_xyz, double gross_mm);
+
 } // namespace fpp::test
 
 // Skips the test with a clear message when a real dataset is absent; in CI
