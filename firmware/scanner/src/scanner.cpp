@@ -108,7 +108,8 @@ std::vector<Frame> Scanner::grab_prepared(std::size_t first, std::size_t count) 
             const drivers::FlipEvent flip = dev_.display.wait_flip(board_.timing.flip_timeout);
             frames.push_back(trigger_and_take(flip, i).frame);
         }
-        check_no_frame_left(count);
+        check_no_frame_waiting(
+            [count] { return "after the last of " + std::to_string(count) + " frames"; });
         dev_.camera.stop();
         return frames;
     } catch (...) {
@@ -367,6 +368,13 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop, const
     return outcome;
 }
 
+template <class Where> void Scanner::check_no_frame_waiting(Where&& where) const {
+    if (const std::size_t extra = dev_.camera.frames_waiting(); extra != 0)
+        throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
+                                   std::to_string(extra) + " frame(s) that no trigger asked for, " +
+                                       where() + " (a trigger fired twice)");
+}
+
 drivers::CapturedFrame Scanner::trigger_and_take(const drivers::FlipEvent& flip,
                                                  std::size_t pattern) {
     // (Named only when refused: no string is built for a good frame.)
@@ -374,11 +382,7 @@ drivers::CapturedFrame Scanner::trigger_and_take(const drivers::FlipEvent& flip,
     dev_.clock.sleep_until_ns(
         flip.timestamp_ns +
         std::chrono::duration_cast<std::chrono::nanoseconds>(board_.timing.settle).count());
-    if (const std::size_t extra = dev_.camera.frames_waiting(); extra != 0)
-        throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
-                                   std::to_string(extra) +
-                                       " frame(s) that no trigger asked for arrived before " +
-                                       name() + "'s trigger (a trigger fired twice)");
+    check_no_frame_waiting([&] { return "before " + name() + "'s trigger"; });
     const bool software = board_.camera.settings.trigger == drivers::TriggerMode::software;
     const std::int64_t triggered_ns = dev_.clock.now_ns();
     if (software)
@@ -401,14 +405,6 @@ drivers::CapturedFrame Scanner::trigger_and_take(const drivers::FlipEvent& flip,
         throw PatternMismatch("frame " + std::to_string(frame.frame_id) + " exposed before " +
                               name() + " was on screen");
     return frame;
-}
-
-void Scanner::check_no_frame_left(std::size_t patterns) const {
-    if (const std::size_t extra = dev_.camera.frames_waiting(); extra != 0)
-        throw drivers::DeviceError(drivers::DeviceKind::camera, "camera",
-                                   std::to_string(extra) + " frame(s) more than the " +
-                                       std::to_string(patterns) +
-                                       " triggers asked for (a trigger fired twice)");
 }
 
 void Scanner::capture_pass(int pass, int passes, ScanMode mode, const std::atomic<bool>* stop,
@@ -454,7 +450,8 @@ void Scanner::capture_pass(int pass, int passes, ScanMode mode, const std::atomi
         if (stop && stop->load())
             throw ScanAborted();
     }
-    check_no_frame_left(patterns_);
+    check_no_frame_waiting(
+        [this] { return "after the last of " + std::to_string(patterns_) + " frames"; });
     dev_.camera.stop();
 }
 

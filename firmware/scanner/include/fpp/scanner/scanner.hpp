@@ -165,9 +165,10 @@ private:
     // DeviceError, which retries it; a line-triggered frame exposed before
     // the flip throws PatternMismatch.
     drivers::CapturedFrame trigger_and_take(const drivers::FlipEvent& flip, std::size_t pattern);
-    // After the last frame of a capture: none may be left over (an extra
-    // frame earlier shifts every later one by one, and leaves one behind).
-    void check_no_frame_left(std::size_t patterns) const;
+    // No frame may wait before a trigger, nor after the last frame (an extra
+    // frame earlier shifts every later one by one, and leaves one behind);
+    // `where()` names the moment in the camera DeviceError.
+    template <class Where> void check_no_frame_waiting(Where&& where) const;
     // The decoded coordinate and its predicted sigma for the table: the one
     // pass, or the passes fused.
     DecodeResult& combine_passes(ScanOutcome& outcome);
