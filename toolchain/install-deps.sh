@@ -3,10 +3,10 @@
 # README's commands installs only what it runs.
 #   main   the main job: build the firmware, the virtual scanner and the host
 #          tool (preset release: no tests, no benchmarks)
-#   tests  main, plus what the tests and benchmarks need (presets ci, asan,
-#          fuzz): GoogleTest, Google Benchmark, OpenCV's contrib modules, a
-#          browser and WebDriver, the point-cloud viewers, Aravis's fake
-#          camera, clang 14 and its libFuzzer
+#   tests  main, plus what the tests and benchmarks need (presets ci, dev,
+#          asan, fuzz): GoogleTest, Google Benchmark, OpenCV's contrib
+#          modules, a browser and WebDriver, the point-cloud viewers,
+#          Aravis's fake camera, clang 14 and its libFuzzer, ccache
 #   cross  the cross build for the scanner's target, AArch64 (Debian arm64):
 #          the cross compiler, qemu-user to run the arm64 tests, and the arm64
 #          packages of the firmware (preset aarch64)
@@ -62,6 +62,8 @@ test_packages=(
   clang-14 libclang-rt-14-dev
   # the ci preset's FormatCheck (tests/format/check-format.sh)
   clang-format-14
+  # the compiler cache of every preset (toolchain/ccache.cmake)
+  ccache
   # packet loss on the GigE link in a test's network namespace
   # (iptables-legacy's statistic match)
   iptables

@@ -24,8 +24,7 @@ constexpr const char* kDemoMarker = ".fpp-demo";
 
 struct DemoArgs {
     std::string out = "demo-out";
-    std::string rig =
-        (std::filesystem::path(FPP_BOARD_DIR) / "sim" / "paper-rig-effects.yaml").string();
+    std::string rig = sim::effects_rig_path().string();
     std::string scene = "composite";
     std::string sequence = "gray-xy";
     std::uint64_t seed = 1;

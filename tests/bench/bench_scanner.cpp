@@ -349,7 +349,10 @@ struct Frames {
         static Frames f = [] {
             Frames made;
             auto& sim = *g_context->sim;
-            for (std::size_t i = 0; i < sim.display().pattern_count(); ++i)
+            // The sequence's patterns only: the display also holds the
+            // preview's white pattern after them.
+            const auto count = static_cast<std::size_t>(g_context->scanner->frames_per_scan());
+            for (std::size_t i = 0; i < count; ++i)
                 made.frames.push_back(
                     sim.renderer().render(sim.display().pattern(i),
                                           fpp::sim::Renderer::frame_seed(1, static_cast<int>(i))));

@@ -16,8 +16,7 @@
 namespace {
 
 fpp::sim::Rig effects_rig() {
-    return fpp::sim::load_rig(std::filesystem::path(FPP_BOARD_DIR) / "sim" /
-                              "paper-rig-effects.yaml");
+    return fpp::sim::load_rig(fpp::sim::effects_rig_path());
 }
 
 fpp::Image<std::uint8_t> fringe(const fpp::sim::Rig& rig) {

@@ -29,7 +29,7 @@ std::string quote(const std::string& s) {
 }
 
 ToolRun run_calib(const std::string& args, const TempDir& scratch) {
-    return fpp::test::run_tool(FPP_CALIB_EXE, args, scratch.path());
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, scratch.path());
 }
 
 // The paper rig with the camera shrunk 4x (same field of view) so that a

@@ -42,7 +42,7 @@ std::string q(const fs::path& p) {
 }
 
 ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(FPP_CALIB_EXE, args, log_folder);
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
 }
 
 // figures.csv as name -> value (checks the header and the three columns).

@@ -18,6 +18,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/structured_light.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -35,7 +36,7 @@ using Frames = std::vector<cv::Mat>;
 constexpr double kPi = std::numbers::pi;
 
 fpp::test::ToolRun run_calib(const std::string& args, const TempDir& scratch) {
-    return fpp::test::run_tool(FPP_CALIB_EXE, args, scratch.path());
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, scratch.path());
 }
 
 std::string quote(const fs::path& p) {
@@ -93,7 +94,12 @@ INSTANTIATE_TEST_SUITE_P(
         RealCase{"slstudio/calibration/calseq1",
                  "slstudio --codec 2x3 --direction both --projector 1824x1140"},
         RealCase{"slmaster/monocular",
-                 "slmaster --codec complementary --steps 12 --fringes 32 --projector 1920x1080"}));
+                 "slmaster --codec complementary --steps 12 --fringes 32 --projector 1920x1080"}),
+    [](const auto& case_info) { // the dataset's folder: slstudio_skull_2x3
+        std::string name = case_info.param.folder;
+        std::replace(name.begin(), name.end(), '/', '_');
+        return name;
+    });
 
 // --- each tool's patterns, from its own formula ---
 

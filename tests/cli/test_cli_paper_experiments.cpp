@@ -51,7 +51,7 @@ std::string quote(const std::string& s) {
 }
 
 ToolRun run_calib(const std::string& args, const fs::path& scratch) {
-    return fpp::test::run_tool(FPP_CALIB_EXE, args, scratch);
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, scratch);
 }
 
 std::string read_text(const fs::path& path) {

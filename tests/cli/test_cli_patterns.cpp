@@ -23,7 +23,7 @@ using fpp::test::TempDir;
 namespace fs = std::filesystem;
 
 fpp::test::ToolRun run_calib(const std::string& args, const TempDir& scratch) {
-    return fpp::test::run_tool(FPP_CALIB_EXE, args, scratch.path());
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, scratch.path());
 }
 
 std::string quote(const fs::path& p) {

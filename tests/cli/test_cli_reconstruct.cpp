@@ -36,7 +36,7 @@ std::string q(const fs::path& p) {
 }
 
 ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(FPP_CALIB_EXE, args, log_folder);
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
 }
 
 // The paper rig with the camera binned 4x (400 x 300, same field of view).

@@ -35,7 +35,7 @@ std::string q(const fs::path& p) {
 }
 
 ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(FPP_CALIB_EXE, args, log_folder);
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
 }
 
 cv::Mat camera_matrix(const fpp::LensModel& l) {

@@ -61,9 +61,11 @@ TEST(ScannerToCalibration, SessionsRecordedByTheScannerCalibrateItToTheTruth) {
     std::ofstream(dir / "checkerboard.yaml") << sim_board("sim-checkerboard-session.yaml");
     std::ofstream(dir / "scan.yaml") << sim_board("sim.yaml");
     auto scanner = [&](const std::string& args) {
-        return run_tool(FPP_SCANNER_EXE, args, dir.path());
+        return run_tool(fpp::test::scanner_exe(), args, dir.path());
     };
-    auto calib = [&](const std::string& args) { return run_tool(FPP_CALIB_EXE, args, dir.path()); };
+    auto calib = [&](const std::string& args) {
+        return run_tool(fpp::test::calib_exe(), args, dir.path());
+    };
 
     // The session: one capture-mode scan per pose, into a store that becomes
     // a session folder (the sim board writes board.yaml beside the scans).

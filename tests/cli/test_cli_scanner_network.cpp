@@ -3,13 +3,11 @@
 // serving its HTTP API on loopback (firmware/scanner/http-api.md), as a
 // person runs them: a session recorded and pulled byte for byte, a table
 // installed and a corrupt one refused with nothing changed, a wrong token,
-// no scanner at all. Then the pieces underneath: the event-stream parser and
-// the session tar's refusal of entries that would land outside the folder.
+// no scanner at all. The pieces underneath have their own tests:
+// test_server_sent_events.cpp, test_session_archive.cpp.
 #include "rig_truth_table.hpp"
 #include "test_support.hpp"
 
-#include "fpp/calib/server_sent_events.hpp"
-#include "fpp/calib/session_archive.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
@@ -17,8 +15,6 @@
 
 #include <gtest/gtest.h>
 
-#include <archive.h>
-#include <archive_entry.h>
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -38,12 +34,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-// tests/CMakeLists.txt gives the daemon's path to this test as to
-// cli_test_cli_scanner_calibration; without it the daemon tests fail, saying so.
-#ifndef FPP_SCANNER_EXE
-#define FPP_SCANNER_EXE ""
-#endif
 
 namespace fs = std::filesystem;
 using fpp::test::run_tool;
@@ -93,13 +83,10 @@ std::string listening_port(const std::string& log) {
 class ScannerDaemon {
 public:
     explicit ScannerDaemon(const std::vector<std::string>& args) {
-        if (std::string(FPP_SCANNER_EXE).empty())
-            throw std::runtime_error("FPP_SCANNER_EXE is not defined: tests/CMakeLists.txt must "
-                                     "give it to cli_test_cli_scanner_network");
         int pipe_fds[2];
         if (::pipe2(pipe_fds, O_CLOEXEC) != 0)
             throw std::runtime_error("pipe2 failed");
-        std::vector<std::string> argv_text{FPP_SCANNER_EXE};
+        std::vector<std::string> argv_text{fpp::test::scanner_exe()};
         argv_text.insert(argv_text.end(), args.begin(), args.end());
         std::vector<char*> argv;
         for (std::string& a : argv_text)
@@ -221,8 +208,7 @@ struct ScannerSetup {
         return run_tool("env",
                         "-u http_proxy -u HTTP_PROXY -u all_proxy -u ALL_PROXY -u FPP_SCANNER "
                         "-u FPP_SCANNER_TOKEN " +
-                            environment + " " + shell_quote(std::string(FPP_CALIB_EXE)) + " " +
-                            args,
+                            environment + " " + shell_quote(fpp::test::calib_exe()) + " " + args,
                         dir.path());
     }
     std::string connection(const ScannerDaemon& scanner) const {
@@ -441,90 +427,4 @@ TEST(ScannerNetwork, AbsentScannerIsAClearErrorAtOnce) {
                                      shell_quote(setup.dir / "s"));
     EXPECT_NE(session.exit_code, 0);
     EXPECT_FALSE(fs::exists(setup.dir / "s"));
-}
-
-// ---- the pieces underneath ---------------------------------------------
-
-TEST(ServerSentEvents, BlocksCutAnywhereGiveTheSameEvents) {
-    const std::string stream =
-        ": keep-alive\n\n"
-        "event: state\ndata: {\"state\": \"idle\", \"error\": null}\n\n"
-        "event: frame-captured\r\ndata: {\"id\": \"a\", \"frame\": 1}\r\n\r\n"
-        "data: first\ndata: second\n\n"
-        "event: no-data\n\n"
-        "event: written\ndata:{\"id\": \"a\"}\n\n"
-        "event: partial\ndata: x";
-    for (std::size_t piece : {std::size_t(1), std::size_t(3), std::size_t(7), stream.size()}) {
-        fpp::calib::ServerSentEventParser parser;
-        std::vector<fpp::calib::ServerEvent> events;
-        for (std::size_t at = 0; at < stream.size(); at += piece)
-            parser.feed(std::string_view(stream).substr(at, piece), events);
-        ASSERT_EQ(events.size(), 4u) << piece;
-        EXPECT_EQ(events[0].name, "state");
-        EXPECT_EQ(events[0].data, "{\"state\": \"idle\", \"error\": null}");
-        EXPECT_EQ(events[1].name, "frame-captured");
-        EXPECT_EQ(events[1].data, "{\"id\": \"a\", \"frame\": 1}");
-        EXPECT_EQ(events[2].name, "message");
-        EXPECT_EQ(events[2].data, "first\nsecond");
-        EXPECT_EQ(events[3].name, "written");
-        EXPECT_EQ(events[3].data, "{\"id\": \"a\"}");
-    }
-}
-
-namespace {
-// A tar (pax) of the given entries: name -> contents, or for a name in
-// `links`, a symbolic link to its contents.
-void write_tar(const fs::path& file, const std::vector<std::pair<std::string, std::string>>& items,
-               const std::vector<std::string>& links = {}) {
-    archive* a = archive_write_new();
-    archive_write_set_format_pax_restricted(a);
-    ASSERT_EQ(archive_write_open_filename(a, file.c_str()), ARCHIVE_OK);
-    for (const auto& [name, contents] : items) {
-        archive_entry* entry = archive_entry_new();
-        archive_entry_set_pathname(entry, name.c_str());
-        if (std::find(links.begin(), links.end(), name) != links.end()) {
-            archive_entry_set_filetype(entry, AE_IFLNK);
-            archive_entry_set_symlink(entry, contents.c_str());
-            archive_entry_set_size(entry, 0);
-        } else {
-            archive_entry_set_filetype(entry, AE_IFREG);
-            archive_entry_set_size(entry, static_cast<la_int64_t>(contents.size()));
-        }
-        archive_entry_set_perm(entry, 0644);
-        archive_write_header(a, entry);
-        if (archive_entry_filetype(entry) == AE_IFREG)
-            archive_write_data(a, contents.data(), contents.size());
-        archive_entry_free(entry);
-    }
-    archive_write_close(a);
-    archive_write_free(a);
-}
-} // namespace
-
-TEST(SessionArchive, EntriesThatWouldLandOutsideTheFolderAreRefusedByName) {
-    TempDir dir;
-    const std::vector<std::pair<std::string, std::string>> good = {
-        {"cal/board.yaml", "format: fpp-board/1\n"}, {"cal/scan-1/scan.json", "{}"}};
-    write_tar(dir / "good.tar", good);
-    const auto extracted = fpp::calib::extract_session_tar(dir / "good.tar", "cal", dir / "good");
-    EXPECT_EQ(extracted.poses, std::vector<std::string>{"scan-1"});
-    EXPECT_EQ(read_bytes(dir / "good" / "scan-1" / "scan.json"), "{}");
-
-    const std::vector<std::pair<std::string, std::string>> bad = {
-        {"/etc/evil", "x"}, {"cal/../evil", "x"}, {"other/evil", "x"}, {"cal/scan-1/link", "/etc"}};
-    for (const auto& item : bad) {
-        auto items = good;
-        items.push_back(item);
-        const fs::path tar = dir / "bad.tar", out = dir / "bad";
-        write_tar(tar, items, {"cal/scan-1/link"});
-        try {
-            fpp::calib::extract_session_tar(tar, "cal", out);
-            ADD_FAILURE() << item.first << " was taken";
-        } catch (const fpp::InputError& e) {
-            EXPECT_EQ(e.field(), item.first) << e.what();
-        }
-        EXPECT_FALSE(fs::exists(out)) << item.first;
-        EXPECT_FALSE(fs::exists(dir / "evil"));
-        EXPECT_EQ(hidden_entries(dir.path()), std::vector<std::string>{});
-    }
 }

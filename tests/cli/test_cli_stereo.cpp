@@ -29,7 +29,7 @@ std::string quote(const std::string& s) {
 }
 
 ToolRun run_calib(const std::string& args, const TempDir& scratch) {
-    return fpp::test::run_tool(FPP_CALIB_EXE, args, scratch.path());
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, scratch.path());
 }
 
 bool contains(const std::string& text, const std::string& what) {

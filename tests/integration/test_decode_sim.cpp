@@ -2,7 +2,8 @@
 // renderer's projector-coordinate truth, for every standard sequence.
 // Full 1600 x 1200 camera; 2 x 2 binned (same optics,
 // 4 x fewer pixels) where the tests run slowly: under the sanitizers and
-// as AArch64 programs under qemu-user (test_support.hpp).
+// as AArch64 programs under qemu-user (test_support.hpp). The streaming
+// decoder on such a capture: test_decode_sim_streaming.cpp.
 
 #include "fpp/capture_set.hpp"
 #include "fpp/decode_accuracy.hpp"
@@ -18,7 +19,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -211,39 +211,5 @@ INSTANTIATE_TEST_SUITE_P(Paper, DecodeSim, ::testing::ValuesIn(method_cases()),
                              std::replace(n.begin(), n.end(), '-', '_');
                              return n;
                          });
-
-// The streaming decoder, fed frame by frame, gives the batch result bit for bit
-// on a real-looking capture (both axes, noise, shadows, occlusions).
-TEST(DecodeSimStreaming, BitIdenticalToBatch) {
-    const fpp::sim::Rig rig = paper_rig(1.5);
-    const fpp::sim::SimulatedCapture sim =
-        fpp::sim::simulate(rig, fpp::sim::named_scene("composite"),
-                           fpp::standard_sequence("gray-xy", rig.projector_size), 5);
-    const fpp::CaptureSet set = to_capture(sim);
-    const fpp::DecodeResult batch = fpp::decode(set);
-    fpp::StreamingDecoder decoder(set.manifest.sequence, set.manifest.camera,
-                                  set.manifest.projector);
-    for (const auto& f : set.frames)
-        decoder.push(f);
-    const fpp::DecodeResult streamed = decoder.finish();
-    auto same = [](const auto& a, const auto& b) {
-        using T = std::remove_cvref_t<decltype(*a.data())>;
-        if (a.size() != b.size())
-            return false;
-        if (a.empty())
-            return b.empty(); // memcmp must not see null pointers
-        return std::memcmp(a.data(), b.data(), a.pixel_count() * sizeof(T)) == 0;
-    };
-    EXPECT_TRUE(same(batch.proj_x, streamed.proj_x));
-    EXPECT_TRUE(same(batch.proj_y, streamed.proj_y));
-    EXPECT_TRUE(same(batch.modulation, streamed.modulation));
-    EXPECT_TRUE(same(batch.mean, streamed.mean));
-    EXPECT_TRUE(same(batch.mask, streamed.mask));
-    // Decoding into a recycled result gives the same bytes.
-    fpp::DecodeResult recycled = fpp::decode(set);
-    fpp::decode(set, recycled);
-    EXPECT_TRUE(same(batch.proj_x, recycled.proj_x));
-    EXPECT_TRUE(same(batch.mask, recycled.mask));
-}
 
 } // namespace

@@ -208,7 +208,6 @@ TEST(ScannerGige, PacketLossRetriesOrFailsCleanlyAndNeverDecodesOnePatternAsAnot
         EXPECT_EQ(entry.string().find(".tmp"), std::string::npos) << entry;
 }
 
-#ifdef FPP_SCANNER_EXE
 TEST(ScannerGige, ScannerBinaryScansThroughTheLink) {
     GigeFixture f;
     {
@@ -218,7 +217,7 @@ TEST(ScannerGige, ScannerBinaryScansThroughTheLink) {
     }
     fpp::test::TempDir scratch;
     const auto run = fpp::test::run_tool(
-        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(f.board_file) + " --once",
+        fpp::test::scanner_exe(), "--board " + fpp::test::shell_quote(f.board_file) + " --once",
         scratch.path());
     ASSERT_EQ(run.exit_code, 0) << run.output;
     const auto scans = list_scans(f.store);
@@ -405,8 +404,8 @@ TEST(ScannerGige, HardwareBoardWithoutTheHardwareFailsNamingTheDevice) {
     std::ofstream(board) << text;
     fpp::test::TempDir scratch;
     const auto run = fpp::test::run_tool(
-        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(board) + " --once --mode capture",
-        scratch.path());
+        fpp::test::scanner_exe(),
+        "--board " + fpp::test::shell_quote(board) + " --once --mode capture", scratch.path());
     EXPECT_EQ(run.exit_code, 1) << run.output;
     const bool named = run.output.find("gpiochip0") != std::string::npos ||
                        run.output.find("/dev/dri/card9") != std::string::npos;
@@ -421,13 +420,12 @@ TEST(ScannerGige, HardwareBoardWithoutTheHardwareFailsNamingTheDevice) {
     const fs::path board2 = dir / "camera-only.yaml";
     std::ofstream(board2) << camera_only;
     const auto run2 = fpp::test::run_tool(
-        FPP_SCANNER_EXE, "--board " + fpp::test::shell_quote(board2) + " --once --mode capture",
-        scratch.path());
+        fpp::test::scanner_exe(),
+        "--board " + fpp::test::shell_quote(board2) + " --once --mode capture", scratch.path());
     EXPECT_EQ(run2.exit_code, 1) << run2.output;
     EXPECT_NE(run2.output.find("error: gpiochip0"), std::string::npos) << run2.output;
     EXPECT_FALSE(fs::exists(dir / "scans") && !fs::is_empty(dir / "scans"));
 }
-#endif
 
 #else
 

@@ -79,14 +79,12 @@ struct Fixture {
         SimBoard sim(board);
         make_table(sim.rig());
     }
-#ifdef FPP_SCANNER_EXE
     // fpp-scanner --board board.yaml --once, as a person runs it.
     fpp::test::ToolRun run_once(const fpp::test::TempDir& scratch) const {
-        return fpp::test::run_tool(FPP_SCANNER_EXE,
+        return fpp::test::run_tool(fpp::test::scanner_exe(),
                                    "--board " + fpp::test::shell_quote(board_file) + " --once",
                                    scratch.path());
     }
-#endif
     bool logged(const std::string& part) {
         std::lock_guard lock(lines_mutex);
         for (const auto& l : lines)
@@ -498,7 +496,6 @@ TEST(ScannerBoardConfig, ShippedBoardFilesAreValid) {
     EXPECT_GE(simulated, 4);
 }
 
-#ifdef FPP_SCANNER_EXE
 TEST(ScannerCli, OnceWritesOutputsAndFailsCleanlyWithoutTable) {
     Fixture f;
     f.make_board_table();
@@ -527,7 +524,7 @@ fpp::test::ToolRun run_with_store_mount(const Fixture& f, const std::string& mou
                                         const fpp::test::TempDir& scratch) {
     const std::string store = fpp::test::shell_quote(f.store);
     const std::string script = "set -e; " + mount_commands + "; exec " +
-                               fpp::test::shell_quote(std::string(FPP_SCANNER_EXE)) + " --board " +
+                               fpp::test::shell_quote(fpp::test::scanner_exe()) + " --board " +
                                fpp::test::shell_quote(f.board_file) + " --once";
     return fpp::test::run_tool("unshare", "-m sh -c " + fpp::test::shell_quote(script),
                                scratch.path());
@@ -589,13 +586,14 @@ TEST(ScannerCli, SigtermDuringAScanAbortsItCleanly) {
     write_text(f.board_file, text);
     const fs::path log = f.dir / "scanner.log";
     const std::string board = f.board_file.string(); // no allocation after fork()
+    const std::string scanner = fpp::test::scanner_exe();
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {
         const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
         if (fd < 0 || dup2(fd, STDERR_FILENO) < 0 || dup2(fd, STDOUT_FILENO) < 0)
             _exit(127);
-        execl(FPP_SCANNER_EXE, FPP_SCANNER_EXE, "--board", board.c_str(), "--once",
+        execl(scanner.c_str(), scanner.c_str(), "--board", board.c_str(), "--once",
               static_cast<char*>(nullptr));
         _exit(127);
     }
@@ -622,4 +620,3 @@ TEST(ScannerCli, SigtermDuringAScanAbortsItCleanly) {
     EXPECT_EQ(out.find("scan written"), std::string::npos) << out;
     EXPECT_TRUE(!fs::exists(f.store) || fs::is_empty(f.store)) << out;
 }
-#endif

@@ -23,8 +23,6 @@
 // 0.195 / 0.188 / 0.225 / 0.176 mm (1.1 to 1.7 % lower: the 3-step phase
 // noise and the board's own shape dominate it).
 
-#if __has_include("fpp/calib/sv_reconstruct.hpp")
-
 #include "test_support.hpp"
 
 #include "fpp/calib/corners.hpp"
@@ -244,5 +242,3 @@ TEST(PhaseErrorSlstudio, CorrectionFlattensTheWhiteSquaresOfTheRealBoards) {
 }
 
 } // namespace
-
-#endif

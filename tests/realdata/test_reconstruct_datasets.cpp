@@ -43,8 +43,6 @@
 //   5..9 DN: the decoder's default threshold (0.02 of full scale, 5.1 DN)
 //   lets their wrong fringe orders through.
 
-#if __has_include("fpp/calib/sv_reconstruct.hpp")
-
 #include "test_support.hpp"
 
 #include "fpp/calib/stereo_calibration.hpp"
@@ -685,13 +683,3 @@ TEST(ReconstructDatasets, SlStudioSkullWithOurCalibration) {
 }
 
 } // namespace
-
-#else
-
-#include <gtest/gtest.h>
-
-TEST(ReconstructDatasets, NeedsTheHostTools) {
-    GTEST_SKIP() << "built without the host tools (FPP_BUILD_HOST_TOOLS=OFF)";
-}
-
-#endif

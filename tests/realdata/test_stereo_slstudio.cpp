@@ -29,13 +29,11 @@
 
 #include "test_support.hpp"
 
-#include <gtest/gtest.h>
-
-#if __has_include("fpp/calib/stereo_session.hpp")
-
 #include "fpp/calib/held_out_check.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/stereo_session.hpp"
+
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -137,11 +135,3 @@ TEST(StereoSlstudio, DefaultProcedureMeasuresHeldOutBoardsBetterThanTheJointOne)
 }
 
 } // namespace
-
-#else
-
-TEST(StereoSlstudio, NeedsTheHostTools) {
-    GTEST_SKIP() << "built without the host tools (FPP_BUILD_HOST_TOOLS=OFF)";
-}
-
-#endif

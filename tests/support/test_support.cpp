@@ -34,6 +34,22 @@ bool in_ci() {
     return env && std::string(env) == "true";
 }
 
+std::string calib_exe() {
+#ifdef FPP_CALIB_EXE
+    return FPP_CALIB_EXE;
+#else
+    throw std::runtime_error("this build has no fpp-calib (FPP_BUILD_HOST_TOOLS is OFF)");
+#endif
+}
+
+std::string scanner_exe() {
+#ifdef FPP_SCANNER_EXE
+    return FPP_SCANNER_EXE;
+#else
+    throw std::runtime_error("this build gave the tests no scanner (tests/CMakeLists.txt)");
+#endif
+}
+
 TempDir::TempDir() {
     std::random_device rd;
     const auto base = std::filesystem::temp_directory_path();

@@ -20,6 +20,15 @@ std::filesystem::path source_dir();
 // True when running in CI (env CI=true): missing real data is then a failure.
 bool in_ci();
 
+// The programs the tests run, as this build made them (tests/CMakeLists.txt
+// gives their paths to test_support.cpp alone, so that no other object holds
+// the build folder's path): the host tool fpp-calib, and the scanner that
+// runs sim boards (fpp-scanner, or fpp-scanner-sim where fpp-scanner is built
+// without the virtual scanner). Each throws, naming the program, in a build
+// that has none (the host tool is not cross-built).
+std::string calib_exe();
+std::string scanner_exe();
+
 // The camera binning of full-size simulated captures: 2 where every pixel
 // costs several times more (under the sanitizers; AArch64 builds, whose tests
 // run under qemu-user here), 1 otherwise. The decoders' arithmetic is the
