@@ -109,3 +109,39 @@ TEST(ScanStore, FolderBytesToleratesFilesRemovedWhileCounting) {
     EXPECT_EQ(fpp::scanner::folder_bytes(folder), 0u);
     EXPECT_EQ(fpp::scanner::folder_bytes(dir / "no-such-scan"), 0u);
 }
+
+// The status counts the whole store while scans are written (a temporary
+// folder renamed into place) and removed: a folder that vanishes between the
+// listing and the descent into it counts as nothing (fuzz_http_api once had
+// "cannot increment recursive directory iterator" escape GET /status).
+TEST(ScanStore, FolderBytesToleratesFoldersRemovedWhileCounting) {
+    fpp::test::TempDir dir;
+    const fs::path store = dir / "store";
+    fs::create_directories(store / "kept");
+    std::ofstream(store / "kept" / "cloud.ply") << "01234";
+    std::atomic<bool> done{false};
+    std::thread churn([&] {
+        for (int i = 0; i < 2000; ++i) {
+            const fs::path scan = store / ("scan-" + std::to_string(i % 4));
+            fs::create_directories(scan / "session" / "pose");
+            std::ofstream(scan / "session" / "pose" / "frame.png") << "0123456789";
+            std::error_code ec;
+            fs::remove_all(scan, ec);
+        }
+        done = true;
+    });
+    int counts = 0;
+    std::uint64_t least = 1000, most = 0;
+    while (!done) {
+        std::uint64_t bytes = 0;
+        EXPECT_NO_THROW(bytes = fpp::scanner::folder_bytes(store));
+        least = std::min(least, bytes);
+        most = std::max(most, bytes);
+        ++counts;
+    }
+    churn.join();
+    EXPECT_GT(counts, 0);
+    EXPECT_EQ(least, 5u);      // the kept file is always counted
+    EXPECT_LE(most, 5u + 10u); // and at most one frame beside it
+    EXPECT_EQ(fpp::scanner::folder_bytes(store), 5u);
+}

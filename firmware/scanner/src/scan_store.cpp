@@ -84,17 +84,23 @@ std::vector<fs::path> list_scans(const fs::path& directory) {
 }
 
 std::uint64_t folder_bytes(const fs::path& folder) {
+    // A DELETE, the pruning or a scan's write (its temporary folder renamed
+    // into place) may remove a file or a folder between the listing and its
+    // size or the descent into it: it then counts as nothing. (A recursive
+    // directory iterator throws from its increment when a folder it is about
+    // to enter is gone.)
     std::uint64_t total = 0;
     std::error_code ec;
-    for (const auto& entry : fs::recursive_directory_iterator(folder, ec)) {
-        // A DELETE or the pruning may remove a file between the listing and
-        // its size: it then counts as nothing.
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
         std::error_code gone;
-        if (!entry.is_regular_file(gone))
-            continue;
-        const std::uintmax_t bytes = entry.file_size(gone);
-        if (!gone)
-            total += bytes;
+        const fs::file_status status = it->symlink_status(gone);
+        if (fs::is_directory(status)) {
+            total += folder_bytes(it->path());
+        } else if (fs::is_regular_file(status)) {
+            const std::uintmax_t bytes = it->file_size(gone);
+            if (!gone)
+                total += bytes;
+        }
     }
     return total;
 }
