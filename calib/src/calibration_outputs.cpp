@@ -57,7 +57,10 @@ void write_stereo_outputs(const SessionResult& result, const std::filesystem::pa
               << std::setprecision(2) << "camera fu " << s.calibration.camera.fu << " fv "
               << s.calibration.camera.fv << ", projector fu " << s.calibration.projector.fu
               << " fv " << s.calibration.projector.fv << "\n"
-              << "wrote " << out.string() << " in " << result.seconds_total << " s\n";
+              << trueness_summary(s.calibration.trueness);
+    if (!s.next_poses.empty())
+        std::cout << "to shrink it most, the next pose: " << s.next_poses.front().words() << "\n";
+    std::cout << "wrote " << out.string() << " in " << result.seconds_total << " s\n";
 }
 
 void write_hybrid_outputs(const HybridResult& result, const std::filesystem::path& out,
@@ -69,7 +72,8 @@ void write_hybrid_outputs(const HybridResult& result, const std::filesystem::pat
     write_table(out, result.table);
     std::cerr << "time per stage (s, summed over the threads running it): "
               << result.time_split.summary() << "\n";
-    std::cout << result.summary() << "wrote " << out.string() << "\n";
+    std::cout << result.summary() << trueness_summary(result.trueness) << "wrote " << out.string()
+              << "\n";
 }
 
 } // namespace fpp::calib

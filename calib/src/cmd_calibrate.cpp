@@ -73,6 +73,7 @@ int run_calibrate(const CalibrateArgs& args) {
     stereo.decode = hybrid.decode;
     stereo.progress = hybrid.progress;
     stereo.compare_corner_methods = !args.stereo_report.empty();
+    stereo.stereo.suggest_next_poses = 1; // the report's advice
     std::vector<BoardView> views;
     keep_board_views(args.session, hybrid, stereo, views);
     std::cerr << "== stereo calibration\n";

@@ -1,16 +1,19 @@
 // fpp-calib scanner-session --scanner URL --token-file FILE --name NAME --out DIR
 //                           [--poses N] [--board-yaml FILE] [--no-wait] [--pose-timeout S]
-//                           [--response]
+//                           [--response] [--check [--target-um UM]]
 //
 // Records a calibration session on a scanner over its HTTP API, one
 // capture-mode scan per pose (with --response, first the projector's
 // response ramp at the first pose), then pulls it as a session folder for
-// `calibrate`.
+// `calibrate`. With --check, the session so far is checked after each pose
+// from the third (session-check: the trueness so far and the next pose in
+// words), and the session ends as soon as it is enough.
 
 #include "cli_util.hpp"
 #include "commands.hpp"
 #include "scanner_connection.hpp"
 #include "scanner_pull.hpp"
+#include "session_check_run.hpp"
 
 #include "fpp/yaml_fields.hpp"
 
@@ -31,7 +34,30 @@ struct ScannerSessionArgs {
     bool no_wait = false;
     bool response = false;
     double pose_timeout_s = 600;
+    bool check = false;
+    double target_um = 15;
 };
+
+// The session so far, pulled beside `out` and checked as session-check
+// checks it (the whole session again each time: corners are found anew).
+SessionVerdict check_so_far(const ScannerClient& client, const ScannerSessionArgs& args,
+                            const std::filesystem::path& out, int pose) {
+    const std::filesystem::path probe = out.string() + ".check";
+    std::filesystem::remove_all(probe);
+    pull_scanner_session(client, args.name, probe);
+    SessionCheckOptions options;
+    options.target_mm = args.target_um / 1000;
+    SessionCheck check;
+    try {
+        check = check_session_folder(probe, options, 0, {});
+    } catch (...) {
+        std::filesystem::remove_all(probe);
+        throw;
+    }
+    std::filesystem::remove_all(probe);
+    std::cout << "after pose " << pose << ": " << check.text() << std::flush;
+    return check.verdict;
+}
 
 // Progress of one pose on stderr: one line updated in place on a terminal,
 // a line at its start and one at its end otherwise.
@@ -133,6 +159,8 @@ int run_scanner_session(const ScannerSessionArgs& args) {
         throw std::invalid_argument("--poses: at least 1");
     if (args.pose_timeout_s <= 0)
         throw std::invalid_argument("--pose-timeout: more than 0 s");
+    if (!(args.target_um > 0))
+        throw std::invalid_argument("--target-um: more than 0");
     nlohmann::json request = {{"name", args.name}};
     if (!args.board_yaml.empty())
         request["board_yaml"] = yaml_fields::read_text_file(args.board_yaml);
@@ -163,6 +191,11 @@ int run_scanner_session(const ScannerSessionArgs& args) {
                       << " grey levels\n";
         }
         record_pose(client, args, pose);
+        if (args.check && pose >= 3 &&
+            check_so_far(client, args, out, pose) == SessionVerdict::enough) {
+            std::cerr << "the session is enough after " << pose << " poses\n";
+            break;
+        }
     }
     pull_scanner_session(client, args.name, out);
     std::cout << "next: fpp-calib calibrate " << out.string()
@@ -199,6 +232,13 @@ Action add_scanner_session_command(CLI::App& app) {
                   "for the board file's projector_response");
     cmd->add_option("--pose-timeout", args->pose_timeout_s,
                     "seconds a pose's scan may take before the command gives up")
+        ->capture_default_str();
+    cmd->add_flag("--check", args->check,
+                  "after each pose from the third, check the session so far as session-check "
+                  "does (the trueness so far, the next pose in words) and stop once it is "
+                  "enough (--poses is then the most)");
+    cmd->add_option("--target-um", args->target_um,
+                    "--check's target: 1 sigma of a 150 mm length along depth (micrometres)")
         ->capture_default_str();
     return action;
 }

@@ -66,6 +66,7 @@ int run_stereo(const StereoArgs& args) {
     options.stereo.procedure = parse_stereo_procedure(args.procedure);
     options.stereo.camera_grid = parse_grid(args.camera_grid, "--camera-grid");
     options.stereo.projector_grid = parse_grid(args.projector_grid, "--projector-grid");
+    options.stereo.suggest_next_poses = 1; // the report's advice
     options.stereo.validate();
     options.decode.threads = args.threads;
     options.progress = [](const std::string& line) { std::cerr << line << "\n"; };

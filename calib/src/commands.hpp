@@ -15,6 +15,7 @@ Action add_decode_command(CLI::App& app);
 Action add_demo_command(CLI::App& app);
 Action add_simulate_session_command(CLI::App& app);
 Action add_stereo_command(CLI::App& app);
+Action add_session_check_command(CLI::App& app);
 Action add_reconstruct_command(CLI::App& app);
 Action add_hybrid_command(CLI::App& app);
 Action add_calibrate_command(CLI::App& app);

@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
     add(fpp::calib::add_demo_command);
     add(fpp::calib::add_simulate_session_command);
     add(fpp::calib::add_stereo_command);
+    add(fpp::calib::add_session_check_command);
     add(fpp::calib::add_reconstruct_command);
     add(fpp::calib::add_hybrid_command);
     add(fpp::calib::add_calibrate_command);

@@ -63,6 +63,7 @@ class Scans(DaemonCase):
         self.assertEqual(t["bytes"], os.path.getsize(d.table))
         self.assertRegex(t["file_fnv1a64"], HEX16)
         self.assertRegex(t["calibration_fnv1a64"], HEX16)
+        self.assertIsNone(t["trueness"])  # the rig's exact table: no calibration's uncertainty
         self.assertRegex(t["installed_utc"], ISO_UTC)
         self.assertRegex(t["created_utc"], ISO_UTC)
         store = st["store"]

@@ -32,6 +32,10 @@ StereoCalibration sample() {
     c.poses.push_back({"pose-01", 0.12, 0.08, 247, true, ""});
     c.poses.push_back({"pose-02", 0.95, 1.70, 180, false, "outlier: \"projector\" RMS 1.70 px"});
     c.origin = "fpp-calib stereo on 'session #3': 15 poses";
+    c.trueness.length_mm = 150;
+    c.trueness.at = {fpp::calib::LengthSigma{420, 0.015, 0.003},
+                     fpp::calib::LengthSigma{478.5, 0.0191, 0.0034},
+                     fpp::calib::LengthSigma{537, 0.024, 0.0039}};
     return c;
 }
 
@@ -73,6 +77,12 @@ TEST(CalibrationFile, RoundTripIsExact) {
     EXPECT_TRUE(r.poses[0].used);
     EXPECT_EQ(r.poses[0].note, "");
     EXPECT_EQ(r.origin, c.origin);
+    EXPECT_EQ(r.trueness.length_mm, 150);
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_EQ(r.trueness.at[k].depth_mm, c.trueness.at[k].depth_mm);
+        EXPECT_EQ(r.trueness.at[k].along_depth_mm, c.trueness.at[k].along_depth_mm);
+        EXPECT_EQ(r.trueness.at[k].across_mm, c.trueness.at[k].across_mm);
+    }
     // Nothing but the file itself in the folder (atomic write, no temporaries).
     int entries = 0;
     for (const auto& e : fs::directory_iterator(dir.path())) {
@@ -209,6 +219,36 @@ TEST(CalibrationFile, WrongShapesAndValuesAreRejected) {
     expect_input_error(edited_yaml("", "poses", "[ { name: a, camera_rms: 0.1 } ]"),
                        "poses[0].projector_rms", "missing");
     expect_input_error(edited_yaml("", "format", "\"fpp-stereo/9\""), "format", "unknown format");
+}
+
+// The trueness is optional (files made elsewhere, or before it existed);
+// when present, every field is checked.
+TEST(CalibrationFile, TruenessIsOptionalAndChecked) {
+    const StereoCalibration without =
+        fpp::calib::parse_calibration(edited_yaml("trueness"), "calib.yaml");
+    EXPECT_FALSE(without.trueness.known());
+    const std::string ok = "{ length_mm: 150, depth_mm: [ 400, 480, 560 ], along_depth_mm: [ "
+                           "0.01, 0.02, 0.03 ], across_mm: [ 0.001, 0.002, 0.003 ] }";
+    EXPECT_EQ(fpp::calib::parse_calibration(edited_yaml("", "trueness", ok), "calib.yaml")
+                  .trueness.at[1]
+                  .along_depth_mm,
+              0.02);
+    expect_input_error(edited_yaml("", "trueness", "[ 1, 2 ]"), "trueness", "map");
+    expect_input_error(edited_yaml("", "trueness", "{ depth_mm: [ 1, 2, 3 ] }"),
+                       "trueness.length_mm", "missing");
+    const auto with = [](const std::string& from, const std::string& to) {
+        std::string t = "{ length_mm: 150, depth_mm: [ 400, 480, 560 ], along_depth_mm: [ "
+                        "0.01, 0.02, 0.03 ], across_mm: [ 0.001, 0.002, 0.003 ] }";
+        t.replace(t.find(from), from.size(), to);
+        return edited_yaml("", "trueness", t);
+    };
+    expect_input_error(with("length_mm: 150", "length_mm: 0"), "trueness.length_mm", "positive");
+    expect_input_error(with("[ 400, 480, 560 ]", "[ 400, 480 ]"), "trueness.depth_mm", "3 numbers");
+    expect_input_error(with("[ 400, 480, 560 ]", "[ 400, 0, 560 ]"), "trueness.depth_mm[1]",
+                       "positive");
+    expect_input_error(with("0.01, 0.02", "0.01, -0.02"), "trueness.along_depth_mm[1]", "negative");
+    expect_input_error(with("0.001, 0.002", "0.001, .nan"), "trueness.across_mm[1]", "finite");
+    expect_input_error(with("along_depth_mm", "along_mm"), "trueness.along_depth_mm", "missing");
 }
 
 TEST(CalibrationFile, WrongSizesAreRejected) {

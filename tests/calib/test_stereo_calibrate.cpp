@@ -3,62 +3,19 @@
 // model, so that every recovered parameter can be compared with the truth.
 
 #include "fpp/calib/stereo_calibrate.hpp"
-#include "fpp/calib/stereo_session.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/session.hpp"
+#include "stereo_observations.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 namespace {
 
 using namespace fpp;
 using calib::PoseObservations;
 
-// The paper rig without the terms outside the calibrated model.
-sim::Rig model_rig() {
-    sim::Rig rig = sim::Rig::paper();
-    rig.camera.drop_unmodelled_terms();
-    rig.projector.drop_unmodelled_terms();
-    return rig;
-}
-
-// The session's 11 x 8 board at the session poses, seen by both devices;
-// `noise_px` Gaussian noise on every coordinate.
-std::vector<PoseObservations> observe(const sim::Rig& rig, int poses, double noise_px,
-                                      std::uint32_t seed = 3) {
-    sim::SessionOptions options;
-    options.poses = poses;
-    const std::vector<sim::Pose> board_poses = sim::session_poses(rig, options);
-    const sim::CheckerboardSpec spec = sim::session_checkerboard();
-    const std::vector<Vec3> board =
-        calib::checkerboard_points(spec.inner_columns, spec.inner_rows, spec.square_size);
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> noise(0.0, noise_px);
-    std::vector<PoseObservations> out;
-    for (std::size_t p = 0; p < board_poses.size(); ++p) {
-        // Board frame of the calibration: origin at inner corner (0, 0).
-        const sim::Checkerboard cb(board_poses[p], spec);
-        const std::vector<Vec3> corners = cb.inner_corners();
-        PoseObservations o;
-        o.name = "pose-" + std::to_string(p + 1);
-        o.board = board;
-        for (const Vec3& x : corners) {
-            const Vec2 c = rig.camera.project(x);
-            const Vec3 xp = mul(rig.R, x);
-            const Vec2 q =
-                rig.projector.project({xp[0] + rig.t[0], xp[1] + rig.t[1], xp[2] + rig.t[2]});
-            o.camera.push_back({c[0] + (noise_px > 0 ? noise(rng) : 0.0),
-                                c[1] + (noise_px > 0 ? noise(rng) : 0.0)});
-            o.projector.push_back({q[0] + (noise_px > 0 ? noise(rng) : 0.0),
-                                   q[1] + (noise_px > 0 ? noise(rng) : 0.0)});
-        }
-        out.push_back(std::move(o));
-    }
-    return out;
-}
+using test::model_rig;
+using test::observe;
 
 void expect_lens_near(const LensModel& got, const LensModel& want, double px, double rel) {
     EXPECT_NEAR(got.fu, want.fu, px);

@@ -324,6 +324,38 @@ TEST(ScannerNetwork, SessionRecordedOverHttpIsPulledByteForByte) {
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status << "\n" << scanner.log();
 }
 
+// --check: the session so far checked after each pose from the third;
+// enough (a loose target here) ends the session there.
+TEST(ScannerNetwork, SessionCheckedAfterEachPoseEndsWhenEnough) {
+    ScannerSetup setup;
+    ScannerDaemon scanner(setup.daemon_args());
+    const fs::path pulled = setup.dir / "pulled";
+    const auto session = setup.calib("scanner-session" + setup.connection(scanner) +
+                                     " --name cal-2 --poses 6 --no-wait --check --target-um "
+                                     "100000 --out " +
+                                     shell_quote(pulled));
+    ASSERT_EQ(session.exit_code, 0) << session.output << "\nscanner:\n" << scanner.log();
+    EXPECT_NE(session.output.find("after pose 3: Session: enough"), std::string::npos)
+        << session.output;
+    EXPECT_NE(session.output.find("Predicted trueness"), std::string::npos) << session.output;
+    EXPECT_NE(session.output.find("the session is enough after 3 poses"), std::string::npos)
+        << session.output;
+    EXPECT_EQ(session.output.find("pose 4 of 6"), std::string::npos) << session.output;
+    int poses = 0;
+    for (const auto& item : fs::directory_iterator(pulled))
+        poses += item.is_directory();
+    EXPECT_EQ(poses, 3);
+    // The checks' own pulls leave nothing behind.
+    EXPECT_FALSE(fs::exists(setup.dir / "pulled.check"));
+    EXPECT_EQ(hidden_entries(setup.dir.path()), std::vector<std::string>{});
+    const auto bad = setup.calib("scanner-session" + setup.connection(scanner) +
+                                 " --name cal-3 --poses 3 --no-wait --check --target-um 0 --out " +
+                                 shell_quote(setup.dir / "bad"));
+    EXPECT_NE(bad.exit_code, 0);
+    EXPECT_NE(bad.output.find("--target-um"), std::string::npos) << bad.output;
+    EXPECT_FALSE(fs::exists(setup.dir / "bad"));
+}
+
 TEST(ScannerNetwork, PushedTableIsInstalledAndACorruptOneChangesNothing) {
     ScannerSetup setup;
     // The sim rig's true table for the board's camera (binned 2 x 2).

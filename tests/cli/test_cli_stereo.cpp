@@ -122,6 +122,45 @@ TEST(CliStereo, SimulatedSessionCalibratesAndWritesTheReport) {
 
 // The paper's procedure on request, and the held-out check of absolute
 // accuracy in the output and the report.
+// The trueness the calibration predicts: in the file, on the terminal and
+// in the report with its map; session-check's verdicts and exit statuses.
+TEST(CliStereo, TruenessIsStatedAndTheSessionChecked) {
+    TempDir dir;
+    const fs::path session = simulate_session(dir, "session", 6, "--seed 3");
+    const ToolRun run = stereo(dir, session);
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "Predicted trueness (1 sigma")) << run.output;
+    const fpp::calib::StereoCalibration c = fpp::calib::load_calibration(dir / "calib.yaml");
+    ASSERT_TRUE(c.trueness.known());
+    EXPECT_EQ(c.trueness.length_mm, 150);
+    EXPECT_GT(c.trueness.middle().along_depth_mm, 0);
+    EXPECT_TRUE(fs::exists(dir / "report" / "trueness.png"));
+    std::stringstream summary;
+    summary << std::ifstream(dir / "report" / "summary.md").rdbuf();
+    EXPECT_TRUE(contains(summary.str(), "## Trueness")) << summary.str();
+
+    const auto check = [&](const std::string& extra) {
+        return run_calib("session-check " + quote(session.string()) + " " + extra, dir);
+    };
+    const ToolRun loose = check("--target-um 100000");
+    EXPECT_EQ(loose.exit_code, 0) << loose.output;
+    EXPECT_TRUE(contains(loose.output, "Session: enough")) << loose.output;
+    EXPECT_TRUE(contains(loose.output, "Poses: 6 used of 6 found")) << loose.output;
+    const ToolRun strict = check("--target-um 1");
+    EXPECT_TRUE(strict.exit_code == 3 || strict.exit_code == 4) << strict.output;
+    EXPECT_TRUE(contains(strict.output, "Next pose: ")) << strict.output;
+    const ToolRun bad = check("--target-um -3");
+    EXPECT_EQ(bad.exit_code, 1) << bad.output;
+    EXPECT_TRUE(contains(bad.output, "target_mm")) << bad.output;
+
+    // Two poses: too weak, said so, not an error.
+    const fs::path two = simulate_session(dir, "two", 2, "--seed 4");
+    const ToolRun weak = run_calib("session-check " + quote(two.string()), dir);
+    EXPECT_EQ(weak.exit_code, 4) << weak.output;
+    EXPECT_TRUE(contains(weak.output, "Session: too weak")) << weak.output;
+    EXPECT_TRUE(contains(weak.output, "only 2 of 2 poses are usable")) << weak.output;
+}
+
 TEST(CliStereo, JointProcedureAndTheHeldOutCheck) {
     TempDir dir;
     const fs::path session = simulate_session(dir, "session", 6, "--seed 4");

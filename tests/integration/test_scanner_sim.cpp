@@ -2,6 +2,7 @@
 // the sim display, trigger line and camera, the table, the scan store, the
 // board file, faults, and the fpp-scanner binary.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "fpp/coefficient_table.hpp"
 #include "fpp/drivers/device_error.hpp"
@@ -71,8 +72,8 @@ struct Fixture {
         write_text(board_file, board_yaml(store, with_table ? "table.fpt" : ""));
         board = read_board_config(board_file);
     }
-    void make_table(const sim::Rig& rig) {
-        write_table(table_file, fpp::test::rig_truth_table(rig));
+    void make_table(const sim::Rig& rig, const TableTrueness& trueness = {}) {
+        write_table(table_file, fpp::test::rig_truth_table(rig, trueness));
     }
     // The table of the board's own rig (a sim board is built for it and let go).
     void make_board_table() {
@@ -99,7 +100,8 @@ struct Fixture {
 TEST(ScannerSim, ScanWritesCloudCloseToTruth) {
     Fixture f;
     SimBoard sim(f.board);
-    f.make_table(sim.rig());
+    // A table that carries its calibration's predicted trueness.
+    f.make_table(sim.rig(), {150.0f, 478.5f, 0.0191f, 0.0034f});
     Scanner scanner(f.board, sim.devices(), f.log);
     const ScanOutcome out = scanner.scan(ScanMode::scan);
 
@@ -130,6 +132,15 @@ TEST(ScannerSim, ScanWritesCloudCloseToTruth) {
     EXPECT_GT(coverage, 0.99);
     EXPECT_NE(json.find("\"statistics_of\": \"pass\""), std::string::npos) << json;
     EXPECT_NE(json.find("\"unwrap_inconsistent\": "), std::string::npos) << json;
+    // The table's trueness, as scan-json.md gives it.
+    const nlohmann::json meta = nlohmann::json::parse(json);
+    const nlohmann::json& trueness = meta.at("table").at("trueness");
+    EXPECT_EQ(trueness.at("length_mm").get<double>(), 150);
+    EXPECT_EQ(trueness.at("depth_mm").get<double>(), 478.5);
+    EXPECT_EQ(trueness.at("sigma_along_depth_mm").get<double>(), 0.0191);
+    EXPECT_EQ(trueness.at("sigma_across_mm").get<double>(), 0.0034);
+    EXPECT_EQ(trueness.at("along_depth_ppm").get<double>(), 127);
+    EXPECT_EQ(trueness.at("across_ppm").get<double>(), 23);
 
     // Every frame shows the pattern it was triggered for, over the whole exposure.
     const auto& exposures = sim.camera().exposures();

@@ -16,8 +16,10 @@
 
 namespace fpp::test {
 
-inline CoefficientTable rig_truth_table(const sim::Rig& rig) {
+// `trueness`: what the header carries (a test of its way to scan.json).
+inline CoefficientTable rig_truth_table(const sim::Rig& rig, const TableTrueness& trueness = {}) {
     TableInfo info;
+    info.trueness = trueness;
     info.camera = rig.camera_size;
     info.projector = rig.projector_size;
     info.model = TableModel::rational;

@@ -80,6 +80,7 @@ fpp::TableInfo make_info(fpp::TableModel model, fpp::Size camera = {100, 37}, in
     info.projector = {1280, 800};
     info.calibration_hash = 0x0123456789abcdefull;
     info.created_unix_s = 1700000000;
+    info.trueness = {150.0f, 478.5f, 0.0191f, 0.0034f};
     return info;
 }
 
@@ -324,7 +325,7 @@ TEST(TableFile, LayoutIsAsDocumented) {
     const Bytes b = read_bytes(dir / "t.fpt");
     ASSERT_GE(b.size(), 128u);
     EXPECT_EQ(std::string(b.begin(), b.begin() + 8), "FPPTABLE");
-    EXPECT_EQ(le32(b, 8), 1u);    // version
+    EXPECT_EQ(le32(b, 8), 2u);    // version
     EXPECT_EQ(le32(b, 12), 128u); // header size
     EXPECT_EQ(le32(b, 16), 100u);
     EXPECT_EQ(le32(b, 20), 37u);
@@ -346,7 +347,12 @@ TEST(TableFile, LayoutIsAsDocumented) {
     EXPECT_EQ(le64(b, 88), 128u);
     const std::size_t data_offset = std::size_t(le64(b, 96));
     EXPECT_EQ(data_offset, 4096u); // 128 + 20 * 4 + 4 rounded up to 4096
-    for (std::size_t i = 104; i < 124; ++i)
+    // The trueness: length, depth, along depth, across (float32).
+    EXPECT_EQ(le32(b, 104), std::bit_cast<std::uint32_t>(150.0f));
+    EXPECT_EQ(le32(b, 108), std::bit_cast<std::uint32_t>(478.5f));
+    EXPECT_EQ(le32(b, 112), std::bit_cast<std::uint32_t>(0.0191f));
+    EXPECT_EQ(le32(b, 116), std::bit_cast<std::uint32_t>(0.0034f));
+    for (std::size_t i = 120; i < 124; ++i)
         EXPECT_EQ(b[i], 0) << "reserved byte " << i;
     EXPECT_EQ(le32(b, 124), reference_crc32(b.data(), 124));
     EXPECT_EQ(le32(b, 128 + 20 * 4), reference_crc32(b.data() + 128, 20 * 4));
@@ -423,14 +429,69 @@ TEST(TableFile, WrongMagicAndUnknownVersion) {
                 Bytes{'h', 'e', 'l', 'l', 'o', ' ', 'w', 'o', 'r', 'l', 'd', '\n'});
     EXPECT_EQ(load_error_field(w.dir / "text.fpt"), "magic");
 
-    b = w.bytes;
-    put32(b, 8, 2);
+    for (const std::uint32_t version : {0u, 3u}) {
+        b = w.bytes;
+        put32(b, 8, version);
+        fix_header_crc(b);
+        const fs::path other = w.damaged(b);
+        EXPECT_EQ(load_error_field(other), "version");
+        const std::string message = load_error_message(other);
+        EXPECT_NE(message.find("unsupported version " + std::to_string(version)), std::string::npos)
+            << message;
+        EXPECT_NE(message.find("reads versions 1 to 2"), std::string::npos) << message;
+    }
+}
+
+// A version-1 table (the trueness bytes reserved and zero) still loads, with
+// the trueness unknown; one with those bytes set is refused.
+TEST(TableFile, VersionOneLoadsWithTheTruenessUnknown) {
+    const Written w;
+    Bytes b = w.bytes;
+    put32(b, 8, 1);
+    for (std::size_t i = 104; i < 120; ++i)
+        b[i] = 0;
     fix_header_crc(b);
-    const fs::path v2 = w.damaged(b);
-    EXPECT_EQ(load_error_field(v2), "version");
-    const std::string message = load_error_message(v2);
-    EXPECT_NE(message.find("unsupported version 2"), std::string::npos) << message;
-    EXPECT_NE(message.find("reads version 1"), std::string::npos) << message;
+    const fs::path v1 = w.damaged(b);
+    const fpp::CoefficientTable t = fpp::load_table(v1, nullptr, false);
+    EXPECT_FALSE(t.info().trueness.known());
+    EXPECT_EQ(t.info().trueness.along_depth_mm, 0.0f);
+    EXPECT_EQ(t.info().calibration_hash, 0x0123456789abcdefull);
+    b = w.bytes;
+    put32(b, 8, 1);
+    fix_header_crc(b);
+    EXPECT_EQ(load_error_field(w.damaged(b)), "reserved");
+}
+
+TEST(TableFile, TruenessIsReadBackAndChecked) {
+    const Written w;
+    const fpp::CoefficientTable t = fpp::load_table(w.path, nullptr, false);
+    EXPECT_EQ(t.info().trueness.length_mm, 150.0f);
+    EXPECT_EQ(t.info().trueness.depth_mm, 478.5f);
+    EXPECT_EQ(t.info().trueness.along_depth_mm, 0.0191f);
+    EXPECT_EQ(t.info().trueness.across_mm, 0.0034f);
+    struct Patch {
+        std::size_t offset;
+        float value;
+        const char* field;
+    };
+    const Patch patches[] = {
+        {104, -150.0f, "trueness_length_mm"},
+        {108, std::numeric_limits<float>::quiet_NaN(), "trueness_depth_mm"},
+        {108, 0.0f, "trueness_depth_mm"},
+        {112, std::numeric_limits<float>::infinity(), "trueness_along_depth_mm"},
+        {116, -0.001f, "trueness_across_mm"},
+        {104, 0.0f, "trueness_length_mm"}}; // unknown, the rest not 0
+    for (const Patch& p : patches) {
+        Bytes b = w.bytes;
+        put32(b, p.offset, std::bit_cast<std::uint32_t>(p.value));
+        fix_header_crc(b);
+        EXPECT_EQ(load_error_field(w.damaged(b)), p.field) << "offset " << p.offset;
+    }
+    // The writer refuses what the loader would.
+    fpp::TableInfo info = make_info(fpp::TableModel::ray);
+    info.trueness.across_mm = -1;
+    EXPECT_THROW(fpp::write_table(w.dir / "bad.fpt", make_table(info)), std::invalid_argument);
+    EXPECT_FALSE(fs::exists(w.dir / "bad.fpt"));
 }
 
 TEST(TableFile, TruncatedOrExtendedFile) {
@@ -464,25 +525,15 @@ TEST(TableFile, HeaderFieldsOutOfRangeAreNamed) {
         std::uint32_t value;
         const char* field;
     };
-    const Patch patches[] = {{16, 0, "camera_width"},
-                             {20, 70000, "camera_height"},
-                             {24, 12, "tile_width"},
-                             {28, 512, "tile_height"},
-                             {32, 4, "model"},
-                             {32, 2, "planes"},
-                             {36, 8, "planes"},
-                             {40, 2, "phase_axis"},
-                             {44, 0, "projector_width"},
-                             {52, 0, "phase_unit"},
-                             {72, 5, "tiles_x"},
-                             {80, 21, "tile_count"},
-                             {84, 1024, "tile_bytes"},
-                             {88, 256, "crc_table_offset"},
-                             {96, 8192, "data_offset"},
-                             {100, 1, "data_offset"},
-                             {104, 1, "reserved"},
-                             {120, 7, "reserved"},
-                             {16, 0x80000000u, "camera_width"}};
+    const Patch patches[] = {{16, 0, "camera_width"},    {20, 70000, "camera_height"},
+                             {24, 12, "tile_width"},     {28, 512, "tile_height"},
+                             {32, 4, "model"},           {32, 2, "planes"},
+                             {36, 8, "planes"},          {40, 2, "phase_axis"},
+                             {44, 0, "projector_width"}, {52, 0, "phase_unit"},
+                             {72, 5, "tiles_x"},         {80, 21, "tile_count"},
+                             {84, 1024, "tile_bytes"},   {88, 256, "crc_table_offset"},
+                             {96, 8192, "data_offset"},  {100, 1, "data_offset"},
+                             {120, 7, "reserved"},       {16, 0x80000000u, "camera_width"}};
     for (const Patch& p : patches) {
         Bytes b = w.bytes;
         put32(b, p.offset, p.value);

@@ -109,6 +109,37 @@ Linearisation linearise(const RigState& state, const std::vector<CornerObservati
                         const std::vector<DenseObservation>& dense,
                         const std::vector<bool>& pose_used, const FreeParameters& free,
                         const GridRegularisation& regularisation, const RigState* start = nullptr);
+// The normal equations at `state`, without a step: A = J^T W J plus the
+// grids' regularisation (both triangles) and g = J^T W r + the
+// regularisation's gradient, over the free parameters in the adjustment's
+// column order; `full_index[c]`: column c's place in the full order
+// (full_order()). gradient_only leaves A empty (the data terms' products are
+// most of the time). Throws std::runtime_error when a point lies behind a
+// device. The grids' gauge comes from `state`'s lenses.
+struct NormalEquations {
+    Eigen::MatrixXd A;
+    Eigen::VectorXd g;
+    std::vector<int> full_index;
+    double data_cost = 0; // weighted squared residuals (no regularisation)
+    int residuals = 0;    // residual rows
+};
+NormalEquations normal_equations(const RigState& state,
+                                 const std::vector<CornerObservation>& corners,
+                                 const std::vector<DenseObservation>& dense,
+                                 const std::vector<bool>& pose_used, const FreeParameters& free,
+                                 const GridRegularisation& regularisation, bool gradient_only,
+                                 ThreadPool* pool = nullptr);
+
+// Where each block starts in the full order of every parameter the
+// adjustment knows (a free set's columns are a subsequence of it): lenses in
+// kLensParameters order, R T as (w, t), grids as (du, dv) per control
+// point, then 6 per board pose.
+struct FullOrder {
+    int camera_lens = 0, projector_lens = 0, stereo = 0, camera_grid = 0, projector_grid = 0;
+    int poses = 0, size = 0;
+};
+FullOrder full_order(const RigState& state);
+
 // The fields a correction grid must not hold, one per row, each a unit
 // vector of (du, dv) per control point: constant and linear displacements
 // (principal point, focal lengths, skew, a turn about the optical axis), the

@@ -2,6 +2,8 @@
 
 #include "fpp/calib/calibration_report.hpp"
 
+#include "fpp/calib/plots.hpp"
+
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
 
@@ -389,6 +391,22 @@ void held_out_section(std::ostream& s, const HeldOutCheck& held_out) {
       << "** | **" << fmt(held_out.length_max_mm, 4) << "** |\n";
 }
 
+// The calibration's uncertainty in millimetres (trueness.hpp).
+void trueness_section(std::ostream& s, const SessionResult& r) {
+    s << "\n## Trueness\n\n" << trueness_summary(r.stereo.calibration.trueness);
+    if (r.stereo.calibration.trueness.known())
+        s << "\nThe shape of a scan (form, flatness) does not depend on it; lengths do, "
+             "along depth most: the session's poses and its corners' spread over the image "
+             "pin the depth scale. trueness.png: the sigma of a "
+          << std::lround(r.stereo.trueness_map.length_mm)
+          << " mm length along each part of the image's rays at "
+          << std::lround(r.stereo.trueness_map.depth_mm) << " mm.\n";
+    if (!r.stereo.next_poses.empty())
+        s << "\nTo shrink the depth scale's uncertainty most, the next pose would be: "
+          << r.stereo.next_poses.front().words() << " (then about +-"
+          << fmt(r.stereo.next_poses.front().sigma_mm, 3) << " mm; `fpp-calib session-check`).\n";
+}
+
 void timing_section(std::ostream& s, const SessionResult& r) {
     s << "\n## Timing\n\ndecoding " << fmt(r.seconds_decode, 2) << " s, corners "
       << fmt(r.seconds_corners, 2) << " s, calibration " << fmt(r.seconds_calibration, 2)
@@ -403,6 +421,7 @@ std::string calibration_summary(const SessionResult& r, const HeldOutCheck* held
     reprojection_section(s, r);
     poses_section(s, r);
     parameters_section(s, r);
+    trueness_section(s, r);
     corner_truth_section(s, r);
     if (held_out)
         held_out_section(s, *held_out);
@@ -426,6 +445,17 @@ void write_calibration_report(const fs::path& folder, const SessionResult& r,
         save_png(temp / "residuals-camera.png", residual_figure(r, false));
         save_png(temp / "residuals-projector.png", residual_figure(r, true));
         save_png(temp / "pose-rms.png", rms_figure(r));
+        const TruenessMap& map = r.stereo.trueness_map;
+        if (r.stereo.calibration.trueness.known() && map.sigma_mm.pixel_count() > 0) {
+            float hi = 0;
+            for (std::size_t k = 0; k < map.sigma_mm.pixel_count(); ++k)
+                if (std::isfinite(map.sigma_mm.data()[k]))
+                    hi = std::max(hi, map.sigma_mm.data()[k]);
+            save_png(temp / "trueness.png",
+                     map_figure(map.sigma_mm, 0.0f, std::max(hi, 1e-4f),
+                                "1 sigma of a " + std::to_string(std::lround(map.length_mm)) +
+                                    " mm length along depth (mm)"));
+        }
     });
 }
 

@@ -365,6 +365,7 @@ std::vector<HybridResult> calibrate_hybrid(const fs::path& session,
     const Size camera = folder.camera_size;
 
     HybridResult common; // the poses, shared by every model's result
+    common.trueness = calibration.trueness;
     common.board = BoardDescription::Kind::plane;
     std::vector<PoseSamples> samples;
     // Reading the next pose's PNG frames overlaps decoding and SV of this one.
@@ -465,6 +466,7 @@ fit_hybrid_models(const HybridResult& common, const std::vector<PoseSamples>& sa
         result.time_split = common.time_split;
         result.board = common.board;
         result.samples = common.samples;
+        result.trueness = common.trueness;
         TableInfo info;
         info.camera = rays.size();
         info.tile_width = options.tile_width;
@@ -473,6 +475,11 @@ fit_hybrid_models(const HybridResult& common, const std::vector<PoseSamples>& sa
         info.phase_axis = Axis::x;
         info.projector = projector;
         info.calibration_hash = calibration_hash;
+        if (common.trueness.known())
+            info.trueness = {float(common.trueness.length_mm),
+                             float(common.trueness.middle().depth_mm),
+                             float(common.trueness.middle().along_depth_mm),
+                             float(common.trueness.middle().across_mm)};
         info.created_unix_s =
             static_cast<std::int64_t>(std::chrono::duration_cast<std::chrono::seconds>(
                                           std::chrono::system_clock::now().time_since_epoch())

@@ -351,6 +351,7 @@ std::vector<HybridResult> calibrate_hybrid_checkerboard(const SessionFolder& fol
     ThreadPool& pool = ThreadPool::shared(options.threads);
 
     HybridResult common;
+    common.trueness = calibration.trueness;
     common.board = BoardDescription::Kind::checkerboard;
     common.samples = options.samples;
     // Each pose on its own thread (poses rather than pixels in parallel:

@@ -35,33 +35,6 @@ float quantile(const Image<float>& image, double q) {
     return v[static_cast<std::size_t>(k)];
 }
 
-// A scalar map in false colour (black = no value) with a labelled colour bar
-// from lo to hi on the right.
-cv::Mat map_figure(const Image<float>& values, float lo, float hi, const std::string& title) {
-    const Image<std::uint8_t> rgb = false_colour(values, lo, hi);
-    const int w = values.width(), h = values.height();
-    const int bar = 24, margin = 90, top = 30;
-    cv::Mat out(h + top + 10, w + margin + bar, CV_8UC3, cv::Scalar(255, 255, 255));
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const std::uint8_t* c = &rgb.at(x, y, 0);
-            out.at<cv::Vec3b>(y + top, x) = cv::Vec3b(c[2], c[1], c[0]);
-        }
-    for (int y = 0; y < h; ++y) {
-        std::uint8_t c[3];
-        ramp_colour(1.0f - static_cast<float>(y) / static_cast<float>(std::max(h - 1, 1)), c);
-        cv::line(out, {w + 10, y + top}, {w + 10 + bar, y + top}, cv::Scalar(c[2], c[1], c[0]));
-    }
-    for (int t = 0; t <= 4; ++t) {
-        const int y = top + (h - 1) * (4 - t) / 4;
-        const double v = double(lo) + double(hi - lo) * t / 4;
-        cv::putText(out, fixed_text(v, 4), {w + 14 + bar, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
-                    {0, 0, 0}, 1, cv::LINE_AA);
-    }
-    cv::putText(out, title, {4, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
-    return out;
-}
-
 cv::Mat pose_count_figure(const HybridResult& r) {
     Image<float> count(r.pose_count.size());
     for (std::size_t i = 0; i < count.pixel_count(); ++i)
@@ -179,6 +152,10 @@ std::string hybrid_summary_markdown(const HybridResult& r) {
         s << "| " << name << " | " << fixed_text(quantile(*image, 0.5), 4) << " | "
           << fixed_text(quantile(*image, 0.99), 4) << " | " << fixed_text(quantile(*image, 1.0), 4)
           << " |\n";
+    s << "\n"
+      << trueness_summary(r.trueness)
+      << "(The calibration's; the table adds its fit's sigma below. Stored in the table and "
+         "reported in every scan.json.)\n";
     s << "\nFit RMS: per pixel, the table against the boards' samples. Predicted depth sigma "
          "(sigma-z.png): the table's own uncertainty from its fit residuals.\n";
     if (r.board == BoardDescription::Kind::checkerboard)

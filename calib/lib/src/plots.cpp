@@ -2,6 +2,8 @@
 
 #include "fpp/calib/plots.hpp"
 
+#include "fpp/false_colour.hpp"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -94,6 +96,34 @@ cv::Vec3b diverging_colour(double t) {
         bgr[2 - c] = static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 255.0)));
     }
     return bgr;
+}
+
+cv::Mat map_figure(const Image<float>& values, float lo, float hi, const std::string& title) {
+    const Image<std::uint8_t> small = false_colour(values, lo, hi);
+    // A coarse map (a few cells per side) enlarged by whole pixels.
+    const int factor = std::max(1, 400 / std::max(1, values.width()));
+    const int w = values.width() * factor, h = values.height() * factor;
+    const auto rgb_at = [&](int x, int y) { return &small.at(x / factor, y / factor, 0); };
+    const int bar = 24, margin = 90, top = 30;
+    cv::Mat out(h + top + 10, w + margin + bar, CV_8UC3, cv::Scalar(255, 255, 255));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::uint8_t* c = rgb_at(x, y);
+            out.at<cv::Vec3b>(y + top, x) = cv::Vec3b(c[2], c[1], c[0]);
+        }
+    for (int y = 0; y < h; ++y) {
+        std::uint8_t c[3];
+        ramp_colour(1.0f - static_cast<float>(y) / static_cast<float>(std::max(h - 1, 1)), c);
+        cv::line(out, {w + 10, y + top}, {w + 10 + bar, y + top}, cv::Scalar(c[2], c[1], c[0]));
+    }
+    for (int t = 0; t <= 4; ++t) {
+        const int y = top + (h - 1) * (4 - t) / 4;
+        const double v = double(lo) + double(hi - lo) * t / 4;
+        cv::putText(out, fixed_text(v, 4), {w + 14 + bar, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                    {0, 0, 0}, 1, cv::LINE_AA);
+    }
+    cv::putText(out, title, {4, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
+    return out;
 }
 
 cv::Mat signed_map_figure(const Image<float>& values, double limit, const std::string& title,

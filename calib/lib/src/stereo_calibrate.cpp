@@ -4,6 +4,9 @@
 #include "fpp/calib/stereo_calibrate.hpp"
 
 #include "bundle_adjustment.hpp"
+#include "calibration_covariance.hpp"
+#include "session_advice.hpp"
+#include "trueness_prediction.hpp"
 
 #include "fpp/parallel.hpp"
 
@@ -158,6 +161,8 @@ void StereoOptions::validate() const {
         bad("max_iterations", "must be at least 1");
     if (threads < 0)
         bad("threads", "must not be negative (0: all cores)");
+    if (suggest_next_poses < 0 || suggest_next_poses > 100)
+        bad("suggest_next_poses", "must be 0 to 100");
 }
 
 Vec2 project_camera(const StereoCalibration& c, const RigidPose& pose, const Vec3& board) {
@@ -276,6 +281,61 @@ double choose_camera_smoothness(const detail::RigState& from,
          extra < options.camera_grid_softer_steps && best_choice() == tried.size() - 1; ++extra)
         validate({tried.back() / 10});
     return tried[best_choice()];
+}
+
+// The calibration's covariance (calibration_covariance.hpp) carried to the
+// lengths a user measures (trueness.hpp): into the calibration and the
+// result's map. A covariance that cannot be formed leaves the trueness
+// unknown, with the reason in the progress.
+void predict_from_covariance(StereoResult& result, const detail::RigState& s,
+                             const std::vector<detail::CornerObservation>& corners,
+                             const std::vector<detail::DenseObservation>& dense,
+                             const std::vector<bool>& used,
+                             const detail::FreeParameters& camera_free,
+                             const detail::FreeParameters& projector_free,
+                             const detail::GridRegularisation& regularisation, bool camera_first,
+                             const std::vector<PoseObservations>& poses,
+                             const StereoOptions& options, ThreadPool& pool,
+                             const std::function<void(const std::string&)>& say) {
+    StageTimer stage(result.time_split, "trueness (the calibration's covariance)");
+    say("the calibration's uncertainty carried to lengths (trueness)");
+    try {
+        const detail::CalibrationCovariance covariance =
+            camera_first
+                ? detail::camera_first_covariance(s, corners, dense, used, camera_free,
+                                                  projector_free, regularisation, &pool)
+                : detail::joint_covariance(s, corners, used, camera_free, regularisation, &pool);
+        detail::TruenessInputs in;
+        in.state = &s;
+        in.covariance = &covariance.sigma;
+        in.camera_size = result.calibration.camera_size;
+        in.depths = detail::session_depths(s, corners, used);
+        Eigen::VectorXd gradient;
+        in.middle_depth_gradient = &gradient;
+        const Trueness t = detail::predict_trueness(in, &result.trueness_map);
+        bool finite = true;
+        for (const LengthSigma& at : t.at)
+            finite = finite && std::isfinite(at.along_depth_mm) && std::isfinite(at.across_mm);
+        if (finite && options.suggest_next_poses > 0) {
+            detail::AdviceInputs advice;
+            advice.state = &s;
+            advice.covariance = &covariance;
+            advice.gradient = &gradient;
+            advice.camera_size = result.calibration.camera_size;
+            advice.projector_size = result.calibration.projector_size;
+            advice.board = poses.front().board;
+            advice.depths = detail::board_centre_depths(s, advice.board, used);
+            advice.count = options.suggest_next_poses;
+            result.next_poses = detail::suggest_poses(advice).next;
+        }
+        if (finite)
+            result.calibration.trueness = t;
+        else
+            say("trueness unknown: the covariance is not finite (a parameter the session does "
+                "not determine)");
+    } catch (const std::runtime_error& e) {
+        say(std::string("trueness unknown: ") + e.what());
+    }
 }
 
 } // namespace
@@ -420,49 +480,27 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
     const auto place_dense_samples = [&](const std::vector<bool>& used) {
         dense.clear();
         dense_origin.clear();
-        StereoCalibration camera_model;
-        camera_model.camera = s.camera;
-        camera_model.camera_correction = s.camera_grid;
         for (std::size_t i = 0; i < poses.size(); ++i) {
             if (!used[i])
                 continue;
-            const RigidPose& pose = s.poses[i];
-            const Vec3 normal{pose.R[2], pose.R[5], pose.R[8]};
-            const double d = normal[0] * pose.t[0] + normal[1] * pose.t[1] + normal[2] * pose.t[2];
             const PoseObservations& o = poses[i];
             for (std::size_t k = 0; k < o.dense_camera.size(); ++k) {
-                Vec2 n{};
-                if (!camera_model.camera_ray(o.dense_camera[k], n))
-                    continue;
-                const double den = normal[0] * n[0] + normal[1] * n[1] + normal[2];
-                const double z = d / den;
-                if (!(std::fabs(den) > 1e-9) || !(z > 0))
-                    continue;
-                dense.push_back({{n[0] * z, n[1] * z, z},
-                                 o.dense_projector[k],
-                                 1.0,
-                                 static_cast<int>(i),
-                                 o.dense_camera[k]});
+                dense.push_back(
+                    {{}, o.dense_projector[k], 1.0, static_cast<int>(i), o.dense_camera[k]});
                 dense_origin.emplace_back(static_cast<int>(i), static_cast<int>(k));
             }
         }
-    };
-
-    // The dense samples' board points again, with the current camera and poses.
-    const auto refresh_dense_points = [&]() {
-        StereoCalibration camera_model;
-        camera_model.camera = s.camera;
-        camera_model.camera_correction = s.camera_grid;
-        for (detail::DenseObservation& o : dense) {
-            const RigidPose& pose = s.poses[std::size_t(o.pose)];
-            const Vec3 normal{pose.R[2], pose.R[5], pose.R[8]};
-            const double d = normal[0] * pose.t[0] + normal[1] * pose.t[1] + normal[2] * pose.t[2];
-            Vec2 n{};
-            if (!camera_model.camera_ray(o.camera, n))
-                continue;
-            const double z = d / (normal[0] * n[0] + normal[1] * n[1] + normal[2]);
-            o.camera_point = {n[0] * z, n[1] * z, z};
-        }
+        std::vector<bool> placed;
+        detail::place_dense_points(s, dense, &placed);
+        std::size_t kept = 0;
+        for (std::size_t k = 0; k < dense.size(); ++k)
+            if (placed[k]) {
+                dense[kept] = dense[k];
+                dense_origin[kept] = dense_origin[k];
+                ++kept;
+            }
+        dense.resize(kept);
+        dense_origin.resize(kept);
     };
 
     // Drops the dense samples further from the projector model than
@@ -545,6 +583,9 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
 
     std::vector<bool> used(poses.size(), true);
     detail::AdjustmentOutcome camera_outcome, projector_outcome;
+    // What the last adjustments held free, with their weights: the
+    // covariance is theirs.
+    detail::FreeParameters camera_free, projector_free;
     for (int round = 0; round < 2; ++round) {
         if (round == 1)
             s = initial; // again from the start, without the outlying poses
@@ -577,6 +618,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                             options.max_iterations, options.progress, &pool);
             camera_stage.stop();
+            camera_free = free;
             say("the projector with the camera and the boards held, from its corners "
                 "(intrinsics, distortion, R, T)");
             free = {};
@@ -626,6 +668,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                 result.iterations += projector_outcome.iterations;
             }
             dense_stage.stop();
+            projector_free = free;
         } else {
             say(round == 0 ? "joint bundle adjustment (both devices, skew " +
                                  std::string(options.skew ? "estimated" : "fixed at 0") + ")"
@@ -647,6 +690,22 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                 free.projector_weight =
                     1 / square(noise_floor(result.initial_projector_rms / std::sqrt(2.0)));
             }
+            // The camera grid's stiffness is the camera lens's: chosen as in
+            // camera_first, from the camera's corners alone (left at 0, the
+            // grid would be held by its ridge only and trade with the focal
+            // lengths and the poses: 2 % of aspect ratio on 6 real poses).
+            if (free.camera_grid && options.camera_grid_smoothness == 0) {
+                detail::FreeParameters camera_only;
+                camera_only.camera_lens = camera_only.camera_grid = camera_only.poses = true;
+                camera_only.camera_observations = true;
+                camera_only.skew = options.skew;
+                camera_only.camera_weight = free.camera_weight;
+                StageTimer validation(result.time_split, "camera grid cross-validation");
+                regularisation.camera_smoothness =
+                    choose_camera_smoothness(s, corners, used, camera_only, regularisation, options,
+                                             pool, result.camera_grid_validation);
+            }
+            result.camera_grid_smoothness = regularisation.camera_smoothness;
             StageTimer joint_stage(result.time_split, "joint adjustment");
             camera_outcome = detail::adjust(s, corners, {}, used, free, regularisation,
                                             options.max_iterations, options.progress, &pool);
@@ -659,6 +718,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
             }
             projector_outcome = camera_outcome;
             result.iterations += camera_outcome.iterations;
+            camera_free = projector_free = free;
         }
 
         // Per-pose residuals and outliers among the used poses.
@@ -698,7 +758,7 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         for (std::size_t i = 0; i < poses.size(); ++i)
             result.dense_residuals[i].assign(poses[i].dense_camera.size(), {kNaN, kNaN});
         double dense_sum = 0;
-        refresh_dense_points();
+        detail::place_dense_points(s, dense);
         for (std::size_t k = 0; k < dense.size(); ++k) {
             const Vec2 up = c.projector_pixel(dense[k].camera_point);
             const Vec2 e{up[0] - dense[k].projector[0], up[1] - dense[k].projector[1]};
@@ -782,6 +842,8 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
         break;
     }
     result.board_poses = s.poses;
+    predict_from_covariance(result, s, corners, dense, used, camera_free, projector_free,
+                            regularisation, camera_first, poses, options, pool, say);
     return result;
 }
 

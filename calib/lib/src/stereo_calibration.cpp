@@ -114,6 +114,41 @@ constexpr KeySet kFppKeys{
 constexpr KeySet kSlStudioKeys{"Kc", "kc", "Kp", "kp", "Rp", "Tp"};
 constexpr KeySet kSlMasterKeys{"M1", "D1", "M4", "D4", "Rlp", "Tlp"};
 
+// trueness: { length_mm: L, depth_mm: [near, middle, far],
+//             along_depth_mm: [3], across_mm: [3] }
+Trueness read_trueness(const Reader& in) {
+    const cv::FileNode node = in.require("trueness");
+    if (!node.isMap())
+        in.fail("trueness", "expected a map");
+    const auto field = [&](const char* name) {
+        const cv::FileNode n = node[name];
+        if (n.empty())
+            in.fail(std::string("trueness.") + name, "missing");
+        return n;
+    };
+    Trueness t;
+    t.length_mm = in.number(field("length_mm"), "trueness.length_mm");
+    if (!(t.length_mm > 0 && std::isfinite(t.length_mm)))
+        in.fail("trueness.length_mm", "must be a positive length (mm)");
+    const auto three = [&](const char* name, auto member, bool positive) {
+        const cv::FileNode n = field(name);
+        const std::string key = std::string("trueness.") + name;
+        if (!n.isSeq() || n.size() != 3)
+            in.fail(key, "expected a list of 3 numbers (near, middle, far)");
+        for (int k = 0; k < 3; ++k) {
+            const std::string element = key + "[" + std::to_string(k) + "]";
+            const double v = in.number(n[k], element); // refuses a non-finite value
+            if (v < 0 || (positive && v == 0))
+                in.fail(element, positive ? "must be positive (mm)" : "must not be negative (mm)");
+            t.at[std::size_t(k)].*member = v;
+        }
+    };
+    three("depth_mm", &LengthSigma::depth_mm, true);
+    three("along_depth_mm", &LengthSigma::along_depth_mm, false);
+    three("across_mm", &LengthSigma::across_mm, false);
+    return t;
+}
+
 StereoCalibration read_fpp(const Reader& in) {
     StereoCalibration c;
     if (in.has("format")) {
@@ -160,6 +195,8 @@ StereoCalibration read_fpp(const Reader& in) {
             r.note = in.text(p["note"], key + ".note");
         c.poses.push_back(std::move(r));
     }
+    if (in.has("trueness"))
+        c.trueness = read_trueness(in);
     if (in.has("origin"))
         c.origin = in.text(in.require("origin"), "origin");
     return c;
@@ -366,6 +403,24 @@ std::string calibration_to_yaml(const StereoCalibration& c) {
         out << "}";
     }
     out << "]";
+    if (c.trueness.known()) {
+        require_finite(c.trueness.length_mm, "trueness.length_mm");
+        out << "trueness"
+            << "{"
+            << "length_mm" << c.trueness.length_mm;
+        const auto three = [&](const char* name, auto member) {
+            out << name << "[:";
+            for (const LengthSigma& at : c.trueness.at) {
+                require_finite(at.*member, (std::string("trueness.") + name).c_str());
+                out << at.*member;
+            }
+            out << "]";
+        };
+        three("depth_mm", &LengthSigma::depth_mm);
+        three("along_depth_mm", &LengthSigma::along_depth_mm);
+        three("across_mm", &LengthSigma::across_mm);
+        out << "}";
+    }
     if (!c.origin.empty())
         out << "origin" << c.origin;
     return out.releaseAndGetString();

@@ -189,10 +189,10 @@ void keep_usable_poses(const fs::path& session, const std::vector<Vec3>& board_p
     result.observations = std::move(used_observations);
     const std::vector<PoseObservations>& observations = result.observations;
     if (observations.size() < 3)
-        throw InputError(session, "",
-                         "only " + std::to_string(observations.size()) + " of " +
-                             std::to_string(result.poses.size()) +
-                             " poses are usable; stereo calibration needs at least 3" + skipped);
+        throw TooFewPosesError(
+            session, "only " + std::to_string(observations.size()) + " of " +
+                         std::to_string(result.poses.size()) +
+                         " poses are usable; stereo calibration needs at least 3" + skipped);
 }
 
 // The stereo calibration of the kept poses, and with options.compare_skew

@@ -1,4 +1,4 @@
-// The coefficient table in memory and its file (.fpt, version 1): a
+// The coefficient table in memory and its file (.fpt, version 2): a
 // 128-byte header with its CRC-32, a CRC-32 per tile, then the float32
 // coefficients tile by tile, 4096-byte aligned so a mapped file is used in
 // place. load_table refuses anything that does not match the format exactly.
@@ -42,10 +42,13 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr char kMagic[8] = {'F', 'P', 'P', 'T', 'A', 'B', 'L', 'E'};
-constexpr std::uint32_t kVersion = 1;
+// Version 2 adds the calibration's predicted trueness (bytes 104..119),
+// which version 1 keeps zero; both are read.
+constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kOldestVersion = 1;
+constexpr std::size_t kTruenessOffset = 104;
 constexpr std::uint32_t kHeaderSize = 128;
 constexpr std::size_t kHeaderCrcOffset = 124;
-constexpr std::size_t kReservedOffset = 104;
 constexpr std::uint32_t kPhaseUnitProjectorPixels = 1;
 constexpr std::uint64_t kDataAlignment = 4096;
 constexpr int kMaxImageSide = 65535;
@@ -96,6 +99,19 @@ std::optional<Problem> check_info(const TableInfo& info) {
         return p;
     if (auto p = check_side("projector_height", info.projector.height, kMaxImageSide))
         return p;
+    const TableTrueness& t = info.trueness;
+    const std::pair<const char*, float> trueness[] = {{"trueness_length_mm", t.length_mm},
+                                                      {"trueness_depth_mm", t.depth_mm},
+                                                      {"trueness_along_depth_mm", t.along_depth_mm},
+                                                      {"trueness_across_mm", t.across_mm}};
+    for (const auto& [field, value] : trueness)
+        if (!std::isfinite(value) || value < 0)
+            return Problem{field, "must be a finite length >= 0 (mm)"};
+    if (t.length_mm == 0 && (t.depth_mm != 0 || t.along_depth_mm != 0 || t.across_mm != 0))
+        return Problem{"trueness_length_mm",
+                       "is 0 (unknown) but the other trueness fields are not"};
+    if (t.length_mm > 0 && !(t.depth_mm > 0))
+        return Problem{"trueness_depth_mm", "must be positive when the trueness is known"};
     return std::nullopt;
 }
 
@@ -234,12 +250,16 @@ std::vector<unsigned char> encode_header(const TableInfo& info, const FileLayout
     put_u32(b + 84, static_cast<std::uint32_t>(l.tile_bytes));
     put_u64(b + 88, l.crc_table_offset);
     put_u64(b + 96, l.data_offset);
+    const float trueness[4] = {info.trueness.length_mm, info.trueness.depth_mm,
+                               info.trueness.along_depth_mm, info.trueness.across_mm};
+    for (int k = 0; k < 4; ++k)
+        put_u32(b + kTruenessOffset + 4 * k, std::bit_cast<std::uint32_t>(trueness[k]));
     put_u32(b + kHeaderCrcOffset, crc32(b, kHeaderCrcOffset));
     return h;
 }
 
 // Decodes and checks a header whose magic, version and CRC have been checked.
-TableInfo decode_header(const fs::path& path, const unsigned char* b) {
+TableInfo decode_header(const fs::path& path, const unsigned char* b, std::uint32_t version) {
     auto fail = [&](const std::string& field, const std::string& message) {
         throw InputError(path, field, message);
     };
@@ -263,6 +283,12 @@ TableInfo decode_header(const fs::path& path, const unsigned char* b) {
                       as_int("projector_height", get_u32(b + 48))};
     info.calibration_hash = get_u64(b + 56);
     info.created_unix_s = static_cast<std::int64_t>(get_u64(b + 64));
+    if (version >= 2) {
+        const auto f32 = [&](int k) {
+            return std::bit_cast<float>(get_u32(b + kTruenessOffset + 4 * std::size_t(k)));
+        };
+        info.trueness = {f32(0), f32(1), f32(2), f32(3)};
+    }
     if (auto p = check_info(info))
         fail(p->field, p->message);
 
@@ -272,8 +298,8 @@ TableInfo decode_header(const fs::path& path, const unsigned char* b) {
                            " model has " + std::to_string(table_planes(info.model)));
     const std::uint32_t unit = get_u32(b + 52);
     if (unit != kPhaseUnitProjectorPixels)
-        fail("phase_unit",
-             "unknown code " + std::to_string(unit) + " (version 1 knows 1 = projector pixels)");
+        fail("phase_unit", "unknown code " + std::to_string(unit) +
+                               " (the format knows only 1 = projector pixels)");
     const FileLayout l = file_layout(info);
     auto expect = [&](const char* field, std::uint64_t stored, std::uint64_t wanted) {
         if (stored != wanted)
@@ -286,9 +312,12 @@ TableInfo decode_header(const fs::path& path, const unsigned char* b) {
     expect("tile_bytes", get_u32(b + 84), l.tile_bytes);
     expect("crc_table_offset", get_u64(b + 88), l.crc_table_offset);
     expect("data_offset", get_u64(b + 96), l.data_offset);
-    for (std::size_t i = kReservedOffset; i < kHeaderCrcOffset; ++i)
+    // Version 1: bytes 104..123 reserved. Version 2: the trueness, then 4
+    // reserved bytes.
+    const std::size_t reserved = version == 1 ? kTruenessOffset : kTruenessOffset + 16;
+    for (std::size_t i = reserved; i < kHeaderCrcOffset; ++i)
         if (b[i] != 0)
-            fail("reserved", "bytes 104..123 must be zero");
+            fail("reserved", "bytes " + std::to_string(reserved) + "..123 must be zero");
     return info;
 }
 
@@ -485,23 +514,24 @@ CoefficientTable load_table(const std::filesystem::path& path, const Size* expec
     if (size < 12)
         throw InputError(path, "file size (truncated)", "the file ends inside the header");
     const std::uint32_t version = get_u32(header + 8);
-    if (version != kVersion)
+    if (version < kOldestVersion || version > kVersion)
         throw InputError(path, "version",
                          "unsupported version " + std::to_string(version) +
-                             " (this build reads version " + std::to_string(kVersion) + ")");
+                             " (this build reads versions " + std::to_string(kOldestVersion) +
+                             " to " + std::to_string(kVersion) + ")");
     if (size < kHeaderSize)
         throw InputError(path, "file size (truncated)",
                          "the file ends inside the header (" + std::to_string(size) + " bytes)");
     if (get_u32(header + 12) != kHeaderSize)
         throw InputError(path, "header_size",
-                         "is " + std::to_string(get_u32(header + 12)) + ", version 1 has 128");
+                         "is " + std::to_string(get_u32(header + 12)) + ", every version has 128");
     const std::uint32_t stored_header_crc = get_u32(header + kHeaderCrcOffset);
     const std::uint32_t header_crc = crc32(header, kHeaderCrcOffset);
     if (stored_header_crc != header_crc)
         throw InputError(path, "header crc",
                          "CRC-32 mismatch (stored " + hex32(stored_header_crc) + ", computed " +
                              hex32(header_crc) + "): the header is corrupt");
-    const TableInfo info = decode_header(path, header);
+    const TableInfo info = decode_header(path, header, version);
     if (expected_camera && !(*expected_camera == info.camera))
         throw InputError(path, "camera_size",
                          "the table is for a " + std::to_string(info.camera.width) + "x" +

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 
@@ -13,6 +14,22 @@ std::string hex64(std::uint64_t v) {
     char buf[24];
     std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
     return buf;
+}
+
+nlohmann::json trueness_json(const TableTrueness& t) {
+    if (!t.known())
+        return nullptr;
+    // Rounded to what the figures mean (0.1 um, 1 ppm).
+    const auto um = [](float mm) { return std::round(double(mm) * 1e4) / 1e4; };
+    const auto ppm = [&](float sigma) {
+        return std::round(double(sigma) / double(t.length_mm) * 1e6);
+    };
+    return {{"length_mm", um(t.length_mm)},
+            {"depth_mm", um(t.depth_mm)},
+            {"sigma_along_depth_mm", um(t.along_depth_mm)},
+            {"sigma_across_mm", um(t.across_mm)},
+            {"along_depth_ppm", ppm(t.along_depth_mm)},
+            {"across_ppm", ppm(t.across_mm)}};
 }
 
 std::string utc_text(std::int64_t unix_s) {
@@ -65,7 +82,8 @@ std::string scan_json(const ScanMetadata& m) {
         j["table"] = {{"path", m.table->path.string()},
                       {"model", to_string(m.table->model)},
                       {"file_fnv1a64", hex64(m.table->file_hash)},
-                      {"calibration_fnv1a64", hex64(m.table->calibration_hash)}};
+                      {"calibration_fnv1a64", hex64(m.table->calibration_hash)},
+                      {"trueness", trueness_json(m.table->trueness)}};
     if (m.board.projector_response)
         j["projector_response"] = m.board.projector_response->string();
     const DecodeStatistics& d = m.decode_statistics;

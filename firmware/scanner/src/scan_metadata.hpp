@@ -7,6 +7,8 @@
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/scanner.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -26,6 +28,7 @@ struct TableSummary {
     TableModel model = TableModel::ray;
     std::uint64_t file_hash = 0;
     std::uint64_t calibration_hash = 0;
+    TableTrueness trueness; // the calibration's predicted trueness, if the table has it
 };
 
 struct ScanMetadata {
@@ -58,5 +61,10 @@ std::optional<std::string> file_written_utc(const std::filesystem::path& path);
 // Lower-case hex of a 64-bit hash, 16 digits (how scan.json and the API
 // write table hashes).
 std::string hex64(std::uint64_t v);
+
+// A table's predicted trueness as scan.json and the API give it: null when
+// the table has none, else the length, its depth, one sigma along depth
+// and across (mm) and both in ppm of the length.
+nlohmann::json trueness_json(const TableTrueness& t);
 
 } // namespace fpp::scanner

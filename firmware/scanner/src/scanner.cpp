@@ -545,7 +545,7 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
     std::optional<TableSummary> table;
     if (!table_.empty())
         table = TableSummary{table_path_, table_.info().model, table_file_hash_,
-                             table_.info().calibration_hash};
+                             table_.info().calibration_hash, table_.info().trueness};
     // The decode statistics of scan.json: of the result the cloud comes from.
     const double full_scale = dev_.camera.bit_depth() == 8 ? 255.0 : 65535.0;
     const bool fused = passes_.size() > 1;

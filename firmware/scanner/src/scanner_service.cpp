@@ -113,6 +113,7 @@ void ScannerService::refresh_table_json() {
              {"bytes", ec ? 0 : bytes},
              {"file_fnv1a64", hex64(scanner_.table_file_hash())},
              {"calibration_fnv1a64", hex64(info.calibration_hash)},
+             {"trueness", trueness_json(info.trueness)},
              {"created_utc", utc_text(info.created_unix_s)},
              {"installed_utc", installed ? json(*installed) : json(nullptr)}};
     }

@@ -69,6 +69,16 @@ inline constexpr int rational_yn = 8;
 // Planes per pixel of a model: 14, 8 or 9.
 int table_planes(TableModel model);
 
+// What the calibration's own uncertainty means for lengths (the host tool's
+// fpp/calib/trueness.hpp): one sigma of the error of a length_mm length
+// centred at depth_mm (camera Z) on the optical axis, along depth and
+// across, mm. All 0: unknown (a version-1 table, a calibration made
+// elsewhere).
+struct TableTrueness {
+    float length_mm = 0, depth_mm = 0, along_depth_mm = 0, across_mm = 0;
+    bool known() const { return length_mm > 0; }
+};
+
 struct TableInfo {
     Size camera;         // camera image the table belongs to
     int tile_width = 32; // pixels; multiples of 8 up to 256
@@ -78,6 +88,7 @@ struct TableInfo {
     Size projector;                     // projector image the phase refers to
     std::uint64_t calibration_hash = 0; // FNV-1a 64 of the source calibration file's bytes
     std::int64_t created_unix_s = 0;    // seconds since 1970 (UTC)
+    TableTrueness trueness;
 
     int tiles_x() const { return (camera.width + tile_width - 1) / tile_width; }
     int tiles_y() const { return (camera.height + tile_height - 1) / tile_height; }

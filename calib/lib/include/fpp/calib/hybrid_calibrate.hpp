@@ -181,6 +181,9 @@ struct HybridResult {
     TimeSplit time_split; // reading, decoding, corners, ..., per-pixel fits
     BoardDescription::Kind board = BoardDescription::Kind::plane; // the procedure used
     HybridSamples samples = HybridSamples::boards; // what was fitted (checkerboard sessions)
+    // The calibration's predicted trueness (trueness.hpp), also in the
+    // table's header; unknown when the calibration has none.
+    Trueness trueness;
 
     // A few lines: model, poses used and rejected (with reasons), pixels
     // modelled, fit RMS percentiles, times.

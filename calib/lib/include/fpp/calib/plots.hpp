@@ -2,6 +2,9 @@
 // PNG figures of the host tool's reports (OpenCV drawing, 8-bit BGR, Hershey
 // fonts so ASCII text only).
 //
+//   map_figure          a scalar per pixel or per cell in false colour with a
+//                       labelled colour bar (no value black; coarse maps
+//                       enlarged)
 //   signed_map_figure   a signed scalar per camera pixel on a diverging
 //                       blue-white-red colour map with symmetric limits and a
 //                       labelled colour bar (pixels without a value grey)
@@ -36,6 +39,11 @@ double symmetric_limit(std::span<const double> values, double quantile = 0.99,
 // Diverging colour map (ColorBrewer RdBu, reversed): t = -1 dark blue, 0
 // near white, +1 dark red; clamped. BGR.
 cv::Vec3b diverging_colour(double t);
+
+// Values (1-channel float image, NaN = no value) in false colour from lo to
+// hi, a title, and a colour bar on the right. A map of a few cells per side
+// is enlarged by whole pixels to about 400 px wide.
+cv::Mat map_figure(const Image<float>& values, float lo, float hi, const std::string& title);
 
 // Signed values per camera pixel (1-channel float image, NaN = no value)
 // with colour limits +-limit, a title, and a colour bar labelled in `unit`.

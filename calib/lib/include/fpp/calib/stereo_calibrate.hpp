@@ -31,6 +31,7 @@
 
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/time_split.hpp"
+#include "fpp/calib/trueness.hpp"
 #include "fpp/image.hpp"
 #include "fpp/lens_model.hpp"
 
@@ -100,6 +101,10 @@ struct StereoOptions {
     // exceeds this multiple of the median pose RMS.
     double outlier_factor = 2.5;
     int max_iterations = 100;
+    // Board poses to suggest for the session's next capture, best first
+    // (StereoResult::next_poses; session_advice.hpp); 0: none (a few
+    // seconds for 30 poses).
+    int suggest_next_poses = 0;
     // Threads of the adjustments (dense samples, cross-validation folds);
     // 0: all cores. The result does not depend on it.
     int threads = 0;
@@ -136,6 +141,12 @@ struct StereoResult {
     // equations and the residual variance); 0 for fixed parameters.
     LensModel camera_sigma;
     LensModel projector_sigma;
+    // The predicted trueness over the image (its figures are in
+    // calibration.trueness): trueness.hpp.
+    TruenessMap trueness_map;
+    // The poses that would shrink the depth scale's sigma most, best first
+    // (StereoOptions::suggest_next_poses).
+    std::vector<PoseSuggestion> next_poses;
     TimeSplit time_split; // initialisation, cross-validation, each adjustment
 };
 

@@ -16,6 +16,7 @@
 
 #include "fpp/calib/camera_pair.hpp"
 #include "fpp/calib/correction_grid.hpp"
+#include "fpp/calib/trueness.hpp"
 #include "fpp/error.hpp"
 #include "fpp/image.hpp"
 #include "fpp/lens_model.hpp"
@@ -79,6 +80,9 @@ struct StereoCalibration {
     double camera_rms = -1;       // px, < 0 if unknown
     double projector_rms = -1;    // px, < 0 if unknown
     std::vector<PoseResidual> poses;
+    // What the calibration's uncertainty means for lengths (trueness.hpp);
+    // unknown for a calibration read without it or made elsewhere.
+    Trueness trueness;
     std::string origin;                                // where it was read from or how it was made
     CalibrationFormat format = CalibrationFormat::fpp; // the format it was read from
 

@@ -23,6 +23,7 @@
 #include "fpp/calib/time_split.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/decoder.hpp"
+#include "fpp/error.hpp"
 
 #include <array>
 #include <filesystem>
@@ -96,6 +97,14 @@ struct SessionResult {
     CornerMethod method = CornerMethod::poly;
     double seconds_decode = 0, seconds_corners = 0, seconds_calibration = 0, seconds_total = 0;
     TimeSplit time_split; // reading, decoding, corners, ..., the calibration's stages
+};
+
+// Fewer than 3 usable poses: the session cannot be calibrated yet (an
+// InputError naming the session folder, with why each pose was skipped).
+class TooFewPosesError : public InputError {
+public:
+    TooFewPosesError(const std::filesystem::path& session, const std::string& message)
+        : InputError(session, "", message) {}
 };
 
 SessionResult calibrate_session(const std::filesystem::path& session,
