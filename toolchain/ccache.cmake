@@ -9,8 +9,9 @@
 # the build that filled the entry), and no compile definition holds the
 # tree's path except in the few files that need one (rig.cpp,
 # network_face.cpp, test_support.cpp). The sloppiness lets objects built
-# with GCC's precompiled headers be cached. ccache falls back to the
-# compiler itself when an entry is corrupt or the cache cannot be written;
+# with GCC's precompiled headers be cached. A corrupt entry is a miss
+# (ccache checks each entry's checksum); a cache folder that cannot be
+# written is skipped by the launcher, which runs the compiler alone;
 # toolchain/run-tests.sh shows hits and misses per build.
 option(FPP_CCACHE "Compile through ccache when it is installed" ON)
 set(FPP_CCACHE_DIR "$ENV{HOME}/.cache/fpp-ccache" CACHE PATH "fpp's compiler cache (ccache)")
@@ -30,6 +31,10 @@ export CCACHE_MAXSIZE='@FPP_CCACHE_MAXSIZE@'
 export CCACHE_BASEDIR='@CMAKE_SOURCE_DIR@'
 export CCACHE_NOHASHDIR=1
 export CCACHE_SLOPPINESS=pch_defines,time_macros,include_file_mtime,include_file_ctime
+# A cache that cannot be written (a read-only or foreign folder) makes
+# ccache fail the compile: then the compiler alone.
+[ -w "$CCACHE_DIR" ] || mkdir -p "$CCACHE_DIR" 2>/dev/null && [ -w "$CCACHE_DIR" ] ||
+  exec "$@"
 exec '@FPP_CCACHE_PROGRAM@' "$@"
 ]])
     file(CHMOD ${launcher} PERMISSIONS OWNER_READ OWNER_WRITE OWNER_EXECUTE GROUP_READ

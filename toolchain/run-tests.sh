@@ -27,15 +27,15 @@ log=$(mktemp)
 seconds_since() { awk -v a="$1" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.0f", b - a }'; }
 
 # The compiler cache's counters: "hits misses other cleanups" (other: what
-# ccache could not cache or read: errors, corrupt entries, a precompiled
-# header it could not use).
+# ccache could not cache: its own errors (a full disk shows as preprocessor
+# errors), a precompiled header it could not use; a corrupt entry is a miss).
 cache_counters() {
   [ -n "$cache_dir" ] && command -v ccache >/dev/null || { echo "- - - -"; return; }
   CCACHE_DIR="$cache_dir" ccache --print-stats 2>/dev/null | awk '
     $1 == "direct_cache_hit" || $1 == "preprocessed_cache_hit" { hits += $2 }
     $1 == "cache_miss" { misses += $2 }
     $1 == "cleanups_performed" { cleanups += $2 }
-    $1 ~ /^(internal_error|bad_output_file|missing_cache_file|error_hashing_extra_file|could_not_use_precompiled_header|unsupported_compiler_option|compiler_check_failed|remote_storage_error)$/ { other += $2 }
+    $1 ~ /^(internal_error|bad_output_file|missing_cache_file|error_hashing_extra_file|could_not_use_precompiled_header|unsupported_compiler_option|compiler_check_failed|remote_storage_error|preprocessor_error)$/ { other += $2 }
     END { printf "%d %d %d %d\n", hits, misses, other, cleanups }'
 }
 
