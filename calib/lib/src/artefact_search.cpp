@@ -1,0 +1,519 @@
+// Finding an artefact's spheres and plate among other surfaces (see the header).
+
+#include "fpp/calib/artefact_search.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+
+namespace fpp::calib {
+
+namespace {
+
+using Eigen::Vector3d;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kCoverageRings = 6, kCoverageSectors = 24;
+
+Vector3d point_at(const Image<float>& xyz, std::size_t i) {
+    const float* p = xyz.data() + 3 * i;
+    return {double(p[0]), double(p[1]), double(p[2])};
+}
+
+bool finite_at(const Image<float>& xyz, std::size_t i) {
+    const float* p = xyz.data() + 3 * i;
+    return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
+
+Vec3 to_vec(const Vector3d& v) {
+    return {v.x(), v.y(), v.z()};
+}
+Vector3d to_eigen(const Vec3& v) {
+    return {v[0], v[1], v[2]};
+}
+
+// The median angle between horizontally adjacent points' rays (radians): a
+// pixel's footprint at depth z is about this times z.
+double pixel_angle(const Image<float>& xyz) {
+    std::vector<double> steps;
+    const int w = xyz.width(), h = xyz.height();
+    const int row_step = std::max(1, h / 64);
+    for (int y = 0; y < h; y += row_step)
+        for (int x = 0; x + 1 < w; ++x) {
+            const std::size_t i = std::size_t(y) * std::size_t(w) + std::size_t(x);
+            if (!finite_at(xyz, i) || !finite_at(xyz, i + 1))
+                continue;
+            const Vector3d a = point_at(xyz, i), b = point_at(xyz, i + 1);
+            if (a.z() > 0 && b.z() > 0)
+                steps.push_back(std::hypot(a.x() / a.z() - b.x() / b.z(),
+                                           a.y() / a.z() - b.y() / b.z()));
+        }
+    if (steps.empty())
+        return 0;
+    std::nth_element(steps.begin(), steps.begin() + std::ptrdiff_t(steps.size() / 2), steps.end());
+    return steps[steps.size() / 2];
+}
+
+// Separable square dilation of a 0/1 mask by `r` pixels.
+void dilate(std::vector<std::uint8_t>& mask, int w, int h, int r) {
+    if (r <= 0)
+        return;
+    std::vector<std::uint8_t> tmp(mask.size(), 0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            std::uint8_t v = 0;
+            for (int k = std::max(0, x - r); k <= std::min(w - 1, x + r) && !v; ++k)
+                v = mask[std::size_t(y) * std::size_t(w) + std::size_t(k)];
+            tmp[std::size_t(y) * std::size_t(w) + std::size_t(x)] = v;
+        }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            std::uint8_t v = 0;
+            for (int k = std::max(0, y - r); k <= std::min(h - 1, y + r) && !v; ++k)
+                v = tmp[std::size_t(k) * std::size_t(w) + std::size_t(x)];
+            mask[std::size_t(y) * std::size_t(w) + std::size_t(x)] = v;
+        }
+}
+
+double median_abs(std::vector<double> values) {
+    if (values.empty())
+        return 0;
+    for (double& v : values)
+        v = std::abs(v);
+    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(values.size() / 2),
+                     values.end());
+    return values[values.size() / 2];
+}
+
+// Usable points whose distance from `centre` is within `band` of `radius`.
+void gather_shell(const Image<float>& xyz, std::span<const std::uint8_t> usable,
+                  const Vector3d& centre, double radius, double band,
+                  std::vector<std::uint32_t>& pixels, std::vector<Vec3>& points) {
+    pixels.clear();
+    points.clear();
+    for (std::size_t i = 0; i < usable.size(); ++i) {
+        if (!usable[i])
+            continue;
+        const Vector3d p = point_at(xyz, i);
+        if (std::abs((p - centre).norm() - radius) < band) {
+            pixels.push_back(static_cast<std::uint32_t>(i));
+            points.push_back(to_vec(p));
+        }
+    }
+}
+
+// Vote cells: integer coordinates packed into one key.
+constexpr std::int64_t kCellRange = std::int64_t{1} << 20;
+std::int64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
+    return ((x + kCellRange) << 42) | ((y + kCellRange) << 21) | (z + kCellRange);
+}
+
+struct Votes {
+    std::vector<Vector3d> centres; // one candidate centre per voting point
+    std::unordered_map<std::int64_t, std::uint32_t> cells;
+    double cell = 1;
+    std::int64_t index(double v) const { return static_cast<std::int64_t>(std::floor(v / cell)); }
+    std::uint32_t count(std::int64_t x, std::int64_t y, std::int64_t z) const {
+        const auto it = cells.find(cell_key(x, y, z));
+        return it == cells.end() ? 0 : it->second;
+    }
+};
+
+Votes vote_centres(const Image<float>& xyz, std::span<const std::uint8_t> usable, double radius) {
+    Votes v;
+    v.cell = std::max(0.5, radius / 5);
+    const double angle = pixel_angle(xyz);
+    const int w = xyz.width(), h = xyz.height();
+    const double limit = 0.9 * double(kCellRange) * v.cell;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t i = std::size_t(y) * std::size_t(w) + std::size_t(x);
+            if (!usable[i])
+                continue;
+            const Vector3d p = point_at(xyz, i);
+            // Neighbours about r/4 away either side: the normal's noise is
+            // the points' noise over that baseline.
+            const int s = std::clamp(
+                angle > 0 ? static_cast<int>(std::lround(radius / 4 / (angle * p.z()))) : 1, 1, 16);
+            if (x < s || y < s || x + s >= w || y + s >= h)
+                continue;
+            const std::size_t l = i - std::size_t(s), r = i + std::size_t(s);
+            const std::size_t u = i - std::size_t(s) * std::size_t(w),
+                              d = i + std::size_t(s) * std::size_t(w);
+            if (!usable[l] || !usable[r] || !usable[u] || !usable[d])
+                continue;
+            Vector3d n = (point_at(xyz, r) - point_at(xyz, l))
+                             .cross(point_at(xyz, d) - point_at(xyz, u));
+            if (!(n.norm() > 0))
+                continue;
+            n.normalize();
+            if (n.dot(p) > 0)
+                n = -n; // towards the camera
+            const Vector3d c = p - radius * n;
+            if (std::abs(c.x()) > limit || std::abs(c.y()) > limit || std::abs(c.z()) > limit)
+                continue;
+            v.centres.push_back(c);
+            ++v.cells[cell_key(v.index(c.x()), v.index(c.y()), v.index(c.z()))];
+        }
+    return v;
+}
+
+struct Peak {
+    Vector3d centre;
+    std::size_t votes = 0;
+};
+
+// The strongest vote peaks (3 x 3 x 3 cells summed), none within `radius` of
+// a stronger one; each centre the mean of the votes near the peak cell.
+std::vector<Peak> vote_peaks(const Votes& v, double radius, std::size_t max_peaks,
+                             std::size_t min_votes) {
+    struct Cell {
+        std::int64_t x, y, z;
+        std::size_t score;
+    };
+    std::vector<Cell> cells;
+    cells.reserve(v.cells.size());
+    for (const auto& [key, count] : v.cells) {
+        (void)count;
+        const std::int64_t x = ((key >> 42) & ((kCellRange << 1) - 1)) - kCellRange;
+        const std::int64_t y = ((key >> 21) & ((kCellRange << 1) - 1)) - kCellRange;
+        const std::int64_t z = (key & ((kCellRange << 1) - 1)) - kCellRange;
+        std::size_t score = 0;
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz)
+                    score += v.count(x + dx, y + dy, z + dz);
+        if (score >= min_votes)
+            cells.push_back({x, y, z, score});
+    }
+    std::sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& b) {
+        return a.score != b.score ? a.score > b.score
+                                  : std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    });
+    std::vector<Peak> peaks;
+    for (const Cell& c : cells) {
+        if (peaks.size() >= max_peaks)
+            break;
+        const Vector3d at = (Vector3d(double(c.x), double(c.y), double(c.z)) +
+                             Vector3d::Constant(0.5)) *
+                            v.cell;
+        if (std::any_of(peaks.begin(), peaks.end(),
+                        [&](const Peak& p) { return (p.centre - at).norm() < radius; }))
+            continue;
+        Vector3d sum = Vector3d::Zero();
+        std::size_t n = 0;
+        for (const Vector3d& centre : v.centres)
+            if ((centre - at).cwiseAbs().maxCoeff() < 1.5 * v.cell) {
+                sum += centre;
+                ++n;
+            }
+        peaks.push_back({n ? Vector3d(sum / double(n)) : at, c.score});
+    }
+    return peaks;
+}
+
+// Step 3 of the header for one peak; false when it is no sphere.
+bool fit_peak(const Image<float>& xyz, std::span<const std::uint8_t> usable, const Peak& peak,
+              double diameter, const ArtefactSearchOptions& options, FoundSphere& out) {
+    const double radius = diameter / 2;
+    std::vector<std::uint32_t> pixels;
+    std::vector<Vec3> points;
+    gather_shell(xyz, usable, peak.centre, radius, std::max(1.0, 0.15 * radius), pixels, points);
+    if (points.size() < options.min_points)
+        return false;
+    const std::size_t gathered = points.size();
+    try {
+        FitOptions robust;
+        robust.reject_sigma = 3;
+        SphereFit fit = fit_sphere(points, robust);
+        for (int round = 0; round < 2; ++round) {
+            std::vector<double> used;
+            for (std::size_t i = 0; i < points.size(); ++i)
+                if (fit.fit.inlier[i])
+                    used.push_back(fit.fit.residuals[i]);
+            const double sigma = 1.4826 * median_abs(used);
+            gather_shell(xyz, usable, to_eigen(fit.centre), fit.radius,
+                         std::max(5 * sigma, 0.05), pixels, points);
+            if (points.size() < options.min_points)
+                return false;
+            fit = fit_sphere(points);
+        }
+        if (!(std::abs(2 * fit.radius - diameter) <= std::max(1.0, 0.1 * diameter)))
+            return false;
+        out.figures = probing_figures(points, diameter);
+    } catch (const FitError&) {
+        return false;
+    }
+    out.pixels = std::move(pixels);
+    out.points = std::move(points);
+    out.coverage = hemisphere_coverage(out.points, out.figures.fit.centre);
+    out.gathered = gathered;
+    out.votes = peak.votes;
+    return true;
+}
+
+std::string mm_text(double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f", v);
+    return text;
+}
+
+// The largest 4-connected patch of `pixels` in a `w` x `h` image.
+std::vector<std::uint32_t> largest_patch(const std::vector<std::uint32_t>& pixels, int w, int h) {
+    std::vector<std::int32_t> label(std::size_t(w) * std::size_t(h), -1);
+    for (std::size_t k = 0; k < pixels.size(); ++k)
+        label[pixels[k]] = 0;
+    std::vector<std::uint32_t> best, patch, stack;
+    std::int32_t next = 1;
+    for (const std::uint32_t start : pixels) {
+        if (label[start] != 0)
+            continue;
+        patch.clear();
+        stack.assign(1, start);
+        label[start] = next;
+        while (!stack.empty()) {
+            const std::uint32_t i = stack.back();
+            stack.pop_back();
+            patch.push_back(i);
+            const int x = int(i % std::uint32_t(w)), y = int(i / std::uint32_t(w));
+            const int nx[4] = {x - 1, x + 1, x, x}, ny[4] = {y, y, y - 1, y + 1};
+            for (int k = 0; k < 4; ++k) {
+                if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h)
+                    continue;
+                const std::uint32_t j = std::uint32_t(ny[k]) * std::uint32_t(w) + std::uint32_t(nx[k]);
+                if (label[j] == 0) {
+                    label[j] = next;
+                    stack.push_back(j);
+                }
+            }
+        }
+        ++next;
+        if (patch.size() > best.size())
+            best.swap(patch);
+    }
+    std::sort(best.begin(), best.end());
+    return best;
+}
+
+// Extents of points along their two principal directions, larger first.
+void principal_extents(const std::vector<Vec3>& points, double extent[2]) {
+    Vector3d mean = Vector3d::Zero();
+    for (const Vec3& p : points)
+        mean += to_eigen(p);
+    mean /= double(points.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const Vec3& p : points) {
+        const Vector3d d = to_eigen(p) - mean;
+        cov += d * d.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(cov);
+    for (int k = 0; k < 2; ++k) {
+        const Vector3d axis = eigen.eigenvectors().col(2 - k); // largest eigenvalues last
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (const Vec3& p : points) {
+            const double t = (to_eigen(p) - mean).dot(axis);
+            lo = std::min(lo, t);
+            hi = std::max(hi, t);
+        }
+        extent[k] = hi - lo;
+    }
+}
+
+// The pool's points within `band` of the plane through `point` with unit `normal`.
+void gather_plane(const Image<float>& xyz, const std::vector<std::uint32_t>& pool,
+                  const Vector3d& point, const Vector3d& normal, double band,
+                  std::vector<std::uint32_t>& pixels, std::vector<Vec3>& points) {
+    pixels.clear();
+    points.clear();
+    for (const std::uint32_t i : pool) {
+        const Vector3d p = point_at(xyz, i);
+        if (std::abs((p - point).dot(normal)) < band) {
+            pixels.push_back(i);
+            points.push_back(to_vec(p));
+        }
+    }
+}
+
+// The plane of most points among the pool (RANSAC, 1 mm band, seeded: the
+// same cloud gives the same plane); false when none holds `min_points`.
+bool ransac_plane(const Image<float>& xyz, const std::vector<std::uint32_t>& pool,
+                  std::size_t min_points, Vector3d& point, Vector3d& normal) {
+    constexpr int kTrials = 300;
+    constexpr double kBand = 1.0;
+    const std::size_t stride = std::max<std::size_t>(1, pool.size() / 20000);
+    std::mt19937 rng(1);
+    std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
+    std::size_t best = 0;
+    for (int trial = 0; trial < kTrials; ++trial) {
+        const Vector3d a = point_at(xyz, pool[pick(rng)]), b = point_at(xyz, pool[pick(rng)]),
+                       c = point_at(xyz, pool[pick(rng)]);
+        Vector3d n = (b - a).cross(c - a);
+        if (!(n.norm() > 1e-6))
+            continue;
+        n.normalize();
+        std::size_t count = 0;
+        for (std::size_t k = 0; k < pool.size(); k += stride)
+            count += std::abs((point_at(xyz, pool[k]) - a).dot(n)) < kBand ? 1 : 0;
+        if (count > best) {
+            best = count;
+            point = a;
+            normal = n;
+        }
+    }
+    return best * stride >= min_points;
+}
+
+} // namespace
+
+std::vector<std::uint8_t> usable_points(const Image<float>& xyz,
+                                        const ArtefactSearchOptions& options) {
+    const int w = xyz.width(), h = xyz.height();
+    const std::size_t n = xyz.pixel_count();
+    std::vector<std::uint8_t> usable(n, 0), edge(n, 0);
+    for (std::size_t i = 0; i < n; ++i)
+        usable[i] = finite_at(xyz, i) ? 1 : 0;
+    const double angle = pixel_angle(xyz);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t i = std::size_t(y) * std::size_t(w) + std::size_t(x);
+            if (!usable[i])
+                continue;
+            const double z = double(xyz.data()[3 * i + 2]);
+            const double jump = options.depth_jump_footprints * angle * std::abs(z);
+            const int nx[4] = {x - 1, x + 1, x, x}, ny[4] = {y, y, y - 1, y + 1};
+            for (int k = 0; k < 4 && !edge[i]; ++k) {
+                if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) {
+                    edge[i] = 1;
+                    continue;
+                }
+                const std::size_t j = std::size_t(ny[k]) * std::size_t(w) + std::size_t(nx[k]);
+                edge[i] = !usable[j] || std::abs(double(xyz.data()[3 * j + 2]) - z) > jump;
+            }
+        }
+    dilate(edge, w, h, options.edge_margin_px);
+    for (std::size_t i = 0; i < n; ++i)
+        usable[i] = usable[i] && !edge[i];
+    return usable;
+}
+
+double hemisphere_coverage(std::span<const Vec3> points, const Vec3& centre) {
+    const Vector3d c = to_eigen(centre);
+    if (!(c.norm() > 0))
+        return 0;
+    const Vector3d view = -c.normalized(); // from the centre towards the camera
+    // A frame about the view direction for the azimuth.
+    const Vector3d a =
+        (std::abs(view.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY()).cross(view).normalized();
+    const Vector3d b = view.cross(a);
+    std::vector<std::uint8_t> cells(kCoverageRings * kCoverageSectors, 0);
+    for (const Vec3& p : points) {
+        const Vector3d u = (to_eigen(p) - c).normalized();
+        const double cos_view = u.dot(view);
+        if (!(cos_view >= 0))
+            continue;
+        // Equal steps of cos(angle from the view) are rings of equal area.
+        const int ring = std::min(kCoverageRings - 1, static_cast<int>(cos_view * kCoverageRings));
+        const double azimuth = std::atan2(u.dot(b), u.dot(a)) + kPi; // 0 .. 2 pi
+        const int sector = std::min(kCoverageSectors - 1,
+                                    static_cast<int>(azimuth / (2 * kPi) * kCoverageSectors));
+        cells[std::size_t(ring * kCoverageSectors + sector)] = 1;
+    }
+    return double(std::count(cells.begin(), cells.end(), 1)) / double(cells.size());
+}
+
+std::vector<FoundSphere> find_spheres(const Image<float>& xyz,
+                                      std::span<const std::uint8_t> usable, double diameter_mm,
+                                      const ArtefactSearchOptions& options) {
+    const double radius = diameter_mm / 2;
+    const Votes votes = vote_centres(xyz, usable, radius);
+    const std::vector<Peak> peaks =
+        vote_peaks(votes, radius, options.max_candidates, options.min_points);
+    std::vector<FoundSphere> found;
+    for (const Peak& peak : peaks) {
+        FoundSphere sphere;
+        if (!fit_peak(xyz, usable, peak, diameter_mm, options, sphere))
+            continue;
+        // Two peaks of one sphere (its votes split): the better fit stays.
+        const Vector3d c = to_eigen(sphere.figures.fit.centre);
+        auto same = std::find_if(found.begin(), found.end(), [&](const FoundSphere& f) {
+            return (to_eigen(f.figures.fit.centre) - c).norm() < radius;
+        });
+        if (same == found.end())
+            found.push_back(std::move(sphere));
+        else if (sphere.points.size() > same->points.size())
+            *same = std::move(sphere);
+    }
+    return found;
+}
+
+FoundPlane find_plane(const Image<float>& xyz, std::span<const std::uint8_t> usable,
+                      double width_mm, double height_mm, const ArtefactSearchOptions& options) {
+    std::vector<std::uint32_t> pool;
+    for (std::size_t i = 0; i < usable.size(); ++i)
+        if (usable[i])
+            pool.push_back(static_cast<std::uint32_t>(i));
+    const double longer = std::max(width_mm, height_mm), shorter = std::min(width_mm, height_mm);
+    constexpr double kExtentSlackMm = 5;
+    std::string seen;
+    for (int attempt = 0; attempt < 4 && pool.size() >= options.min_points; ++attempt) {
+        Vector3d point, normal;
+        if (!ransac_plane(xyz, pool, options.min_points, point, normal))
+            break;
+        std::vector<std::uint32_t> pixels;
+        std::vector<Vec3> points;
+        gather_plane(xyz, pool, point, normal, 1.0, pixels, points);
+        PlaneFit fit;
+        try {
+            FitOptions robust;
+            robust.reject_sigma = 3;
+            fit = fit_plane(points, robust);
+            for (int round = 0; round < 2; ++round) {
+                std::vector<double> used;
+                for (std::size_t i = 0; i < points.size(); ++i)
+                    if (fit.fit.inlier[i])
+                        used.push_back(fit.fit.residuals[i]);
+                gather_plane(xyz, pool, to_eigen(fit.point), to_eigen(fit.normal),
+                             std::max(5 * 1.4826 * median_abs(used), 0.05), pixels, points);
+                if (points.size() < options.min_points)
+                    break;
+                fit = fit_plane(points);
+            }
+        } catch (const FitError&) {
+            break;
+        }
+        const std::vector<std::uint32_t> patch = largest_patch(pixels, xyz.width(), xyz.height());
+        FoundPlane found;
+        for (const std::uint32_t i : patch)
+            found.points.push_back(to_vec(point_at(xyz, i)));
+        if (found.points.size() >= options.min_points) {
+            principal_extents(found.points, found.extent_mm);
+            if (found.extent_mm[0] <= longer + kExtentSlackMm &&
+                found.extent_mm[1] <= shorter + kExtentSlackMm) {
+                found.pixels = patch;
+                found.figures = flatness_figures(found.points);
+                return found;
+            }
+            seen += (seen.empty() ? "" : ", ") + mm_text(found.extent_mm[0]) + " x " +
+                    mm_text(found.extent_mm[1]) + " mm";
+        }
+        // Not the plate (a wall, a table): look among the other points.
+        std::vector<std::uint8_t> taken(usable.size(), 0);
+        for (const std::uint32_t i : pixels)
+            taken[i] = 1;
+        std::erase_if(pool, [&](std::uint32_t i) { return taken[i] != 0; });
+    }
+    throw FitError("no flat of " + mm_text(width_mm) + " x " + mm_text(height_mm) +
+                   " mm in view" +
+                   (seen.empty() ? std::string(" (no plane found)")
+                                 : "; the planes found are larger: " + seen +
+                                       " (a wall or a table? the plate must be seen apart)"));
+}
+
+} // namespace fpp::calib
