@@ -1,0 +1,310 @@
+// fpp-calib verify, run as a person would, on the virtual scanner: a ball
+// bar on its rod and stand before a wall, simulated in several of the VDI
+// positions within the paper rig's volume, reconstructed with the table of
+// the rig's true geometry (camera binned 4x); SD against the one the true
+// sphere centres give; a glossy bar whose highlights leave holes; a figure
+// beyond its MPE; and bad input, which exits 2, names what is wrong and
+// writes no report.
+
+#include "rig_truth_table.hpp"
+#include "test_support.hpp"
+
+#include "fpp/coefficient_table.hpp"
+#include "fpp/sim/rig.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using fpp::Vec3;
+using fpp::test::TempDir;
+using fpp::test::ToolRun;
+namespace fs = std::filesystem;
+
+constexpr double kDiameter = 30, kLength = 150;
+
+std::string q(const fs::path& p) {
+    return fpp::test::shell_quote(p.string());
+}
+
+ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
+    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
+}
+
+// The effects rig (gamma, defocus, noise) with the camera binned 4x: 400 x 300.
+fpp::sim::Rig small_rig() {
+    fpp::sim::Rig rig = fpp::sim::load_rig(fpp::sim::effects_rig_path()).binned_camera(4);
+    rig.name = "effects-quarter";
+    return rig;
+}
+
+Vec3 unit(const Vec3& a) {
+    const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    return {a[0] / n, a[1] / n, a[2] / n};
+}
+
+std::string triple(const Vec3& v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << "[" << v[0] << ", " << v[1] << ", " << v[2] << "]";
+    return s.str();
+}
+
+// One position of the bar: its centre, its direction, its true length.
+struct Position {
+    Vec3 centre, axis;
+    double length = kLength;
+    std::string material = "albedo: 0.85";
+};
+
+// The ball bar on a 10 mm rod, on a post, before a wall (as
+// board/sim/scenes/ball-bar-on-stand.yaml, moved).
+std::string scene_yaml(const Position& p) {
+    const Vec3 post{p.centre[0], p.centre[1] + 65, p.centre[2] + 5};
+    std::ostringstream s;
+    s.precision(17);
+    s << "format: fpp-scene/1\nshapes:\n"
+      << "  - {type: plane, name: wall, centre: [0, 0, 575], size: [420, 330], albedo: 0.8}\n"
+      << "  - {type: ball_bar, name: ball, centre: " << triple(p.centre)
+      << ", axis: " << triple(p.axis) << ", distance: " << p.length << ", radius: "
+      << kDiameter / 2 << ", " << (p.material.rfind("albedo", 0) == 0 ? "" : "material: ")
+      << p.material << "}\n"
+      << "  - {type: cylinder, name: rod, centre: " << triple(p.centre)
+      << ", axis: " << triple(p.axis) << ", radius: 5, length: " << p.length - 28
+      << ", albedo: 0.6}\n"
+      << "  - {type: cylinder, name: stand, centre: " << triple(post)
+      << ", axis: [0, 1, 0], radius: 8, length: 120, albedo: 0.7}\n";
+    return s.str();
+}
+
+// SD of the true centres (the scene's) against the certificate's 150 mm.
+double true_spacing_error(const Position& p) {
+    return p.length - kLength;
+}
+
+// Four of the seven VDI/VDE 2634-2 positions within the paper rig's volume
+// (sphere centres between Z 430 and 530 mm): across the view, tilted in
+// depth, diagonal, and steep in the image; one bar 4 um long.
+const std::vector<Position>& positions() {
+    static const std::vector<Position> p = {
+        {{0, -10, 480}, {1, 0, 0}},
+        {{0, -5, 480}, {0.87, 0, 0.5}, kLength + 0.004},
+        {{0, -15, 480}, {0.7, 0.5, 0.5}},
+        {{-10, 0, 470}, {0.35, 1, -0.25}},
+    };
+    return p;
+}
+
+const char* kArtefact = "format: fpp-artefact/1\n"
+                        "kind: ball-bar\n"
+                        "name: virtual ball bar\n"
+                        "sphere_diameters_mm: [30.000, 30.000]\n"
+                        "centre_distance_mm: 150.000\n"
+                        "uncertainty_mm: 0.001\n";
+
+class CliVerify : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        dir_ = new TempDir;
+        std::ofstream(*dir_ / "rig.yaml") << fpp::sim::rig_to_yaml(small_rig());
+        fpp::write_table(*dir_ / "table.fpt", fpp::test::rig_truth_table(small_rig()));
+        std::ofstream(*dir_ / "bar.yaml") << kArtefact;
+        for (std::size_t k = 0; k < positions().size(); ++k)
+            simulate("position-" + std::to_string(k + 1), positions()[k], int(k + 1));
+        Position glossy = positions()[0];
+        glossy.material = "{albedo: 0.45, specular: 0.4, shininess: 300}";
+        simulate("glossy", glossy, 9);
+        // The other sphere beyond the image's right edge.
+        simulate("one-sphere", {{150, -10, 480}, {1, 0, 0}}, 10);
+    }
+    static void TearDownTestSuite() {
+        delete dir_;
+        dir_ = nullptr;
+    }
+    static void simulate(const std::string& name, const Position& p, int seed,
+                         const std::string& extra = {}) {
+        const fs::path scene = *dir_ / (name + ".scene.yaml");
+        std::ofstream(scene) << scene_yaml(p);
+        const ToolRun run = run_calib("simulate --rig " + q(*dir_ / "rig.yaml") + " --scene " +
+                                          q(scene) + " --sequence gray-x --seed " +
+                                          std::to_string(seed) + " " + extra + " --out " +
+                                          q(*dir_ / name),
+                                      dir_->path());
+        ASSERT_EQ(run.exit_code, 0) << run.output;
+    }
+    static fs::path path(const std::string& name) { return *dir_ / name; }
+    static std::string captures() {
+        std::string s;
+        for (std::size_t k = 0; k < positions().size(); ++k)
+            s += " " + q(path("position-" + std::to_string(k + 1)));
+        return s;
+    }
+    static ToolRun verify(const std::string& args, const fs::path& report,
+                          const std::string& artefact = "bar.yaml") {
+        return run_calib("verify --artefact " + q(path(artefact)) + " --table " +
+                             q(path("table.fpt")) + " --report " + q(report) + " " + args,
+                         dir_->path());
+    }
+
+    static TempDir* dir_;
+};
+
+TempDir* CliVerify::dir_ = nullptr;
+
+nlohmann::json read_json(const fs::path& file) {
+    std::ifstream in(file);
+    return nlohmann::json::parse(in);
+}
+
+bool says(const ToolRun& run, const std::string& part) {
+    return run.output.find(part) != std::string::npos;
+}
+
+TEST_F(CliVerify, BallBarInFourPositionsMeetsTheTruth) {
+    TempDir out;
+    const fs::path report = out / "report";
+    const ToolRun run = verify("--mpe-sd 0.02 --mpe-pf 0.5 --mpe-ps 0.05" + captures(), report);
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    for (const char* file : {"summary.md", "verification.json", "sd.png", "probing-form.png",
+                             "probing-size.png", "residuals-1.png", "residuals-4.png"})
+        EXPECT_TRUE(fs::is_regular_file(report / file)) << file;
+    const nlohmann::json j = read_json(report / "verification.json");
+    EXPECT_EQ(j["format"], "fpp-verification/1");
+    EXPECT_EQ(j["verdict"], "pass");
+    ASSERT_EQ(j["sphere_spacing_error_mm"].size(), positions().size());
+    ASSERT_EQ(j["probing_form_mm"].size(), positions().size());
+    for (std::size_t k = 0; k < positions().size(); ++k) {
+        SCOPED_TRACE("position " + std::to_string(k + 1));
+        const double sd = j["sphere_spacing_error_mm"][k].get<double>();
+        const nlohmann::json& p = j["positions"][k];
+        // The target: within 0.005 mm of the SD of the true centres.
+        EXPECT_NEAR(sd, true_spacing_error(positions()[k]), 0.005);
+        EXPECT_NEAR(p["truth_sphere_spacing_error_mm"].get<double>(),
+                    true_spacing_error(positions()[k]), 0.0005);
+        std::printf("position %zu: SD %+.4f mm, true %+.4f mm, from the true points %+.4f mm\n",
+                    k + 1, sd, true_spacing_error(positions()[k]),
+                    p["truth_sphere_spacing_error_mm"].get<double>());
+        ASSERT_EQ(p["spheres"].size(), 2u);
+        for (const nlohmann::json& s : p["spheres"]) {
+            EXPECT_GT(s["coverage"].get<double>(), 0.4);
+            EXPECT_GT(s["points_used"].get<int>(), 300);
+            EXPECT_NEAR(s["probing_size_mm"].get<double>(), 0, 0.05);
+            std::printf("  sphere %d: P_F %.4f P_S %+.4f coverage %.2f points %d\n",
+                        s["sphere"].get<int>(), s["probing_form_mm"].get<double>(),
+                        s["probing_size_mm"].get<double>(), s["coverage"].get<double>(),
+                        s["points_used"].get<int>());
+        }
+    }
+}
+
+TEST_F(CliVerify, GlossySpheresAreFittedAroundTheirHighlightHoles) {
+    TempDir out;
+    const ToolRun matte = verify(q(path("position-1")), out / "matte");
+    ASSERT_EQ(matte.exit_code, 0) << matte.output;
+    const ToolRun glossy = verify(q(path("glossy")), out / "glossy");
+    ASSERT_EQ(glossy.exit_code, 0) << glossy.output;
+    const nlohmann::json a = read_json(out / "matte/verification.json");
+    const nlohmann::json b = read_json(out / "glossy/verification.json");
+    for (int s = 0; s < 2; ++s) {
+        const double matte_coverage = a["positions"][0]["spheres"][s]["coverage"];
+        const double glossy_coverage = b["positions"][0]["spheres"][s]["coverage"];
+        std::printf("sphere %d: coverage %.2f matte, %.2f glossy\n", s + 1, matte_coverage,
+                    glossy_coverage);
+        EXPECT_LT(b["positions"][0]["spheres"][s]["points_used"].get<int>(),
+                  a["positions"][0]["spheres"][s]["points_used"].get<int>());
+    }
+    EXPECT_NEAR(b["sphere_spacing_error_mm"][0].get<double>(), 0, 0.01);
+}
+
+TEST_F(CliVerify, AFigureBeyondItsMpeFailsTheVerification) {
+    TempDir out;
+    const ToolRun run = verify("--mpe-pf 0.001 " + q(path("position-1")), out / "report");
+    EXPECT_EQ(run.exit_code, 4) << run.output;
+    EXPECT_TRUE(says(run, "verification failed: P_F")) << run.output;
+    const nlohmann::json j = read_json(out / "report/verification.json");
+    EXPECT_EQ(j["verdict"], "fail");
+    EXPECT_EQ(j["figures"][1]["verdict"], "fail");
+    EXPECT_EQ(j["figures"][0]["verdict"], "none"); // SD: no MPE given
+}
+
+// Bad input: exit 2, the message names `parts`, no report written.
+void expect_refused(const ToolRun& run, const fs::path& report,
+                    const std::vector<std::string>& parts) {
+    EXPECT_EQ(run.exit_code, 2) << run.output;
+    for (const std::string& part : parts)
+        EXPECT_TRUE(says(run, part)) << "missing '" << part << "' in\n" << run.output;
+    EXPECT_FALSE(fs::exists(report)) << run.output;
+}
+
+TEST_F(CliVerify, RefusesACertificateOneMillimetreOff) {
+    std::ofstream(path("bar-151.yaml"))
+        << "format: fpp-artefact/1\nkind: ball-bar\nsphere_diameters_mm: [30, 30]\n"
+           "centre_distance_mm: 151.000\nuncertainty_mm: 0.001\n";
+    TempDir out;
+    const ToolRun run = verify(captures(), out / "report", "bar-151.yaml");
+    expect_refused(run, out / "report",
+                   {"bar-151.yaml: centre_distance_mm", "far more than a scanner could be off"});
+}
+
+TEST_F(CliVerify, RefusesAMalformedArtefactFileNamingTheKey) {
+    std::ofstream(path("bar-bad.yaml"))
+        << "format: fpp-artefact/1\nkind: ball-bar\nsphere_diameters_mm: [30, 30]\n"
+           "centre_distance_mm: 150\n";
+    TempDir out;
+    expect_refused(verify(q(path("position-1")), out / "report", "bar-bad.yaml"), out / "report",
+                   {"bar-bad.yaml: uncertainty_mm: missing field"});
+}
+
+TEST_F(CliVerify, RefusesAMissingSphereNamingTheCapture) {
+    TempDir out;
+    expect_refused(verify(q(path("one-sphere")), out / "report"), out / "report",
+                   {"one-sphere: spheres: found 1 of the 2", "missing"});
+}
+
+TEST_F(CliVerify, RefusesACaptureOfAnotherCameraSize) {
+    TempDir out;
+    fpp::sim::Rig rig = small_rig().binned_camera(2); // 200 x 150
+    const fs::path rig_file = out / "rig-200.yaml";
+    std::ofstream(rig_file) << fpp::sim::rig_to_yaml(rig);
+    std::ofstream(out / "scene.yaml") << scene_yaml(positions()[0]);
+    const ToolRun sim = run_calib("simulate --rig " + q(rig_file) + " --scene " +
+                                      q(out / "scene.yaml") + " --sequence gray-x --out " +
+                                      q(out / "small"),
+                                  out.path());
+    ASSERT_EQ(sim.exit_code, 0) << sim.output;
+    expect_refused(verify(q(path("position-1")) + " " + q(out / "small"), out / "report"),
+                   out / "report", {"small/capture.yaml: camera", "200x150", "400x300"});
+}
+
+TEST_F(CliVerify, RefusesACaptureTheScannerMadeWithAnotherTable) {
+    TempDir out;
+    const fs::path scan = out / "scan-20261129-040000-000";
+    fs::create_directories(scan);
+    fs::copy(path("position-1"), scan / "capture", fs::copy_options::recursive);
+    std::ofstream(scan / "scan.json")
+        << R"({"format": "fpp-scan/1", "table": {"path": "/var/lib/fpp-scanner/table.fpt",)"
+        << R"( "model": "rational", "file_fnv1a64": "0123456789abcdef"}})";
+    expect_refused(verify(q(scan / "capture"), out / "report"), out / "report",
+                   {"scan.json: table.file_fnv1a64", "another table", "--any-table"});
+    const ToolRun anyway = verify("--any-table " + q(scan / "capture"), out / "report");
+    EXPECT_EQ(anyway.exit_code, 0) << anyway.output;
+}
+
+TEST_F(CliVerify, RefusesBadOptions) {
+    TempDir out;
+    expect_refused(verify("--mpe-sd -1 " + q(path("position-1")), out / "report"), out / "report",
+                   {"--mpe-sd", "positive"});
+    expect_refused(verify("--mpe-flatness 0.01 " + q(path("position-1")), out / "report"),
+                   out / "report", {"--mpe-flatness", "has no flat"});
+    expect_refused(verify(q(path("position-1")) + " " + q(path("position-1")), out / "report"),
+                   out / "report", {"given twice"});
+}
+
+} // namespace
