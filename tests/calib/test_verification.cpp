@@ -93,7 +93,8 @@ Scan scan_of(const sim::Scene& scene, double noise_mm, unsigned seed = 1) {
         float* p = s.xyz.data() + 3 * i;
         if (!std::isfinite(p[2]))
             continue;
-        const double r = std::sqrt(double(p[0]) * p[0] + double(p[1]) * p[1] + double(p[2]) * p[2]);
+        const double x = double(p[0]), y = double(p[1]), z = double(p[2]);
+        const double r = std::sqrt(x * x + y * y + z * z);
         const double f = 1 + (noise_mm > 0 ? noise(rng) : 0.0) / r;
         for (int c = 0; c < 3; ++c)
             p[c] = static_cast<float>(double(p[c]) * f);
@@ -190,7 +191,7 @@ TEST(Verification, FitsASphereWithAHighlightHole) {
     const Vec3 c2 = along(centre, axis, 75);
     for (std::size_t i = 0; i < scan.xyz.pixel_count(); ++i) {
         float* p = scan.xyz.data() + 3 * i;
-        const Vec3 point{p[0], p[1], p[2]};
+        const Vec3 point{double(p[0]), double(p[1]), double(p[2])};
         const Vec3 front = {c2[0] + 5, c2[1], c2[2] - 14};
         if (std::isfinite(p[2]) && distance(point, front) < 6)
             p[0] = p[1] = p[2] = static_cast<float>(kNaN);

@@ -71,10 +71,10 @@ std::vector<Candidate> sphere_candidates(const Artefact& artefact, const Image<f
                        0.5 * std::min(d, c.searched_diameter);
             });
             if (same == all.end())
-                all.push_back({std::move(f), d});
+                all.push_back(Candidate{std::move(f), d});
             else if (std::abs(fitted - d) <
                      std::abs(same->found.figures.diameter - same->searched_diameter))
-                *same = {std::move(f), d};
+                *same = Candidate{std::move(f), d};
         }
     return all;
 }
@@ -235,6 +235,7 @@ MeasuredPosition measure_position(const Artefact& artefact, const Image<float>& 
     m.spheres.resize(n);
     for (std::size_t k = 0; k < n; ++k)
         m.spheres[index[k]] = measured_sphere(artefact, index[k], all[k].found, truth_xyz);
+    check_apart_in_view(m, capture);
     for (const MeasuredSphere& s : m.spheres)
         if (s.coverage < options.min_coverage)
             throw InputError(capture, sphere_field(s.index),
@@ -245,7 +246,6 @@ MeasuredPosition measure_position(const Artefact& artefact, const Image<float>& 
                                  mm(options.min_coverage, 2) +
                                  "): cut by the edge of the view or of the projector's light, "
                                  "or hidden");
-    check_apart_in_view(m, capture);
     if (artefact.kind == ArtefactKind::ball_bar) {
         m.length = distance(m.spheres[0].centre, m.spheres[1].centre);
         m.spacing_error = *m.length - artefact.centre_distance_mm;
