@@ -375,8 +375,7 @@ int run_reconstruct(const ReconstructArgs& args) {
     const ReconstructModel model = load_reconstruct_model(args, request, capture);
     check_capture_axes(capture, request.requested);
 
-    const std::optional<DecodedScan> scan =
-        decode_and_smooth(capture, args.decode, request.smooth);
+    const std::optional<DecodedScan> scan = decode_and_smooth(capture, args.decode, request.smooth);
     if (!scan)
         return kExitDecodeFailed;
     const ModelledCloud made = apply_model(model, request.use_table, scan->decoded,

@@ -79,8 +79,8 @@ VerificationOptions check_verify_arguments(const VerifyArgs& args) {
     options.mpe.spacing_mm = given_mpe(args.mpe_sd_option, args.mpe_sd, "--mpe-sd");
     options.mpe.form_mm = given_mpe(args.mpe_pf_option, args.mpe_pf, "--mpe-pf");
     options.mpe.size_mm = given_mpe(args.mpe_ps_option, args.mpe_ps, "--mpe-ps");
-    options.mpe.flatness_mm = given_mpe(args.mpe_flatness_option, args.mpe_flatness,
-                                        "--mpe-flatness");
+    options.mpe.flatness_mm =
+        given_mpe(args.mpe_flatness_option, args.mpe_flatness, "--mpe-flatness");
     if (!(args.min_coverage > 0 && args.min_coverage < 1))
         throw InputError("command line", "--min-coverage", "must be between 0 and 1");
     if (!(args.max_credible_error > 0) || !std::isfinite(args.max_credible_error))
@@ -102,8 +102,8 @@ void check_mpe_fits_artefact(const Artefact& artefact, const VerificationOptions
     const bool plane = artefact.kind == ArtefactKind::plane;
     if (mpe.spacing_mm && artefact.kind != ArtefactKind::ball_bar)
         throw InputError("command line", "--mpe-sd",
-                         std::string("a ") + to_string(artefact.kind) +
-                             " has no sphere spacing (" + artefact.origin.string() + ")");
+                         std::string("a ") + to_string(artefact.kind) + " has no sphere spacing (" +
+                             artefact.origin.string() + ")");
     if ((mpe.form_mm || mpe.size_mm) && plane)
         throw InputError("command line", mpe.form_mm ? "--mpe-pf" : "--mpe-ps",
                          "a plane has no sphere (" + artefact.origin.string() + ")");
@@ -192,13 +192,12 @@ std::optional<MeasuredPosition> measure_capture(const VerifyArgs& args, std::siz
         return std::nullopt;
     const TableCloud made = apply_table_to_scan(*table, scan->decoded, args.decode.threads);
     if (made.stats.points == 0)
-        throw InputError(path, "",
-                         std::to_string(scan->decode_stats.decoded) +
-                             " pixels decoded but the table " + args.table +
-                             " gives none a point (no model " +
-                             std::to_string(made.stats.no_model) + ", outside its phase range " +
-                             std::to_string(made.stats.out_of_range) +
-                             "): is the table for this scanner?");
+        throw InputError(
+            path, "",
+            std::to_string(scan->decode_stats.decoded) + " pixels decoded but the table " +
+                args.table + " gives none a point (no model " +
+                std::to_string(made.stats.no_model) + ", outside its phase range " +
+                std::to_string(made.stats.out_of_range) + "): is the table for this scanner?");
     return measure_position(artefact, made.cloud.xyz, path, options, capture_truth(capture));
 }
 
@@ -275,12 +274,12 @@ Action add_verify_command(CLI::App& app) {
                     "report folder to write (must not exist, be empty, or hold an earlier "
                     "report, which is replaced)")
         ->required();
-    args->mpe_sd_option = cmd->add_option("--mpe-sd", args->mpe_sd,
-                                          "MPE of the sphere-spacing error SD (mm)");
-    args->mpe_pf_option = cmd->add_option("--mpe-pf", args->mpe_pf,
-                                          "MPE of the probing error form P_F (mm)");
-    args->mpe_ps_option = cmd->add_option("--mpe-ps", args->mpe_ps,
-                                          "MPE of the probing error size P_S (mm)");
+    args->mpe_sd_option =
+        cmd->add_option("--mpe-sd", args->mpe_sd, "MPE of the sphere-spacing error SD (mm)");
+    args->mpe_pf_option =
+        cmd->add_option("--mpe-pf", args->mpe_pf, "MPE of the probing error form P_F (mm)");
+    args->mpe_ps_option =
+        cmd->add_option("--mpe-ps", args->mpe_ps, "MPE of the probing error size P_S (mm)");
     args->mpe_flatness_option =
         cmd->add_option("--mpe-flatness", args->mpe_flatness, "MPE of the flatness F (mm)");
     cmd->add_option("--min-coverage", args->min_coverage,

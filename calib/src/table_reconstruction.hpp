@@ -42,8 +42,7 @@ struct DecodedScan {
 
 // Nothing when the decode failed (fpp/decode_diagnosis.hpp): the likely cause
 // is then said on stderr, naming the capture's folder.
-std::optional<DecodedScan> decode_and_smooth(const CaptureSet& capture,
-                                             const DecodeOptions& decode,
+std::optional<DecodedScan> decode_and_smooth(const CaptureSet& capture, const DecodeOptions& decode,
                                              const CoordinateFilterOptions& smooth);
 
 // The table applied to the decoded projector column (tiles over `threads`

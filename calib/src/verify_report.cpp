@@ -227,18 +227,20 @@ std::string verification_summary(const VerificationRecord& r) {
     md << "\nA figure passes when its magnitude is within its MPE at every position; "
           "without an MPE it gets no verdict.\n\n## Positions\n\n";
     if (a.kind == ArtefactKind::plane) {
-        md << "| position | capture | F (mm) | F, all points (mm) | RMS (mm) | extent (mm) | points "
+        md << "| position | capture | F (mm) | F, all points (mm) | RMS (mm) | extent (mm) | "
+              "points "
               "|\n|---:|---|---:|---:|---:|---|---:|\n";
         for (std::size_t k = 0; k < r.positions.size(); ++k) {
             const MeasuredPlane& p = *r.positions[k].plane;
             md << "| " << k + 1 << " | `" << r.positions[k].capture.string() << "` | "
                << fixed_text(p.flatness, 4) << " | " << fixed_text(p.flatness_all_points, 4)
-               << " | " << fixed_text(p.rms, 4) << " | " << fixed_text(p.extent_mm[0], 1)
-               << " x " << fixed_text(p.extent_mm[1], 1) << " | " << p.points_used << " |\n";
+               << " | " << fixed_text(p.rms, 4) << " | " << fixed_text(p.extent_mm[0], 1) << " x "
+               << fixed_text(p.extent_mm[1], 1) << " | " << p.points_used << " |\n";
         }
     } else {
         md << "| position | sphere | diameter (mm) | P_F (mm) | P_S (mm) | coverage | points | "
-              "SD (mm) | SD from the truth (mm) |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+              "SD (mm) | SD from the truth (mm) "
+              "|\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
         for (std::size_t k = 0; k < r.positions.size(); ++k) {
             const MeasuredPosition& p = r.positions[k];
             for (const MeasuredSphere& s : p.spheres) {
@@ -246,10 +248,8 @@ std::string verification_summary(const VerificationRecord& r) {
                 md << "| " << k + 1 << " | " << s.index + 1 << " | " << fixed_text(s.diameter, 4)
                    << " | " << fixed_text(s.form, 4) << " | " << fixed_text(s.size_error, 4)
                    << " | " << fixed_text(s.coverage, 2) << " | " << s.points_used << " | "
-                   << (first && p.spacing_error ? fixed_text(*p.spacing_error, 4) : "")
-                   << " | "
-                   << (first && p.truth_spacing_error ? fixed_text(*p.truth_spacing_error, 4)
-                                                      : "")
+                   << (first && p.spacing_error ? fixed_text(*p.spacing_error, 4) : "") << " | "
+                   << (first && p.truth_spacing_error ? fixed_text(*p.truth_spacing_error, 4) : "")
                    << " |\n";
             }
         }
@@ -263,13 +263,12 @@ std::string verification_summary(const VerificationRecord& r) {
     for (const FigureVerdict& f : r.figures)
         md << "- `" << text_of(f.name).file << "`: " << text_of(f.name).title << "\n";
     md << "- `residuals-N.png`: position N, the fit residual of every point used per camera "
-          "pixel (" << (a.kind == ArtefactKind::plane ? "+ towards the camera" : "+ outside")
-       << ")\n";
+          "pixel ("
+       << (a.kind == ArtefactKind::plane ? "+ towards the camera" : "+ outside") << ")\n";
     return md.str();
 }
 
-void write_verification_report(const std::filesystem::path& folder,
-                               const VerificationRecord& r) {
+void write_verification_report(const std::filesystem::path& folder, const VerificationRecord& r) {
     const std::string json = verification_json(r);
     const std::string summary = verification_summary(r);
     std::vector<std::pair<std::string, cv::Mat>> pngs;

@@ -176,7 +176,8 @@ TEST(Verification, RefusesASphereWithTooLittleSurfaceNamingIt) {
     const double z = 480;
     // Sphere 2 mostly beyond the right edge: a crescent of it in view.
     const Vec3 centre{right_edge_x(z) - 75 + 10, 0, z};
-    const fpp::InputError e = refusal(ball_bar(), scan_of(bar_scene(centre, {1, 0, 0}, false), 0.02));
+    const fpp::InputError e =
+        refusal(ball_bar(), scan_of(bar_scene(centre, {1, 0, 0}, false), 0.02));
     EXPECT_TRUE(e.field() == "sphere 2" || e.field() == "spheres") << e.what();
     EXPECT_TRUE(says(e, "too little") || says(e, "missing")) << e.what();
 }
@@ -207,10 +208,9 @@ TEST(Verification, FitsASphereWithAHighlightHole) {
 TEST(Verification, RefusesAMissingSphere) {
     sim::Scene scene;
     scene.add(std::make_unique<sim::Sphere>(Vec3{-40, 0, 480}, kDiameter / 2, 0.85), "ball");
-    scene.add(std::make_unique<sim::Cylinder>(Vec3{20, 0, 480}, Vec3{1, 0, 0}, 5, 100, 0.6),
-              "rod");
-    scene.add(std::make_unique<sim::Plane>(sim::Pose{{0, 0, 575}, {1, 0, 0, 0, 1, 0, 0, 0, 1}},
-                                           420, 330, 0.8),
+    scene.add(std::make_unique<sim::Cylinder>(Vec3{20, 0, 480}, Vec3{1, 0, 0}, 5, 100, 0.6), "rod");
+    scene.add(std::make_unique<sim::Plane>(sim::Pose{{0, 0, 575}, {1, 0, 0, 0, 1, 0, 0, 0, 1}}, 420,
+                                           330, 0.8),
               "wall");
     const fpp::InputError e = refusal(ball_bar(), scan_of(scene, 0.02));
     EXPECT_EQ(e.field(), "spheres");
@@ -284,8 +284,8 @@ TEST(Verification, RefusesACertificateTheScansContradict) {
 TEST(Verification, VerdictsAgainstEachMpe) {
     const Vec3 centre{0, -10, 480}, axis{1, 0, 0.25};
     const Scan scan = scan_of(bar_scene(centre, axis, true), 0.02);
-    const std::vector<MeasuredPosition> positions = {fpp::calib::measure_position(
-        ball_bar(), scan.xyz, "position-1", VerificationOptions{})};
+    const std::vector<MeasuredPosition> positions = {
+        fpp::calib::measure_position(ball_bar(), scan.xyz, "position-1", VerificationOptions{})};
     fpp::calib::MaximumPermissibleErrors mpe;
     mpe.spacing_mm = 0.02;
     mpe.form_mm = 0.3;
@@ -300,11 +300,11 @@ TEST(Verification, VerdictsAgainstEachMpe) {
 
 TEST(Verification, FindsAPlateBeforeAWall) {
     sim::Scene scene;
-    scene.add(std::make_unique<sim::Plane>(
-                  sim::Pose::from_euler_deg({0, 0, 470}, 10, -15, 5), 200, 150, 0.85),
+    scene.add(std::make_unique<sim::Plane>(sim::Pose::from_euler_deg({0, 0, 470}, 10, -15, 5), 200,
+                                           150, 0.85),
               "plate");
-    scene.add(std::make_unique<sim::Plane>(sim::Pose{{0, 0, 575}, {1, 0, 0, 0, 1, 0, 0, 0, 1}},
-                                           420, 330, 0.8),
+    scene.add(std::make_unique<sim::Plane>(sim::Pose{{0, 0, 575}, {1, 0, 0, 0, 1, 0, 0, 0, 1}}, 420,
+                                           330, 0.8),
               "wall");
     Artefact plate;
     plate.origin = "plate.yaml";
@@ -323,8 +323,8 @@ TEST(Verification, FindsAPlateBeforeAWall) {
 
     // The wall alone is no plate of that size.
     sim::Scene wall;
-    wall.add(std::make_unique<sim::Plane>(sim::Pose{{0, 0, 575}, {1, 0, 0, 0, 1, 0, 0, 0, 1}},
-                                          420, 330, 0.8),
+    wall.add(std::make_unique<sim::Plane>(sim::Pose{{0, 0, 575}, {1, 0, 0, 0, 1, 0, 0, 0, 1}}, 420,
+                                          330, 0.8),
              "wall");
     const fpp::InputError e = refusal(plate, scan_of(wall, 0.02));
     EXPECT_EQ(e.field(), "plane");

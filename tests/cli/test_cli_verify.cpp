@@ -73,9 +73,8 @@ std::string scene_yaml(const Position& p) {
     s << "format: fpp-scene/1\nshapes:\n"
       << "  - {type: plane, name: wall, centre: [0, 0, 575], size: [420, 330], albedo: 0.8}\n"
       << "  - {type: ball_bar, name: ball, centre: " << triple(p.centre)
-      << ", axis: " << triple(p.axis) << ", distance: " << p.length << ", radius: "
-      << kDiameter / 2 << ", " << (p.material.rfind("albedo", 0) == 0 ? "" : "material: ")
-      << p.material << "}\n"
+      << ", axis: " << triple(p.axis) << ", distance: " << p.length << ", radius: " << kDiameter / 2
+      << ", " << (p.material.rfind("albedo", 0) == 0 ? "" : "material: ") << p.material << "}\n"
       << "  - {type: cylinder, name: rod, centre: " << triple(p.centre)
       << ", axis: " << triple(p.axis) << ", radius: 5, length: " << p.length - 28
       << ", albedo: 0.6}\n"
@@ -132,11 +131,11 @@ protected:
                          const std::string& extra = {}) {
         const fs::path scene = *dir_ / (name + ".scene.yaml");
         std::ofstream(scene) << scene_yaml(p);
-        const ToolRun run = run_calib("simulate --rig " + q(*dir_ / "rig.yaml") + " --scene " +
-                                          q(scene) + " --sequence gray-x --seed " +
-                                          std::to_string(seed) + " " + extra + " --out " +
-                                          q(*dir_ / name),
-                                      dir_->path());
+        const ToolRun run =
+            run_calib("simulate --rig " + q(*dir_ / "rig.yaml") + " --scene " + q(scene) +
+                          " --sequence gray-x --seed " + std::to_string(seed) + " " + extra +
+                          " --out " + q(*dir_ / name),
+                      dir_->path());
         ASSERT_EQ(run.exit_code, 0) << run.output;
     }
     static fs::path path(const std::string& name) { return *dir_ / name; }
@@ -274,10 +273,10 @@ TEST_F(CliVerify, RefusesACaptureOfAnotherCameraSize) {
     const fs::path rig_file = out / "rig-200.yaml";
     std::ofstream(rig_file) << fpp::sim::rig_to_yaml(rig);
     std::ofstream(out / "scene.yaml") << scene_yaml(positions()[0]);
-    const ToolRun sim = run_calib("simulate --rig " + q(rig_file) + " --scene " +
-                                      q(out / "scene.yaml") + " --sequence gray-x --out " +
-                                      q(out / "small"),
-                                  out.path());
+    const ToolRun sim =
+        run_calib("simulate --rig " + q(rig_file) + " --scene " + q(out / "scene.yaml") +
+                      " --sequence gray-x --out " + q(out / "small"),
+                  out.path());
     ASSERT_EQ(sim.exit_code, 0) << sim.output;
     expect_refused(verify(q(path("position-1")) + " " + q(out / "small"), out / "report"),
                    out / "report", {"small/capture.yaml: camera", "200x150", "400x300"});

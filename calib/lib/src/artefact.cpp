@@ -59,7 +59,8 @@ void read_spheres(const Reader& in, const YAML::Node& root, Artefact& a) {
                     (count == 1 ? " diameter" : " diameters") + ", got " +
                     std::to_string(list.size()));
     for (std::size_t i = 0; i < count; ++i)
-        a.sphere_diameters_mm.push_back(bounded(in, list[i], yaml_fields::item("sphere_diameters_mm", i),
+        a.sphere_diameters_mm.push_back(bounded(in, list[i],
+                                                yaml_fields::item("sphere_diameters_mm", i),
                                                 kMinDiameterMm, kMaxDiameterMm));
     if (a.kind != ArtefactKind::ball_bar)
         return;
@@ -77,8 +78,7 @@ void read_plane(const Reader& in, const YAML::Node& root, Artefact& a) {
     in.expect_list(size, "plane_size_mm", 2);
     a.plane_width_mm = bounded(in, size[0], "plane_size_mm[0]", 0, kMaxLengthMm, true);
     a.plane_height_mm = bounded(in, size[1], "plane_size_mm[1]", 0, kMaxLengthMm, true);
-    a.flatness_mm =
-        in.real_value(in.require(root, "", "flatness_mm"), "flatness_mm");
+    a.flatness_mm = in.real_value(in.require(root, "", "flatness_mm"), "flatness_mm");
     if (!(a.flatness_mm >= 0) || !(a.flatness_mm < kMaxFlatnessMm))
         in.fail(root["flatness_mm"], "flatness_mm",
                 number(a.flatness_mm) + " is outside [0, " + number(kMaxFlatnessMm) +
@@ -107,8 +107,8 @@ Artefact parse_artefact(const std::string& text, const std::filesystem::path& or
     const YAML::Node format = in.require(root, "", "format");
     if (in.string_value(format, "format") != kFormat)
         in.fail(format, "format",
-                "unknown format '" + in.string_value(format, "format") + "' (expected " +
-                    kFormat + ")");
+                "unknown format '" + in.string_value(format, "format") + "' (expected " + kFormat +
+                    ")");
     Artefact a;
     a.origin = origin;
     a.kind = parse_kind(in, in.require(root, "", "kind"));
@@ -120,7 +120,8 @@ Artefact parse_artefact(const std::string& text, const std::filesystem::path& or
                        "uncertainty_mm"});
         break;
     case ArtefactKind::sphere:
-        in.expect_map(root, "", {"format", "kind", "name", "sphere_diameters_mm", "uncertainty_mm"});
+        in.expect_map(root, "",
+                      {"format", "kind", "name", "sphere_diameters_mm", "uncertainty_mm"});
         break;
     case ArtefactKind::plane:
         in.expect_map(root, "",
@@ -130,8 +131,7 @@ Artefact parse_artefact(const std::string& text, const std::filesystem::path& or
     if (const YAML::Node name = root["name"]; name.IsDefined() && !name.IsNull()) {
         a.name = in.string_value(name, "name");
         if (a.name.empty() || a.name.size() > kMaxNameLength)
-            in.fail(name, "name",
-                    "must be 1 to " + std::to_string(kMaxNameLength) + " characters");
+            in.fail(name, "name", "must be 1 to " + std::to_string(kMaxNameLength) + " characters");
     }
     if (a.kind == ArtefactKind::plane)
         read_plane(in, root, a);

@@ -52,8 +52,8 @@ double pixel_angle(const Image<float>& xyz) {
                 continue;
             const Vector3d a = point_at(xyz, i), b = point_at(xyz, i + 1);
             if (a.z() > 0 && b.z() > 0)
-                steps.push_back(std::hypot(a.x() / a.z() - b.x() / b.z(),
-                                           a.y() / a.z() - b.y() / b.z()));
+                steps.push_back(
+                    std::hypot(a.x() / a.z() - b.x() / b.z(), a.y() / a.z() - b.y() / b.z()));
         }
     if (steps.empty())
         return 0;
@@ -149,8 +149,8 @@ Votes vote_centres(const Image<float>& xyz, std::span<const std::uint8_t> usable
                               d = i + std::size_t(s) * std::size_t(w);
             if (!usable[l] || !usable[r] || !usable[u] || !usable[d])
                 continue;
-            Vector3d n = (point_at(xyz, r) - point_at(xyz, l))
-                             .cross(point_at(xyz, d) - point_at(xyz, u));
+            Vector3d n =
+                (point_at(xyz, r) - point_at(xyz, l)).cross(point_at(xyz, d) - point_at(xyz, u));
             if (!(n.norm() > 0))
                 continue;
             n.normalize();
@@ -201,9 +201,8 @@ std::vector<Peak> vote_peaks(const Votes& v, double radius, std::size_t max_peak
     for (const Cell& c : cells) {
         if (peaks.size() >= max_peaks)
             break;
-        const Vector3d at = (Vector3d(double(c.x), double(c.y), double(c.z)) +
-                             Vector3d::Constant(0.5)) *
-                            v.cell;
+        const Vector3d at =
+            (Vector3d(double(c.x), double(c.y), double(c.z)) + Vector3d::Constant(0.5)) * v.cell;
         if (std::any_of(peaks.begin(), peaks.end(),
                         [&](const Peak& p) { return (p.centre - at).norm() < radius; }))
             continue;
@@ -239,8 +238,8 @@ bool fit_peak(const Image<float>& xyz, std::span<const std::uint8_t> usable, con
                 if (fit.fit.inlier[i])
                     used.push_back(fit.fit.residuals[i]);
             const double sigma = 1.4826 * median_abs(used);
-            gather_shell(xyz, usable, to_eigen(fit.centre), fit.radius,
-                         std::max(5 * sigma, 0.05), pixels, points);
+            gather_shell(xyz, usable, to_eigen(fit.centre), fit.radius, std::max(5 * sigma, 0.05),
+                         pixels, points);
             if (points.size() < options.min_points)
                 return false;
             fit = fit_sphere(points);
@@ -287,7 +286,8 @@ std::vector<std::uint32_t> largest_patch(const std::vector<std::uint32_t>& pixel
             for (int k = 0; k < 4; ++k) {
                 if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h)
                     continue;
-                const std::uint32_t j = std::uint32_t(ny[k]) * std::uint32_t(w) + std::uint32_t(nx[k]);
+                const std::uint32_t j =
+                    std::uint32_t(ny[k]) * std::uint32_t(w) + std::uint32_t(nx[k]);
                 if (label[j] == 0) {
                     label[j] = next;
                     stack.push_back(j);
@@ -428,9 +428,8 @@ double hemisphere_coverage(std::span<const Vec3> points, const Vec3& centre) {
     return double(std::count(cells.begin(), cells.end(), 1)) / double(cells.size());
 }
 
-std::vector<FoundSphere> find_spheres(const Image<float>& xyz,
-                                      std::span<const std::uint8_t> usable, double diameter_mm,
-                                      const ArtefactSearchOptions& options) {
+std::vector<FoundSphere> find_spheres(const Image<float>& xyz, std::span<const std::uint8_t> usable,
+                                      double diameter_mm, const ArtefactSearchOptions& options) {
     const double radius = diameter_mm / 2;
     const Votes votes = vote_centres(xyz, usable, radius);
     const std::vector<Peak> peaks =
@@ -509,8 +508,7 @@ FoundPlane find_plane(const Image<float>& xyz, std::span<const std::uint8_t> usa
             taken[i] = 1;
         std::erase_if(pool, [&](std::uint32_t i) { return taken[i] != 0; });
     }
-    throw FitError("no flat of " + mm_text(width_mm) + " x " + mm_text(height_mm) +
-                   " mm in view" +
+    throw FitError("no flat of " + mm_text(width_mm) + " x " + mm_text(height_mm) + " mm in view" +
                    (seen.empty() ? std::string(" (no plane found)")
                                  : "; the planes found are larger: " + seen +
                                        " (a wall or a table? the plate must be seen apart)"));

@@ -42,7 +42,8 @@ cv::Mat mpe_plot(const std::vector<double>& values, const std::vector<std::strin
     const double top_value = nice_ceil(std::max(reach * 1.15, 1e-4));
     const double lo = signed_figure ? -top_value : 0, hi = top_value;
     auto y_of = [&](double v) {
-        return top + static_cast<int>(std::lround((hi - std::clamp(v, lo, hi)) / (hi - lo) * plot_h));
+        return top +
+               static_cast<int>(std::lround((hi - std::clamp(v, lo, hi)) / (hi - lo) * plot_h));
     };
     const std::size_t n = std::max<std::size_t>(values.size(), 1);
     auto x_of = [&](std::size_t k) {
@@ -69,15 +70,15 @@ cv::Mat mpe_plot(const std::vector<double>& values, const std::vector<std::strin
                  2, cv::LINE_AA);
         cv::circle(canvas, at, 5, outside ? kOutside : kInside, cv::FILLED, cv::LINE_AA);
         if (k < labels.size() && values.size() <= 40)
-            label(canvas, labels[k],
-                  {at.x - text_width(labels[k], 0.4) / 2, top + plot_h + 18}, 0.4);
+            label(canvas, labels[k], {at.x - text_width(labels[k], 0.4) / 2, top + plot_h + 18},
+                  0.4);
     }
     label(canvas, x_label, {left + plot_w / 2 - text_width(x_label, 0.45) / 2, height - 20});
     label(canvas, y_label, {8, top - 12}, 0.42);
     label(canvas, title, {left, 28}, 0.55);
-    const std::string legend = mpe ? "green: within the MPE " + fixed_text(*mpe, 4) +
-                                         " mm; red: outside"
-                                   : "no MPE given: no verdict";
+    const std::string legend =
+        mpe ? "green: within the MPE " + fixed_text(*mpe, 4) + " mm; red: outside"
+            : "no MPE given: no verdict";
     label(canvas, legend, {left + plot_w - text_width(legend, 0.42), top - 12}, 0.42);
     return canvas;
 }

@@ -167,9 +167,9 @@ void check_apart_in_view(const MeasuredPosition& m, const std::filesystem::path&
         return;
     const MeasuredSphere &a = m.spheres[0], &b = m.spheres[1];
     const double la = length(a.centre), lb = length(b.centre);
-    const double cos_apart = (a.centre[0] * b.centre[0] + a.centre[1] * b.centre[1] +
-                              a.centre[2] * b.centre[2]) /
-                             (la * lb);
+    const double cos_apart =
+        (a.centre[0] * b.centre[0] + a.centre[1] * b.centre[1] + a.centre[2] * b.centre[2]) /
+        (la * lb);
     const double apart = std::acos(std::clamp(cos_apart, -1.0, 1.0));
     const double touching = std::asin(std::min(1.0, a.diameter / 2 / la)) +
                             std::asin(std::min(1.0, b.diameter / 2 / lb));
@@ -217,12 +217,11 @@ MeasuredPosition measure_position(const Artefact& artefact, const Image<float>& 
         for (const Candidate& c : all)
             list += "\n  diameter " + mm(c.found.figures.diameter) + " mm at " +
                     point_text(c.found.figures.fit.centre);
-        throw InputError(capture, "spheres",
-                         std::to_string(whole) + " spheres of the certified diameter (" +
-                             diameters + " mm) in view, the " + to_string(artefact.kind) +
-                             " has " + std::to_string(n) +
-                             ": which belong to it is ambiguous; take the others out of view:" +
-                             list);
+        throw InputError(
+            capture, "spheres",
+            std::to_string(whole) + " spheres of the certified diameter (" + diameters +
+                " mm) in view, the " + to_string(artefact.kind) + " has " + std::to_string(n) +
+                ": which belong to it is ambiguous; take the others out of view:" + list);
     }
     if (all.size() < n)
         throw InputError(capture, "spheres",
@@ -269,11 +268,10 @@ void check_certificate(const Artefact& artefact, const std::vector<MeasuredPosit
         for (const MeasuredSphere& s : p.spheres) {
             largest_size_error = std::max(largest_size_error, std::abs(s.size_error));
             if (std::abs(s.size_error) > limit)
-                throw InputError(artefact.origin,
-                                 "sphere_diameters_mm[" + std::to_string(s.index) + "]",
-                                 "certified " + mm(s.certified_diameter) + " mm, but " +
-                                     p.capture.string() + " measures " + mm(s.diameter) +
-                                     " mm: " + signed_mm(s.size_error) + beyond);
+                throw InputError(
+                    artefact.origin, "sphere_diameters_mm[" + std::to_string(s.index) + "]",
+                    "certified " + mm(s.certified_diameter) + " mm, but " + p.capture.string() +
+                        " measures " + mm(s.diameter) + " mm: " + signed_mm(s.size_error) + beyond);
         }
     for (std::size_t k = 0; k < positions.size(); ++k) {
         const MeasuredPosition& p = positions[k];
@@ -287,10 +285,9 @@ void check_certificate(const Artefact& artefact, const std::vector<MeasuredPosit
                              std::to_string(k + 1) + " (" + p.capture.string() + ") measures " +
                              mm(*p.length) + " mm: " + signed_mm(*p.spacing_error) + beyond +
                              " (a scale error that large would put the " + mm(d, 0) +
-                             " mm spheres " + mm(std::abs(*p.spacing_error) * d /
-                                                     artefact.centre_distance_mm) +
-                             " mm off; they are off by at most " + mm(largest_size_error) +
-                             " mm)");
+                             " mm spheres " +
+                             mm(std::abs(*p.spacing_error) * d / artefact.centre_distance_mm) +
+                             " mm off; they are off by at most " + mm(largest_size_error) + " mm)");
     }
 }
 

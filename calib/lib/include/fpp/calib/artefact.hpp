@@ -18,13 +18,13 @@ const char* to_string(ArtefactKind kind);
 struct Artefact {
     std::filesystem::path origin; // the file it was read from (named in errors)
     ArtefactKind kind = ArtefactKind::ball_bar;
-    std::string name;                         // optional label (serial number); may be empty
-    std::vector<double> sphere_diameters_mm;  // ball bar: 2, sphere: 1, plane: none
-    double centre_distance_mm = 0;            // ball bar only
-    double plane_width_mm = 0;                // plane only: its size
-    double plane_height_mm = 0;               //
-    double flatness_mm = 0;                   // plane only: its certified flatness
-    double uncertainty_mm = 0;                // of the certificate's values, 1 sigma
+    std::string name;                        // optional label (serial number); may be empty
+    std::vector<double> sphere_diameters_mm; // ball bar: 2, sphere: 1, plane: none
+    double centre_distance_mm = 0;           // ball bar only
+    double plane_width_mm = 0;               // plane only: its size
+    double plane_height_mm = 0;              //
+    double flatness_mm = 0;                  // plane only: its certified flatness
+    double uncertainty_mm = 0;               // of the certificate's values, 1 sigma
 
     std::size_t sphere_count() const { return sphere_diameters_mm.size(); }
 };

@@ -44,7 +44,7 @@ namespace fpp::calib {
 struct ArtefactSearchOptions {
     int edge_margin_px = 2;
     double depth_jump_footprints = 8;
-    std::size_t min_points = 30;   // a sphere or plane fitted from fewer is not one
+    std::size_t min_points = 30;     // a sphere or plane fitted from fewer is not one
     std::size_t max_candidates = 12; // vote peaks fitted per radius
 };
 
@@ -64,8 +64,8 @@ struct FoundSphere {
 // Every sphere of `diameter_mm` in the cloud (steps 2 and 3), strongest
 // first; `usable` from usable_points. Spheres whose centres are closer than
 // the radius are one (the one with more points is kept).
-std::vector<FoundSphere> find_spheres(const Image<float>& xyz,
-                                      std::span<const std::uint8_t> usable, double diameter_mm,
+std::vector<FoundSphere> find_spheres(const Image<float>& xyz, std::span<const std::uint8_t> usable,
+                                      double diameter_mm,
                                       const ArtefactSearchOptions& options = {});
 
 // Share of the hemisphere of the sphere about `centre` facing the camera
@@ -84,7 +84,6 @@ struct FoundPlane {
 // max(5 sigma, 0.05 mm) of its fit), the first whose extent fits the
 // plate's (within 5 mm). Throws FitError saying what was found otherwise.
 FoundPlane find_plane(const Image<float>& xyz, std::span<const std::uint8_t> usable,
-                      double width_mm, double height_mm,
-                      const ArtefactSearchOptions& options = {});
+                      double width_mm, double height_mm, const ArtefactSearchOptions& options = {});
 
 } // namespace fpp::calib

@@ -76,9 +76,9 @@ struct MeasuredPlane {
 struct MeasuredPosition {
     std::filesystem::path capture; // the capture set's folder
     Size camera;
-    std::vector<MeasuredSphere> spheres; // in the artefact's order
-    std::optional<double> length;        // ball bar: centre distance
-    std::optional<double> spacing_error; // SD
+    std::vector<MeasuredSphere> spheres;       // in the artefact's order
+    std::optional<double> length;              // ball bar: centre distance
+    std::optional<double> spacing_error;       // SD
     std::optional<double> truth_spacing_error; // SD of the true points' spheres
     std::optional<MeasuredPlane> plane;
 };
@@ -99,10 +99,10 @@ void check_certificate(const Artefact& artefact, const std::vector<MeasuredPosit
 
 // One figure against its MPE.
 struct FigureVerdict {
-    std::string name;            // "SD", "P_F", "P_S", "F"
-    std::vector<double> values;  // every value of it, in position order
-    double worst = 0;            // largest |value|
-    std::optional<double> mpe;   // none: no verdict
+    std::string name;           // "SD", "P_F", "P_S", "F"
+    std::vector<double> values; // every value of it, in position order
+    double worst = 0;           // largest |value|
+    std::optional<double> mpe;  // none: no verdict
     bool passed() const { return !mpe || worst <= *mpe; }
 };
 
