@@ -6,6 +6,7 @@
 // beyond its MPE; and bad input, which exits 2, names what is wrong and
 // writes no report.
 
+#include "ball_bar_scene.hpp"
 #include "rig_truth_table.hpp"
 #include "test_support.hpp"
 
@@ -23,12 +24,10 @@
 
 namespace {
 
-using fpp::Vec3;
+using fpp::test::BallBarPlacement;
 using fpp::test::TempDir;
 using fpp::test::ToolRun;
 namespace fs = std::filesystem;
-
-constexpr double kDiameter = 30, kLength = 150;
 
 std::string q(const fs::path& p) {
     return fpp::test::shell_quote(p.string());
@@ -45,68 +44,22 @@ fpp::sim::Rig small_rig() {
     return rig;
 }
 
-Vec3 unit(const Vec3& a) {
-    const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    return {a[0] / n, a[1] / n, a[2] / n};
-}
-
-std::string triple(const Vec3& v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << "[" << v[0] << ", " << v[1] << ", " << v[2] << "]";
-    return s.str();
-}
-
-// One position of the bar: its centre, its direction, its true length.
-struct Position {
-    Vec3 centre, axis;
-    double length = kLength;
-    std::string material = "albedo: 0.85";
-};
-
-// The ball bar on a 10 mm rod, on a post, before a wall (as
-// board/sim/scenes/ball-bar-on-stand.yaml, moved).
-std::string scene_yaml(const Position& p) {
-    const Vec3 post{p.centre[0], p.centre[1] + 65, p.centre[2] + 5};
-    std::ostringstream s;
-    s.precision(17);
-    s << "format: fpp-scene/1\nshapes:\n"
-      << "  - {type: plane, name: wall, centre: [0, 0, 575], size: [420, 330], albedo: 0.8}\n"
-      << "  - {type: ball_bar, name: ball, centre: " << triple(p.centre)
-      << ", axis: " << triple(p.axis) << ", distance: " << p.length << ", radius: " << kDiameter / 2
-      << ", " << (p.material.rfind("albedo", 0) == 0 ? "" : "material: ") << p.material << "}\n"
-      << "  - {type: cylinder, name: rod, centre: " << triple(p.centre)
-      << ", axis: " << triple(p.axis) << ", radius: 5, length: " << p.length - 28
-      << ", albedo: 0.6}\n"
-      << "  - {type: cylinder, name: stand, centre: " << triple(post)
-      << ", axis: [0, 1, 0], radius: 8, length: 120, albedo: 0.7}\n";
-    return s.str();
-}
-
 // SD of the true centres (the scene's) against the certificate's 150 mm.
-double true_spacing_error(const Position& p) {
-    return p.length - kLength;
+double true_spacing_error(const BallBarPlacement& p) {
+    return p.length - fpp::test::kBallBarLengthMm;
 }
 
-// Four of the seven VDI/VDE 2634-2 positions within the paper rig's volume
-// (sphere centres between Z 430 and 530 mm): across the view, tilted in
-// depth, diagonal, and steep in the image; one bar 4 um long.
-const std::vector<Position>& positions() {
-    static const std::vector<Position> p = {
-        {{0, -10, 480}, {1, 0, 0}},
-        {{0, -5, 480}, {0.87, 0, 0.5}, kLength + 0.004},
-        {{0, -15, 480}, {0.7, 0.5, 0.5}},
-        {{-10, 0, 470}, {0.35, 1, -0.25}},
-    };
+// Four of the seven positions (all seven: test_cli_verify_long.cpp), one
+// bar 4 um longer than its certificate.
+const std::vector<BallBarPlacement>& positions() {
+    static const std::vector<BallBarPlacement> p = [] {
+        const auto& all = fpp::test::vdi_ball_bar_positions();
+        std::vector<BallBarPlacement> some = {all[0], all[1], all[4], all[6]};
+        some[1].length += 0.004;
+        return some;
+    }();
     return p;
 }
-
-const char* kArtefact = "format: fpp-artefact/1\n"
-                        "kind: ball-bar\n"
-                        "name: virtual ball bar\n"
-                        "sphere_diameters_mm: [30.000, 30.000]\n"
-                        "centre_distance_mm: 150.000\n"
-                        "uncertainty_mm: 0.001\n";
 
 class CliVerify : public ::testing::Test {
 protected:
@@ -114,11 +67,11 @@ protected:
         dir_ = new TempDir;
         std::ofstream(*dir_ / "rig.yaml") << fpp::sim::rig_to_yaml(small_rig());
         fpp::write_table(*dir_ / "table.fpt", fpp::test::rig_truth_table(small_rig()));
-        std::ofstream(*dir_ / "bar.yaml") << kArtefact;
+        std::ofstream(*dir_ / "bar.yaml") << fpp::test::ball_bar_artefact_yaml();
         for (std::size_t k = 0; k < positions().size(); ++k)
             simulate("position-" + std::to_string(k + 1), positions()[k], int(k + 1));
-        Position glossy = positions()[0];
-        glossy.material = "{albedo: 0.45, specular: 0.4, shininess: 300}";
+        BallBarPlacement glossy = positions()[0];
+        glossy.material = "material: {albedo: 0.45, specular: 0.4, shininess: 300}";
         simulate("glossy", glossy, 9);
         // The other sphere beyond the image's right edge.
         simulate("one-sphere", {{150, -10, 480}, {1, 0, 0}}, 10);
@@ -127,10 +80,10 @@ protected:
         delete dir_;
         dir_ = nullptr;
     }
-    static void simulate(const std::string& name, const Position& p, int seed,
+    static void simulate(const std::string& name, const BallBarPlacement& p, int seed,
                          const std::string& extra = {}) {
         const fs::path scene = *dir_ / (name + ".scene.yaml");
-        std::ofstream(scene) << scene_yaml(p);
+        std::ofstream(scene) << fpp::test::ball_bar_scene_yaml(p);
         const ToolRun run =
             run_calib("simulate --rig " + q(*dir_ / "rig.yaml") + " --scene " + q(scene) +
                           " --sequence gray-x --seed " + std::to_string(seed) + " " + extra +
@@ -272,7 +225,7 @@ TEST_F(CliVerify, RefusesACaptureOfAnotherCameraSize) {
     fpp::sim::Rig rig = small_rig().binned_camera(2); // 200 x 150
     const fs::path rig_file = out / "rig-200.yaml";
     std::ofstream(rig_file) << fpp::sim::rig_to_yaml(rig);
-    std::ofstream(out / "scene.yaml") << scene_yaml(positions()[0]);
+    std::ofstream(out / "scene.yaml") << fpp::test::ball_bar_scene_yaml(positions()[0]);
     const ToolRun sim =
         run_calib("simulate --rig " + q(rig_file) + " --scene " + q(out / "scene.yaml") +
                       " --sequence gray-x --out " + q(out / "small"),
