@@ -172,6 +172,25 @@ TEST(Verification, FitsASphereCutByTheEdgeOfTheView) {
     EXPECT_NEAR(*m.spacing_error, 0, 0.03);
 }
 
+TEST(Verification, FitsASphereHalfOutOfTheProjectorsLight) {
+    const Vec3 centre{0, -10, 480}, axis{1, 0, 0.25};
+    Scan scan = scan_of(bar_scene(centre, axis, true), 0.02);
+    // The edge of the projector's image (or the stand's shadow) across
+    // sphere 2: nothing decodes beyond it.
+    const Vec3 c2 = along(centre, axis, 75);
+    for (std::size_t i = 0; i < scan.xyz.pixel_count(); ++i) {
+        float* p = scan.xyz.data() + 3 * i;
+        if (std::isfinite(p[2]) && double(p[0]) > c2[0] && double(p[0]) < c2[0] + 20)
+            p[0] = p[1] = p[2] = static_cast<float>(kNaN);
+    }
+    const MeasuredPosition m =
+        fpp::calib::measure_position(ball_bar(), scan.xyz, "position-1", VerificationOptions{});
+    ASSERT_EQ(m.spheres.size(), 2u);
+    EXPECT_LT(m.spheres[1].coverage, 0.7 * m.spheres[0].coverage);
+    EXPECT_LT(distance(m.spheres[1].centre, c2), 0.03);
+    EXPECT_NEAR(*m.spacing_error, 0, 0.03);
+}
+
 TEST(Verification, RefusesASphereWithTooLittleSurfaceNamingIt) {
     const double z = 480;
     // Sphere 2 mostly beyond the right edge: a crescent of it in view.
