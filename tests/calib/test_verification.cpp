@@ -149,7 +149,7 @@ TEST(Verification, FindsTheBallBarAmongItsRodStandAndWall) {
     EXPECT_NEAR(*m.spacing_error, 0, 0.005);
     EXPECT_NEAR(*m.truth_spacing_error, 0, 1e-4); // exact points: exact centres
     for (const auto& s : m.spheres) {
-        EXPECT_GT(s.coverage, 0.5) << s.index;
+        EXPECT_GT(s.coverage, 0.4) << s.index;
         EXPECT_GT(s.points_used, 500u) << s.index;
         EXPECT_NEAR(s.size_error, 0, 0.01) << s.index;
         EXPECT_LT(s.form, 0.2) << s.index; // noise 0.02: about 8 sigma
@@ -157,19 +157,33 @@ TEST(Verification, FindsTheBallBarAmongItsRodStandAndWall) {
     }
 }
 
-TEST(Verification, FitsASphereCutByTheEdgeOfTheView) {
+// Half of sphere 2 in view: its centre on the image's right edge.
+Scan half_in_view() {
     const double z = 480;
-    // Sphere 2's centre on the image's right edge: half of it in view.
+    return scan_of(bar_scene({right_edge_x(z) - 75, 0, z}, {1, 0, 0}, false), 0.02);
+}
+
+TEST(Verification, FitsASphereCutByTheEdgeOfTheViewFromWhatIsThere) {
+    const double z = 480;
     const Vec3 centre{right_edge_x(z) - 75, 0, z};
-    const Scan scan = scan_of(bar_scene(centre, {1, 0, 0}, false), 0.02);
+    VerificationOptions options;
+    options.min_coverage = 0.15;
     const MeasuredPosition m =
-        fpp::calib::measure_position(ball_bar(), scan.xyz, "position-1", VerificationOptions{});
+        fpp::calib::measure_position(ball_bar(), half_in_view().xyz, "position-1", options);
     ASSERT_EQ(m.spheres.size(), 2u);
     const auto &whole = m.spheres[0], &cut = m.spheres[1];
-    EXPECT_LT(cut.coverage, 0.7 * whole.coverage);
-    EXPECT_GE(cut.coverage, VerificationOptions{}.min_coverage);
+    EXPECT_LT(cut.coverage, 0.6 * whole.coverage);
+    EXPECT_GT(cut.coverage, 0.15);
     EXPECT_LT(distance(cut.centre, along(centre, {1, 0, 0}, 75)), 0.03);
     EXPECT_NEAR(*m.spacing_error, 0, 0.03);
+}
+
+TEST(Verification, RefusesASphereWithTooLittleSurfaceNamingIt) {
+    // At 42 px across, half a sphere covers about 0.22 of its hemisphere:
+    // under the default minimum (0.25).
+    const fpp::InputError e = refusal(ball_bar(), half_in_view());
+    EXPECT_EQ(e.field(), "sphere 2") << e.what();
+    EXPECT_TRUE(says(e, "too little of the sphere's surface")) << e.what();
 }
 
 TEST(Verification, FitsASphereHalfOutOfTheProjectorsLight) {
@@ -183,22 +197,14 @@ TEST(Verification, FitsASphereHalfOutOfTheProjectorsLight) {
         if (std::isfinite(p[2]) && double(p[0]) > c2[0] && double(p[0]) < c2[0] + 20)
             p[0] = p[1] = p[2] = static_cast<float>(kNaN);
     }
+    VerificationOptions options;
+    options.min_coverage = 0.15;
     const MeasuredPosition m =
-        fpp::calib::measure_position(ball_bar(), scan.xyz, "position-1", VerificationOptions{});
+        fpp::calib::measure_position(ball_bar(), scan.xyz, "position-1", options);
     ASSERT_EQ(m.spheres.size(), 2u);
-    EXPECT_LT(m.spheres[1].coverage, 0.7 * m.spheres[0].coverage);
+    EXPECT_LT(m.spheres[1].coverage, 0.6 * m.spheres[0].coverage);
     EXPECT_LT(distance(m.spheres[1].centre, c2), 0.03);
     EXPECT_NEAR(*m.spacing_error, 0, 0.03);
-}
-
-TEST(Verification, RefusesASphereWithTooLittleSurfaceNamingIt) {
-    const double z = 480;
-    // Sphere 2 mostly beyond the right edge: a crescent of it in view.
-    const Vec3 centre{right_edge_x(z) - 75 + 10, 0, z};
-    const fpp::InputError e =
-        refusal(ball_bar(), scan_of(bar_scene(centre, {1, 0, 0}, false), 0.02));
-    EXPECT_TRUE(e.field() == "sphere 2" || e.field() == "spheres") << e.what();
-    EXPECT_TRUE(says(e, "too little") || says(e, "missing")) << e.what();
 }
 
 TEST(Verification, FitsASphereWithAHighlightHole) {

@@ -19,8 +19,9 @@ namespace {
 
 using Eigen::Vector3d;
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr int kCoverageRings = 6, kCoverageSectors = 24;
+// Cells across the coverage grid (hemisphere_coverage): 156 of them on
+// the hemisphere, about 9 mm^2 each on a 30 mm sphere.
+constexpr int kCoverageGrid = 14;
 
 Vector3d point_at(const Image<float>& xyz, std::size_t i) {
     const float* p = xyz.data() + 3 * i;
@@ -126,20 +127,24 @@ struct Votes {
     }
 };
 
-Votes vote_centres(const Image<float>& xyz, std::span<const std::uint8_t> usable, double radius) {
-    Votes v;
-    v.cell = std::max(0.5, radius / 5);
+// The centre of a sphere of `radius` through each usable point: p - r n, n
+// its normal from the points about r/4 either side (the normal's noise is
+// the points' noise over that baseline), towards the camera; NaN where the
+// neighbours are not all usable. `steps` gets the neighbour distance in pixels.
+std::vector<Vector3d> candidate_centres(const Image<float>& xyz,
+                                        std::span<const std::uint8_t> usable, double radius,
+                                        std::vector<int>& steps) {
     const double angle = pixel_angle(xyz);
     const int w = xyz.width(), h = xyz.height();
-    const double limit = 0.9 * double(kCellRange) * v.cell;
+    std::vector<Vector3d> centres(xyz.pixel_count(),
+                                  Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+    steps.assign(xyz.pixel_count(), 0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const std::size_t i = std::size_t(y) * std::size_t(w) + std::size_t(x);
             if (!usable[i])
                 continue;
             const Vector3d p = point_at(xyz, i);
-            // Neighbours about r/4 away either side: the normal's noise is
-            // the points' noise over that baseline.
             const int s = std::clamp(
                 angle > 0 ? static_cast<int>(std::lround(radius / 4 / (angle * p.z()))) : 1, 1, 16);
             if (x < s || y < s || x + s >= w || y + s >= h)
@@ -156,12 +161,47 @@ Votes vote_centres(const Image<float>& xyz, std::span<const std::uint8_t> usable
             n.normalize();
             if (n.dot(p) > 0)
                 n = -n; // towards the camera
-            const Vector3d c = p - radius * n;
+            centres[i] = p - radius * n;
+            steps[i] = s;
+        }
+    return centres;
+}
+
+// Votes of the points whose candidate centre the points r/4 either side
+// that have one agree with (within 0.15 r; at least one of them): on a
+// sphere of the radius they all name its centre, while on a plane or a bar
+// they stand a chord apart, so that flat and singly curved surfaces cast no
+// vote.
+Votes vote_centres(const Image<float>& xyz, std::span<const std::uint8_t> usable, double radius) {
+    Votes v;
+    v.cell = std::max(0.5, radius / 5);
+    std::vector<int> steps;
+    const std::vector<Vector3d> centres = candidate_centres(xyz, usable, radius, steps);
+    const int w = xyz.width(), h = xyz.height();
+    const double limit = 0.9 * double(kCellRange) * v.cell;
+    const double agree = 0.15 * radius;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t i = std::size_t(y) * std::size_t(w) + std::size_t(x);
+            const int s = steps[i];
+            if (s == 0)
+                continue;
+            const Vector3d& c = centres[i];
+            int agreeing = 0, disagreeing = 0;
+            const std::size_t neighbours[4] = {i - std::size_t(s), i + std::size_t(s),
+                                               i - std::size_t(s) * std::size_t(w),
+                                               i + std::size_t(s) * std::size_t(w)};
+            for (const std::size_t j : neighbours)
+                if (steps[j] > 0)
+                    ++((centres[j] - c).norm() < agree ? agreeing : disagreeing);
+            if (agreeing == 0 || disagreeing > 0)
+                continue;
             if (std::abs(c.x()) > limit || std::abs(c.y()) > limit || std::abs(c.z()) > limit)
                 continue;
             v.centres.push_back(c);
             ++v.cells[cell_key(v.index(c.x()), v.index(c.y()), v.index(c.z()))];
         }
+    (void)h;
     return v;
 }
 
@@ -408,24 +448,39 @@ double hemisphere_coverage(std::span<const Vec3> points, const Vec3& centre) {
     if (!(c.norm() > 0))
         return 0;
     const Vector3d view = -c.normalized(); // from the centre towards the camera
-    // A frame about the view direction for the azimuth.
+    // A frame about the view direction.
     const Vector3d a =
         (std::abs(view.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY()).cross(view).normalized();
     const Vector3d b = view.cross(a);
-    std::vector<std::uint8_t> cells(kCoverageRings * kCoverageSectors, 0);
+    // Lambert's azimuthal equal-area projection maps the hemisphere onto a
+    // disc of radius sqrt 2; a square grid over it has cells of equal area
+    // on the sphere, about square everywhere.
+    const double half = std::sqrt(2.0), cell = 2 * half / kCoverageGrid;
+    auto inside = [&](int ix, int iy) {
+        return std::hypot(-half + (ix + 0.5) * cell, -half + (iy + 0.5) * cell) <= half;
+    };
+    std::vector<std::uint8_t> hit(kCoverageGrid * kCoverageGrid, 0);
     for (const Vec3& p : points) {
         const Vector3d u = (to_eigen(p) - c).normalized();
         const double cos_view = u.dot(view);
         if (!(cos_view >= 0))
             continue;
-        // Equal steps of cos(angle from the view) are rings of equal area.
-        const int ring = std::min(kCoverageRings - 1, static_cast<int>(cos_view * kCoverageRings));
-        const double azimuth = std::atan2(u.dot(b), u.dot(a)) + kPi; // 0 .. 2 pi
-        const int sector = std::min(kCoverageSectors - 1,
-                                    static_cast<int>(azimuth / (2 * kPi) * kCoverageSectors));
-        cells[std::size_t(ring * kCoverageSectors + sector)] = 1;
+        const double k = std::sqrt(2 / (1 + cos_view));
+        const int ix =
+            std::clamp(static_cast<int>((k * u.dot(a) + half) / cell), 0, kCoverageGrid - 1);
+        const int iy =
+            std::clamp(static_cast<int>((k * u.dot(b) + half) / cell), 0, kCoverageGrid - 1);
+        if (inside(ix, iy))
+            hit[std::size_t(iy * kCoverageGrid + ix)] = 1;
     }
-    return double(std::count(cells.begin(), cells.end(), 1)) / double(cells.size());
+    int cells = 0, covered = 0;
+    for (int iy = 0; iy < kCoverageGrid; ++iy)
+        for (int ix = 0; ix < kCoverageGrid; ++ix)
+            if (inside(ix, iy)) {
+                ++cells;
+                covered += hit[std::size_t(iy * kCoverageGrid + ix)];
+            }
+    return double(covered) / double(cells);
 }
 
 std::vector<FoundSphere> find_spheres(const Image<float>& xyz, std::span<const std::uint8_t> usable,
@@ -433,7 +488,7 @@ std::vector<FoundSphere> find_spheres(const Image<float>& xyz, std::span<const s
     const double radius = diameter_mm / 2;
     const Votes votes = vote_centres(xyz, usable, radius);
     const std::vector<Peak> peaks =
-        vote_peaks(votes, radius, options.max_candidates, options.min_points);
+        vote_peaks(votes, radius, options.max_candidates, options.min_votes);
     std::vector<FoundSphere> found;
     for (const Peak& peak : peaks) {
         FoundSphere sphere;

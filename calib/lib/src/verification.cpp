@@ -36,7 +36,9 @@ double length(const Vec3& a) {
 }
 
 std::string point_text(const Vec3& p) {
-    return "(" + mm(p[0], 1) + ", " + mm(p[1], 1) + ", " + mm(p[2], 1) + ") mm";
+    char text[96];
+    std::snprintf(text, sizeof text, "(%.1f, %.1f, %.1f) mm", p[0], p[1], p[2]);
+    return text;
 }
 
 std::string sphere_field(std::size_t index) {
