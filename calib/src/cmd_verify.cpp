@@ -19,6 +19,7 @@
 #include "verify_report.hpp"
 
 #include "fpp/calib/artefact.hpp"
+#include "fpp/calib/plots.hpp"
 #include "fpp/calib/report_folder.hpp"
 #include "fpp/calib/verification.hpp"
 #include "fpp/capture_set.hpp"
@@ -32,7 +33,6 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <iterator>
 #include <optional>
 #include <sstream>
 
@@ -121,10 +121,12 @@ std::string hash_text(std::uint64_t hash) {
 
 std::uint64_t file_hash(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!in.good() && !in.eof())
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    if (!in || in.bad())
         throw IoError(path, "cannot read");
-    return fnv1a64(bytes.data(), bytes.size());
+    const std::string all = bytes.str();
+    return fnv1a64(all.data(), all.size());
 }
 
 // A capture the scanner made (scan-*/capture*) whose scan.json names

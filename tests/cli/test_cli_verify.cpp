@@ -1,7 +1,7 @@
 // fpp-calib verify, run as a person would, on the virtual scanner: a ball
 // bar on its rod and stand before a wall, simulated in several of the VDI
 // positions within the paper rig's volume, reconstructed with the table of
-// the rig's true geometry (camera binned 4x); SD against the one the true
+// the rig's true geometry (camera binned 2x); SD against the one the true
 // sphere centres give; a glossy bar whose highlights leave holes; a figure
 // beyond its MPE; and bad input, which exits 2, names what is wrong and
 // writes no report.
@@ -37,10 +37,11 @@ ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
     return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
 }
 
-// The effects rig (gamma, defocus, noise) with the camera binned 4x: 400 x 300.
+// The effects rig (gamma, defocus, noise) with the camera binned 2x: 800 x
+// 600, a sphere about 85 px across.
 fpp::sim::Rig small_rig() {
-    fpp::sim::Rig rig = fpp::sim::load_rig(fpp::sim::effects_rig_path()).binned_camera(4);
-    rig.name = "effects-quarter";
+    fpp::sim::Rig rig = fpp::sim::load_rig(fpp::sim::effects_rig_path()).binned_camera(2);
+    rig.name = "effects-half";
     return rig;
 }
 
@@ -68,34 +69,45 @@ protected:
         std::ofstream(*dir_ / "rig.yaml") << fpp::sim::rig_to_yaml(small_rig());
         fpp::write_table(*dir_ / "table.fpt", fpp::test::rig_truth_table(small_rig()));
         std::ofstream(*dir_ / "bar.yaml") << fpp::test::ball_bar_artefact_yaml();
-        for (std::size_t k = 0; k < positions().size(); ++k)
-            simulate("position-" + std::to_string(k + 1), positions()[k], int(k + 1));
-        BallBarPlacement glossy = positions()[0];
-        glossy.material = "material: {albedo: 0.45, specular: 0.4, shininess: 300}";
-        simulate("glossy", glossy, 9);
-        // The other sphere beyond the image's right edge.
-        simulate("one-sphere", {{150, -10, 480}, {1, 0, 0}}, 10);
     }
     static void TearDownTestSuite() {
         delete dir_;
         dir_ = nullptr;
     }
-    static void simulate(const std::string& name, const BallBarPlacement& p, int seed,
-                         const std::string& extra = {}) {
-        const fs::path scene = *dir_ / (name + ".scene.yaml");
-        std::ofstream(scene) << fpp::test::ball_bar_scene_yaml(p);
-        const ToolRun run =
-            run_calib("simulate --rig " + q(*dir_ / "rig.yaml") + " --scene " + q(scene) +
-                          " --sequence gray-x --seed " + std::to_string(seed) + " " + extra +
-                          " --out " + q(*dir_ / name),
-                      dir_->path());
-        ASSERT_EQ(run.exit_code, 0) << run.output;
-    }
     static fs::path path(const std::string& name) { return *dir_ / name; }
+    // A capture, simulated on first use (CTest runs each test in its own
+    // process): position-1 .. position-4, glossy (position 1 with polished
+    // spheres), one-sphere (the other beyond the image's right edge).
+    static fs::path capture(const std::string& name) {
+        const fs::path folder = path(name);
+        if (fs::exists(folder))
+            return folder;
+        BallBarPlacement p;
+        int seed = 1;
+        if (name.rfind("position-", 0) == 0) {
+            seed = std::stoi(name.substr(9));
+            p = positions().at(std::size_t(seed - 1));
+        } else if (name == "glossy") {
+            p = positions()[0];
+            p.material = "material: {albedo: 0.45, specular: 0.4, shininess: 300}";
+            seed = 9;
+        } else {
+            p = {{150, -10, 480}, {1, 0, 0}};
+            seed = 10;
+        }
+        const fs::path scene = path(name + ".scene.yaml");
+        std::ofstream(scene) << fpp::test::ball_bar_scene_yaml(p);
+        const ToolRun run = run_calib("simulate --rig " + q(path("rig.yaml")) + " --scene " +
+                                          q(scene) + " --sequence gray-x --seed " +
+                                          std::to_string(seed) + " --out " + q(folder),
+                                      dir_->path());
+        EXPECT_EQ(run.exit_code, 0) << run.output;
+        return folder;
+    }
     static std::string captures() {
         std::string s;
         for (std::size_t k = 0; k < positions().size(); ++k)
-            s += " " + q(path("position-" + std::to_string(k + 1)));
+            s += " " + q(capture("position-" + std::to_string(k + 1)));
         return s;
     }
     static ToolRun verify(const std::string& args, const fs::path& report,
@@ -158,9 +170,9 @@ TEST_F(CliVerify, BallBarInFourPositionsMeetsTheTruth) {
 
 TEST_F(CliVerify, GlossySpheresAreFittedAroundTheirHighlightHoles) {
     TempDir out;
-    const ToolRun matte = verify(q(path("position-1")), out / "matte");
+    const ToolRun matte = verify(q(capture("position-1")), out / "matte");
     ASSERT_EQ(matte.exit_code, 0) << matte.output;
-    const ToolRun glossy = verify(q(path("glossy")), out / "glossy");
+    const ToolRun glossy = verify(q(capture("glossy")), out / "glossy");
     ASSERT_EQ(glossy.exit_code, 0) << glossy.output;
     const nlohmann::json a = read_json(out / "matte/verification.json");
     const nlohmann::json b = read_json(out / "glossy/verification.json");
@@ -177,7 +189,7 @@ TEST_F(CliVerify, GlossySpheresAreFittedAroundTheirHighlightHoles) {
 
 TEST_F(CliVerify, AFigureBeyondItsMpeFailsTheVerification) {
     TempDir out;
-    const ToolRun run = verify("--mpe-pf 0.001 " + q(path("position-1")), out / "report");
+    const ToolRun run = verify("--mpe-pf 0.001 " + q(capture("position-1")), out / "report");
     EXPECT_EQ(run.exit_code, 4) << run.output;
     EXPECT_TRUE(says(run, "verification failed: P_F")) << run.output;
     const nlohmann::json j = read_json(out / "report/verification.json");
@@ -200,7 +212,7 @@ TEST_F(CliVerify, RefusesACertificateOneMillimetreOff) {
         << "format: fpp-artefact/1\nkind: ball-bar\nsphere_diameters_mm: [30, 30]\n"
            "centre_distance_mm: 151.000\nuncertainty_mm: 0.001\n";
     TempDir out;
-    const ToolRun run = verify(captures(), out / "report", "bar-151.yaml");
+    const ToolRun run = verify(q(capture("position-1")), out / "report", "bar-151.yaml");
     expect_refused(run, out / "report",
                    {"bar-151.yaml: centre_distance_mm", "far more than a scanner could be off"});
 }
@@ -210,20 +222,20 @@ TEST_F(CliVerify, RefusesAMalformedArtefactFileNamingTheKey) {
         << "format: fpp-artefact/1\nkind: ball-bar\nsphere_diameters_mm: [30, 30]\n"
            "centre_distance_mm: 150\n";
     TempDir out;
-    expect_refused(verify(q(path("position-1")), out / "report", "bar-bad.yaml"), out / "report",
+    expect_refused(verify(q(capture("position-1")), out / "report", "bar-bad.yaml"), out / "report",
                    {"bar-bad.yaml: uncertainty_mm: missing field"});
 }
 
 TEST_F(CliVerify, RefusesAMissingSphereNamingTheCapture) {
     TempDir out;
-    expect_refused(verify(q(path("one-sphere")), out / "report"), out / "report",
+    expect_refused(verify(q(capture("one-sphere")), out / "report"), out / "report",
                    {"one-sphere: spheres: found 1 of the 2", "missing"});
 }
 
 TEST_F(CliVerify, RefusesACaptureOfAnotherCameraSize) {
     TempDir out;
-    fpp::sim::Rig rig = small_rig().binned_camera(2); // 200 x 150
-    const fs::path rig_file = out / "rig-200.yaml";
+    fpp::sim::Rig rig = small_rig().binned_camera(2); // 400 x 300
+    const fs::path rig_file = out / "rig-400.yaml";
     std::ofstream(rig_file) << fpp::sim::rig_to_yaml(rig);
     std::ofstream(out / "scene.yaml") << fpp::test::ball_bar_scene_yaml(positions()[0]);
     const ToolRun sim =
@@ -231,15 +243,15 @@ TEST_F(CliVerify, RefusesACaptureOfAnotherCameraSize) {
                       " --sequence gray-x --out " + q(out / "small"),
                   out.path());
     ASSERT_EQ(sim.exit_code, 0) << sim.output;
-    expect_refused(verify(q(path("position-1")) + " " + q(out / "small"), out / "report"),
-                   out / "report", {"small/capture.yaml: camera", "200x150", "400x300"});
+    expect_refused(verify(q(capture("position-1")) + " " + q(out / "small"), out / "report"),
+                   out / "report", {"small/capture.yaml: camera", "400x300", "800x600"});
 }
 
 TEST_F(CliVerify, RefusesACaptureTheScannerMadeWithAnotherTable) {
     TempDir out;
     const fs::path scan = out / "scan-20261129-040000-000";
     fs::create_directories(scan);
-    fs::copy(path("position-1"), scan / "capture", fs::copy_options::recursive);
+    fs::copy(capture("position-1"), scan / "capture", fs::copy_options::recursive);
     std::ofstream(scan / "scan.json")
         << R"({"format": "fpp-scan/1", "table": {"path": "/var/lib/fpp-scanner/table.fpt",)"
         << R"( "model": "rational", "file_fnv1a64": "0123456789abcdef"}})";
@@ -251,12 +263,13 @@ TEST_F(CliVerify, RefusesACaptureTheScannerMadeWithAnotherTable) {
 
 TEST_F(CliVerify, RefusesBadOptions) {
     TempDir out;
-    expect_refused(verify("--mpe-sd -1 " + q(path("position-1")), out / "report"), out / "report",
-                   {"--mpe-sd", "positive"});
-    expect_refused(verify("--mpe-flatness 0.01 " + q(path("position-1")), out / "report"),
+    expect_refused(verify("--mpe-sd -1 " + q(capture("position-1")), out / "report"),
+                   out / "report", {"--mpe-sd", "positive"});
+    expect_refused(verify("--mpe-flatness 0.01 " + q(capture("position-1")), out / "report"),
                    out / "report", {"--mpe-flatness", "has no flat"});
-    expect_refused(verify(q(path("position-1")) + " " + q(path("position-1")), out / "report"),
-                   out / "report", {"given twice"});
+    expect_refused(
+        verify(q(capture("position-1")) + " " + q(capture("position-1")), out / "report"),
+        out / "report", {"given twice"});
 }
 
 } // namespace

@@ -19,6 +19,7 @@ namespace {
 
 using Eigen::Vector3d;
 
+constexpr double kPi = 3.14159265358979323846;
 // Cells across the coverage grid (hemisphere_coverage): 156 of them on
 // the hemisphere, about 9 mm^2 each on a 30 mm sphere.
 constexpr int kCoverageGrid = 14;
@@ -259,8 +260,48 @@ std::vector<Peak> vote_peaks(const Votes& v, double radius, std::size_t max_peak
 }
 
 // Step 3 of the header for one peak; false when it is no sphere.
+// Drops the points whose surface normal (from the points about r/8 either
+// side, where all four are usable) is more than 20 degrees off the sphere's
+// radius: where a bar or a stand meets the sphere, the points within the
+// band of its shell are on the bar.
+void drop_off_normal(const Image<float>& xyz, std::span<const std::uint8_t> usable,
+                     const Vector3d& centre, double radius, double angle,
+                     std::vector<std::uint32_t>& pixels, std::vector<Vec3>& points) {
+    const int w = xyz.width(), h = xyz.height();
+    const double min_cos = std::cos(20 * kPi / 180);
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < pixels.size(); ++k) {
+        const std::size_t i = pixels[k];
+        const int x = int(i % std::size_t(w)), y = int(i / std::size_t(w));
+        const Vector3d p = to_eigen(points[k]);
+        const int s = std::clamp(
+            angle > 0 ? static_cast<int>(std::lround(radius / 8 / (angle * p.z()))) : 1, 1, 8);
+        bool keep = true;
+        if (x >= s && y >= s && x + s < w && y + s < h) {
+            const std::size_t l = i - std::size_t(s), r = i + std::size_t(s);
+            const std::size_t u = i - std::size_t(s) * std::size_t(w),
+                              d = i + std::size_t(s) * std::size_t(w);
+            if (usable[l] && usable[r] && usable[u] && usable[d]) {
+                const Vector3d n = (point_at(xyz, r) - point_at(xyz, l))
+                                       .cross(point_at(xyz, d) - point_at(xyz, u));
+                const Vector3d radial = p - centre;
+                keep =
+                    n.norm() > 0 && std::abs(n.dot(radial)) >= min_cos * n.norm() * radial.norm();
+            }
+        }
+        if (keep) {
+            pixels[kept] = pixels[k];
+            points[kept] = points[k];
+            ++kept;
+        }
+    }
+    pixels.resize(kept);
+    points.resize(kept);
+}
+
 bool fit_peak(const Image<float>& xyz, std::span<const std::uint8_t> usable, const Peak& peak,
-              double diameter, const ArtefactSearchOptions& options, FoundSphere& out) {
+              double diameter, double angle, const ArtefactSearchOptions& options,
+              FoundSphere& out) {
     const double radius = diameter / 2;
     std::vector<std::uint32_t> pixels;
     std::vector<Vec3> points;
@@ -280,6 +321,7 @@ bool fit_peak(const Image<float>& xyz, std::span<const std::uint8_t> usable, con
             const double sigma = 1.4826 * median_abs(used);
             gather_shell(xyz, usable, to_eigen(fit.centre), fit.radius, std::max(5 * sigma, 0.05),
                          pixels, points);
+            drop_off_normal(xyz, usable, to_eigen(fit.centre), fit.radius, angle, pixels, points);
             if (points.size() < options.min_points)
                 return false;
             fit = fit_sphere(points);
@@ -487,12 +529,13 @@ std::vector<FoundSphere> find_spheres(const Image<float>& xyz, std::span<const s
                                       double diameter_mm, const ArtefactSearchOptions& options) {
     const double radius = diameter_mm / 2;
     const Votes votes = vote_centres(xyz, usable, radius);
+    const double angle = pixel_angle(xyz);
     const std::vector<Peak> peaks =
         vote_peaks(votes, radius, options.max_candidates, options.min_votes);
     std::vector<FoundSphere> found;
     for (const Peak& peak : peaks) {
         FoundSphere sphere;
-        if (!fit_peak(xyz, usable, peak, diameter_mm, options, sphere))
+        if (!fit_peak(xyz, usable, peak, diameter_mm, angle, options, sphere))
             continue;
         // Two peaks of one sphere (its votes split): the better fit stays.
         const Vector3d c = to_eigen(sphere.figures.fit.centre);
