@@ -261,9 +261,9 @@ std::vector<Peak> vote_peaks(const Votes& v, double radius, std::size_t max_peak
 
 // Step 3 of the header for one peak; false when it is no sphere.
 // Drops the points whose surface normal (from the points about r/8 either
-// side, where all four are usable) is more than 20 degrees off the sphere's
-// radius: where a bar or a stand meets the sphere, the points within the
-// band of its shell are on the bar.
+// side, or nearer where those are not all usable, down to 2 px) is more than
+// 20 degrees off the sphere's radius: where a bar or a stand meets the
+// sphere, the points within the band of its shell are on the bar.
 void drop_off_normal(const Image<float>& xyz, std::span<const std::uint8_t> usable,
                      const Vector3d& centre, double radius, double angle,
                      std::vector<std::uint32_t>& pixels, std::vector<Vec3>& points) {
@@ -274,20 +274,23 @@ void drop_off_normal(const Image<float>& xyz, std::span<const std::uint8_t> usab
         const std::size_t i = pixels[k];
         const int x = int(i % std::size_t(w)), y = int(i / std::size_t(w));
         const Vector3d p = to_eigen(points[k]);
-        const int s = std::clamp(
-            angle > 0 ? static_cast<int>(std::lround(radius / 8 / (angle * p.z()))) : 1, 1, 8);
+        const int step = std::clamp(
+            angle > 0 ? static_cast<int>(std::lround(radius / 8 / (angle * p.z()))) : 2, 2, 8);
+        // Near a hole or an edge, shorter baselines (down to 2 px) in turn.
         bool keep = true;
-        if (x >= s && y >= s && x + s < w && y + s < h) {
+        for (int s = step; s >= 2; s /= 2) {
+            if (x < s || y < s || x + s >= w || y + s >= h)
+                continue;
             const std::size_t l = i - std::size_t(s), r = i + std::size_t(s);
             const std::size_t u = i - std::size_t(s) * std::size_t(w),
                               d = i + std::size_t(s) * std::size_t(w);
-            if (usable[l] && usable[r] && usable[u] && usable[d]) {
-                const Vector3d n = (point_at(xyz, r) - point_at(xyz, l))
-                                       .cross(point_at(xyz, d) - point_at(xyz, u));
-                const Vector3d radial = p - centre;
-                keep =
-                    n.norm() > 0 && std::abs(n.dot(radial)) >= min_cos * n.norm() * radial.norm();
-            }
+            if (!usable[l] || !usable[r] || !usable[u] || !usable[d])
+                continue;
+            const Vector3d n =
+                (point_at(xyz, r) - point_at(xyz, l)).cross(point_at(xyz, d) - point_at(xyz, u));
+            const Vector3d radial = p - centre;
+            keep = n.norm() > 0 && std::abs(n.dot(radial)) >= min_cos * n.norm() * radial.norm();
+            break;
         }
         if (keep) {
             pixels[kept] = pixels[k];
