@@ -13,14 +13,18 @@
 //      surfaces' fringes and lies between them;
 //   2. every usable point votes for the centre of a sphere of radius r
 //      through it, p - r n (n its normal from the points r/4 either side,
-//      towards the camera), in cells of r/5; on a sphere the votes pile up
-//      at one point, on a plane or a bar of another radius they spread;
+//      towards the camera), in cells of r/5, when the points r/4 either
+//      side name the same centre (within 0.15 r): on a sphere of that
+//      radius they do, on a plane or a bar they stand a chord apart, so
+//      flat and singly curved surfaces cast no votes;
 //   3. each peak (strongest first, none within r of a stronger one) is fitted:
 //      the points within max(1 mm, 0.15 r) of the shell of radius r about
 //      it, a least-squares sphere of free radius with outliers beyond 3 sigma
 //      rejected, then twice the points within max(5 sigma, 0.05 mm) of that
 //      sphere, 5 sigma (sigma: 1.4826 x the median |residual|) far beyond the
-//      noise but well inside the distance to any other surface, refitted.
+//      noise but well inside the distance to any other surface, less those
+//      whose normal is more than 20 degrees off the sphere's radius (the bar
+//      where it meets the sphere), refitted.
 // A peak is a sphere of the certificate when its fitted diameter is within
 // max(1 mm, 10 %) of the certified one (the certificate's consistency with
 // the scans is judged later, fpp/calib/verification.hpp).
@@ -29,7 +33,8 @@
 // points cover, in 156 cells of equal area (a 14 x 14 grid over the
 // hemisphere's Lambert azimuthal equal-area map). Points within a few
 // pixels of the silhouette are not used, so a whole sphere scores less than
-// 1: about 0.5 at 42 px across (400 x 300 at 480 mm), 0.7 at full size.
+// 1: about 0.5 at 42 px across (400 x 300 at 480 mm), 0.6 at 800 x 600,
+// 0.7 at full size (1600 x 1200).
 
 #include "fpp/calib/evaluation.hpp"
 #include "fpp/image.hpp"

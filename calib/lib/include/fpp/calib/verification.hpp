@@ -43,8 +43,8 @@ struct MaximumPermissibleErrors {
 struct VerificationOptions {
     ArtefactSearchOptions search;
     // Of the hemisphere facing the camera (artefact_search.hpp): a whole
-    // sphere scores 0.5 to 0.7, one cut in half by the view's edge about
-    // 0.22 at 42 px across (400 x 300) and 0.35 at full size.
+    // sphere scores 0.5 to 0.7, one cut in half by the view's edge 0.22 at
+    // 42 px across (400 x 300), 0.28 at 800 x 600, 0.32 at full size.
     double min_coverage = 0.25;
     double max_credible_error_mm = 0.5; // beyond it the certificate is refused
     MaximumPermissibleErrors mpe;
