@@ -187,6 +187,51 @@ TEST_F(CliVerify, GlossySpheresAreFittedAroundTheirHighlightHoles) {
     EXPECT_NEAR(b["sphere_spacing_error_mm"][0].get<double>(), 0, 0.01);
 }
 
+TEST_F(CliVerify, ASingleSphereAndAFlatPlate) {
+    TempDir out;
+    // The sphere certificate on the capture that holds one sphere in view.
+    const fs::path artefacts = fpp::test::source_dir() / "board/sim/artefacts";
+    const ToolRun sphere =
+        run_calib("verify --artefact " + q(artefacts / "sphere-30.yaml") + " --table " +
+                      q(path("table.fpt")) + " --mpe-pf 0.5 --mpe-ps 0.05 --report " +
+                      q(out / "sphere") + " " + q(capture("one-sphere")),
+                  out.path());
+    ASSERT_EQ(sphere.exit_code, 0) << sphere.output;
+    const nlohmann::json s = read_json(out / "sphere/verification.json");
+    EXPECT_EQ(s["artefact"]["kind"], "sphere");
+    EXPECT_EQ(s["sphere_spacing_error_mm"].size(), 0u);
+    ASSERT_EQ(s["probing_size_mm"].size(), 1u);
+    EXPECT_NEAR(s["probing_size_mm"][0][0].get<double>(), 0, 0.05);
+
+    // A 200 x 150 mm plate, tilted, before the wall.
+    const fs::path scene = out / "plate.yaml";
+    std::ofstream(scene)
+        << "format: fpp-scene/1\nshapes:\n"
+           "  - {type: plane, name: wall, centre: [0, 0, 575], size: [420, 330], albedo: 0.8}\n"
+           "  - {type: plane, name: plate, centre: [0, 0, 470], euler_deg: [10, -15, 5],\n"
+           "     size: [200, 150], albedo: 0.85}\n";
+    const ToolRun sim = run_calib("simulate --rig " + q(path("rig.yaml")) + " --scene " + q(scene) +
+                                      " --sequence gray-x --out " + q(out / "plate"),
+                                  out.path());
+    ASSERT_EQ(sim.exit_code, 0) << sim.output;
+    const ToolRun plate =
+        run_calib("verify --artefact " + q(artefacts / "flat-200x150.yaml") + " --table " +
+                      q(path("table.fpt")) + " --mpe-flatness 0.3 --report " + q(out / "flat") +
+                      " " + q(out / "plate"),
+                  out.path());
+    ASSERT_EQ(plate.exit_code, 0) << plate.output;
+    const nlohmann::json f = read_json(out / "flat/verification.json");
+    ASSERT_EQ(f["flatness_mm"].size(), 1u);
+    const double flatness = f["flatness_mm"][0].get<double>();
+    std::printf("plate: F %.4f mm, extent %.1f x %.1f mm\n", flatness,
+                f["positions"][0]["plane"]["extent_mm"][0].get<double>(),
+                f["positions"][0]["plane"]["extent_mm"][1].get<double>());
+    EXPECT_GT(flatness, 0);
+    EXPECT_LT(flatness, 0.3);
+    EXPECT_EQ(f["verdict"], "pass");
+    EXPECT_TRUE(fs::is_regular_file(out / "flat/flatness.png"));
+}
+
 TEST_F(CliVerify, AFigureBeyondItsMpeFailsTheVerification) {
     TempDir out;
     const ToolRun run = verify("--mpe-pf 0.001 " + q(capture("position-1")), out / "report");
