@@ -16,6 +16,7 @@
 #include "cmd_reconstruct_pair.hpp"
 #include "commands.hpp"
 #include "decode_outputs.hpp"
+#include "table_reconstruction.hpp"
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
@@ -109,13 +110,6 @@ void settle_sizes(StereoCalibration& calibration, const fs::path& calib_path,
                              size_text(manifest.projector));
 }
 
-bool sequence_codes(const Sequence& sequence, Axis axis) {
-    return std::any_of(sequence.begin(), sequence.end(), [&](const PatternBlock& b) {
-        const auto* phase = std::get_if<PhaseBlock>(&b);
-        return phase && phase->axis == axis;
-    });
-}
-
 struct CloudSummary {
     double z_min = 0, z_max = 0, z_p01 = 0, z_p99 = 0;
 };
@@ -200,15 +194,7 @@ ReconstructModel load_reconstruct_model(const ReconstructArgs& args,
     ReconstructModel model;
     if (request.use_table) {
         CoefficientTable& table = model.table;
-        // Validated whole (header, every tile's CRC) and against the camera.
-        table = load_table(calib_path, &capture.manifest.camera);
-        if (table.info().phase_axis != Axis::x)
-            throw InputError(calib_path, "phase_axis", "maps the projector row; expected x");
-        if (!(table.info().projector == capture.manifest.projector))
-            throw InputError(calib_path, "projector_size",
-                             "the table is for a " + size_text(table.info().projector) +
-                                 " projector, the capture's is " +
-                                 size_text(capture.manifest.projector));
+        table = load_table_for_capture(calib_path, capture);
         std::cerr << "table: " << to_string(table.info().model) << " model, camera "
                   << size_text(table.info().camera) << "\n";
     } else {
@@ -218,51 +204,6 @@ ReconstructModel load_reconstruct_model(const ReconstructArgs& args,
         settle_sizes(calibration, calib_path, args, capture.manifest);
     }
     return model;
-}
-
-// The capture codes the projector column, and the row when --axes xy asks for it.
-void check_capture_axes(const CaptureSet& capture, ReconstructAxes requested) {
-    const fs::path manifest_path = capture.folder / "capture.yaml";
-    const bool has_x = sequence_codes(capture.manifest.sequence, Axis::x);
-    const bool has_y = sequence_codes(capture.manifest.sequence, Axis::y);
-    if (!has_x)
-        throw InputError(manifest_path, "sequence",
-                         "no phase block along x: reconstruction needs the projector column");
-    if (requested == ReconstructAxes::xy && !has_y)
-        throw InputError(manifest_path, "sequence",
-                         "--axes xy needs the projector row, but the capture has no phase block "
-                         "along y (use --axes x)");
-}
-
-// The capture decoded, its projector coordinates smoothed.
-struct DecodedScan {
-    DecodeResult decoded;
-    DecodeStatistics decode_stats;
-    CoordinateFilterReport smoothing;
-    double decode_seconds = 0, smooth_seconds = 0;
-};
-
-// Nothing when the decode failed (the likely cause said on stderr).
-std::optional<DecodedScan> decode_and_smooth(const CaptureSet& capture, const ReconstructArgs& args,
-                                             const CoordinateFilterOptions& smooth) {
-    Stopwatch decode_watch;
-    DecodeResult decoded = decode(capture, args.decode); // InputError naming the field
-    const double decode_seconds = decode_watch.seconds();
-    // A failed decode gives no cloud: the likely cause instead (fpp/decode_diagnosis.hpp).
-    const DecodeStatistics decode_stats = decode_statistics(decoded, frames_full_scale(capture));
-    const DecodeDiagnosis diagnosis = diagnose_decode(capture, decoded, decode_stats, args.decode);
-    if (diagnosis.failed) {
-        std::cerr << "fpp-calib: error: " << capture.folder.string() << ": " << diagnosis.message
-                  << "\nno point cloud written\n";
-        return std::nullopt;
-    }
-    if (!diagnosis.message.empty())
-        std::cerr << "fpp-calib: warning: " << diagnosis.message << "\n";
-    Stopwatch smooth_watch;
-    Image<float> scratch;
-    const CoordinateFilterReport smoothing = smooth_coordinates(decoded, smooth, scratch);
-    const double smooth_seconds = smooth_watch.seconds();
-    return DecodedScan{std::move(decoded), decode_stats, smoothing, decode_seconds, smooth_seconds};
 }
 
 // The cloud the model makes of the decoded coordinates.
@@ -280,12 +221,10 @@ ModelledCloud apply_model(const ReconstructModel& model, bool use_table,
     TableApplyStats table_stats;
     double prepare_seconds = 0, model_seconds = 0;
     if (use_table) {
-        ThreadPool pool(threads);
-        Stopwatch watch;
-        table_stats = apply_table(model.table, decoded.proj_x, cloud, &pool);
-        model_seconds = watch.seconds();
-        cloud.quality = decoded.modulation;
-        cloud.intensity = decoded.mean;
+        TableCloud made = apply_table_to_scan(model.table, decoded, threads);
+        cloud = std::move(made.cloud);
+        table_stats = made.stats;
+        model_seconds = made.seconds;
         stats.axes = ReconstructAxes::x;
         stats.points = table_stats.points;
     } else {
@@ -436,7 +375,7 @@ int run_reconstruct(const ReconstructArgs& args) {
     const ReconstructModel model = load_reconstruct_model(args, request, capture);
     check_capture_axes(capture, request.requested);
 
-    const std::optional<DecodedScan> scan = decode_and_smooth(capture, args, request.smooth);
+    const std::optional<DecodedScan> scan = decode_and_smooth(capture, args.decode, request.smooth);
     if (!scan)
         return kExitDecodeFailed;
     const ModelledCloud made = apply_model(model, request.use_table, scan->decoded,

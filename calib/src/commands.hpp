@@ -21,6 +21,7 @@ Action add_hybrid_command(CLI::App& app);
 Action add_calibrate_command(CLI::App& app);
 Action add_response_command(CLI::App& app);
 Action add_evaluate_command(CLI::App& app);
+Action add_verify_command(CLI::App& app);
 Action add_paper_experiments_command(CLI::App& app);
 Action add_import_command(CLI::App& app);
 Action add_patterns_command(CLI::App& app);

@@ -1,7 +1,8 @@
 // fpp-calib: the host tool of the fpp scanner. Subcommands (each in cmd_*.cpp):
 // simulate, simulate-session, demo (the virtual scanner); decode; stereo,
 // hybrid, calibrate (calibration and coefficient tables); reconstruct (one
-// camera with a table or calibration, or two cameras); evaluate;
+// camera with a table or calibration, or two cameras); evaluate; verify
+// (a certified artefact, VDI/VDE 2634-2);
 // paper-experiments; response (projector response); import (other tools'
 // captures); patterns (projector images for capture by hand); scanner-status,
 // scanner-session, scanner-pull, scanner-push-table (a scanner over its HTTP
@@ -51,6 +52,7 @@ int main(int argc, char** argv) {
     add(fpp::calib::add_calibrate_command);
     add(fpp::calib::add_response_command);
     add(fpp::calib::add_evaluate_command);
+    add(fpp::calib::add_verify_command);
     add(fpp::calib::add_paper_experiments_command);
     add(fpp::calib::add_import_command);
     add(fpp::calib::add_patterns_command);
