@@ -3,7 +3,7 @@
 // parameters, correction grids, the stereo transform, board poses, corners
 // of both devices and dense samples, each kind with its own weight.
 
-#include "bundle_adjustment.hpp"
+#include "stereo/bundle_adjustment.hpp"
 
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/session.hpp"

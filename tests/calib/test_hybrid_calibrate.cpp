@@ -17,6 +17,7 @@
 #include "test_support.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
+#include "fpp/calib/rig_calibration.hpp"
 #include "fpp/calib/shape_fit.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/stereo_session.hpp"

@@ -1,5 +1,5 @@
 // The parser of the scanner's event stream (fpp-calib's client of the HTTP
-// API, calib/lib/src/server_sent_events.cpp): the same events whatever the
+// API, calib/lib/src/scanner/server_sent_events.cpp): the same events whatever the
 // blocks the network cuts the stream into.
 #include "fpp/calib/server_sent_events.hpp"
 

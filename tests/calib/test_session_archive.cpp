@@ -1,5 +1,5 @@
 // The session tar that fpp-calib pulls from the scanner
-// (calib/lib/src/session_archive.cpp): a good one extracted, and every entry
+// (calib/lib/src/scanner/session_archive.cpp): a good one extracted, and every entry
 // that would land outside the folder refused by name with nothing written.
 #include "test_support.hpp"
 

@@ -4,6 +4,7 @@
 
 #include "test_support.hpp"
 
+#include "fpp/calib/rig_calibration.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/image_io.hpp"

@@ -101,6 +101,12 @@ struct StereoOptions {
     // exceeds this multiple of the median pose RMS.
     double outlier_factor = 2.5;
     int max_iterations = 100;
+    // camera_first: after the camera's adjustment its focal lengths are
+    // multiplied by this (its distortion and skew kept in the image) and the
+    // boards placed again with the camera held, before the projector's
+    // stages: a depth scale a certified artefact measured (fpp-calib
+    // correct). 1: none.
+    double camera_focal_scale = 1;
     // Board poses to suggest for the session's next capture, best first
     // (StereoResult::next_poses; session_advice.hpp); 0: none (a few
     // seconds for 30 poses).

@@ -25,10 +25,6 @@
 #include <string>
 #include <vector>
 
-namespace fpp::sim {
-struct Rig;
-}
-
 namespace fpp::calib {
 
 inline constexpr const char* kStereoFormat = "fpp-stereo/1";
@@ -97,11 +93,6 @@ struct StereoCalibration {
     // Both sizes set (foreign formats may lack them).
     bool sizes_known() const;
 };
-
-// The exact stereo model of a simulated rig (its lenses, R and t; sizes from
-// the rig). With rig.without_effects() the simulator renders exactly this
-// model. Pose list empty, RMS unknown.
-StereoCalibration calibration_from_rig(const sim::Rig& rig);
 
 // "auto", "fpp", "slstudio", "slmaster", "opencv-stereo", "bouguet", "matlab"; throws
 // std::invalid_argument otherwise.

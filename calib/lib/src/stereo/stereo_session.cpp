@@ -5,7 +5,7 @@
 
 #include "fpp/calib/session_folder.hpp"
 #include "fpp/calib/time_split.hpp"
-#include "pose_pipeline.hpp"
+#include "session/pose_pipeline.hpp"
 
 #include "fpp/error.hpp"
 #include "fpp/image_io.hpp"

@@ -25,7 +25,7 @@
 // camera grid, projector grid); a fixed parameter's row and column are 0.
 // Units: px, px per unit of distortion term, rad, mm.
 
-#include "bundle_adjustment.hpp"
+#include "stereo/bundle_adjustment.hpp"
 
 #include <Eigen/Dense>
 

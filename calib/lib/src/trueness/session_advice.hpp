@@ -15,9 +15,9 @@
 // share (its stage, and the stage's response to the camera's) is held: a
 // new pose's projector corners would only lower it further.
 
-#include "bundle_adjustment.hpp"
 #include "calibration_covariance.hpp"
 #include "fpp/calib/trueness.hpp"
+#include "stereo/bundle_adjustment.hpp"
 
 #include <Eigen/Dense>
 

@@ -4,9 +4,9 @@
 #include "fpp/calib/stereo_calibrate.hpp"
 
 #include "bundle_adjustment.hpp"
-#include "calibration_covariance.hpp"
-#include "session_advice.hpp"
-#include "trueness_prediction.hpp"
+#include "trueness/calibration_covariance.hpp"
+#include "trueness/session_advice.hpp"
+#include "trueness/trueness_prediction.hpp"
 
 #include "fpp/parallel.hpp"
 
@@ -33,6 +33,21 @@ Vec3 add(const Vec3& a, const Vec3& b) {
 
 bool projector_valid(const PoseObservations& o, std::size_t k) {
     return std::isfinite(o.projector[k][0]) && std::isfinite(o.projector[k][1]);
+}
+
+// The focal lengths times `k` with the image unchanged: the same pixel for
+// the same direction scaled in depth, i.e. normalised coordinates divided
+// by k, so the distortion terms of order n in them times k^(n-1), and skew
+// as the focal lengths.
+void scale_focal_lengths(LensModel& lens, double k) {
+    lens.fu *= k;
+    lens.fv *= k;
+    lens.skew *= k;
+    lens.k1 *= k * k;
+    lens.k2 *= std::pow(k, 4);
+    lens.k3 *= std::pow(k, 6);
+    lens.p1 *= k;
+    lens.p2 *= k;
 }
 
 Mat3 from_cv_rotation(const cv::Mat& rvec_or_matrix) {
@@ -161,6 +176,10 @@ void StereoOptions::validate() const {
         bad("max_iterations", "must be at least 1");
     if (threads < 0)
         bad("threads", "must not be negative (0: all cores)");
+    if (!(camera_focal_scale > 0.9 && camera_focal_scale < 1.1))
+        bad("camera_focal_scale", "must be within 10 % of 1");
+    if (camera_focal_scale != 1 && procedure != StereoProcedure::camera_first)
+        bad("camera_focal_scale", "needs the camera-first procedure");
     if (suggest_next_poses < 0 || suggest_next_poses > 100)
         bad("suggest_next_poses", "must be 0 to 100");
 }
@@ -619,6 +638,17 @@ StereoResult stereo_calibrate(const std::vector<PoseObservations>& poses, Size c
                                             options.max_iterations, options.progress, &pool);
             camera_stage.stop();
             camera_free = free;
+            if (options.camera_focal_scale != 1) {
+                say("the camera's focal lengths scaled by " +
+                    std::to_string(options.camera_focal_scale) +
+                    " (a depth scale measured elsewhere), the boards placed again");
+                scale_focal_lengths(s.camera, options.camera_focal_scale);
+                detail::FreeParameters place;
+                place.poses = place.camera_observations = true;
+                place.camera_weight = free.camera_weight;
+                detail::adjust(s, corners, {}, used, place, regularisation, options.max_iterations,
+                               options.progress, &pool);
+            }
             say("the projector with the camera and the boards held, from its corners "
                 "(intrinsics, distortion, R, T)");
             free = {};

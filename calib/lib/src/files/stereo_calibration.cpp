@@ -7,7 +7,6 @@
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
-#include "fpp/sim/rig.hpp"
 #include "fpp/yaml_fields.hpp"
 
 #include <opencv2/core.hpp>
@@ -42,18 +41,6 @@ bool StereoCalibration::camera_ray(Vec2 pixel, Vec2& normalised) const {
 bool StereoCalibration::sizes_known() const {
     return camera_size.width > 0 && camera_size.height > 0 && projector_size.width > 0 &&
            projector_size.height > 0;
-}
-
-StereoCalibration calibration_from_rig(const sim::Rig& rig) {
-    StereoCalibration c;
-    c.camera_size = rig.camera_size;
-    c.projector_size = rig.projector_size;
-    c.camera = rig.camera;
-    c.projector = rig.projector;
-    c.R = rig.R;
-    c.T = rig.t;
-    c.origin = "simulated rig '" + rig.name + "' (exact model)";
-    return c;
 }
 
 CameraPairFileError::CameraPairFileError(const fs::path& file, CameraPairCalibration pair_)

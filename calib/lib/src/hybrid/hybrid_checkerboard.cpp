@@ -2,14 +2,14 @@
 // camera alone, samples on their bright parts, the stereo model between
 // them (see fpp/calib/hybrid_calibrate.hpp).
 
-#include "bundle_adjustment.hpp"
 #include "fpp/calib/corners.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/calib/time_split.hpp"
 #include "fpp/error.hpp"
 #include "hybrid_fit.hpp"
 #include "phase_smoothing.hpp"
-#include "pose_pipeline.hpp"
+#include "session/pose_pipeline.hpp"
+#include "stereo/bundle_adjustment.hpp"
 
 #include <opencv2/calib3d.hpp>
 

@@ -4,8 +4,8 @@
 // Sensitivities by central differences of the triangulated length at 0.1
 // sigma of each parameter; sigma^2 = g^T Sigma g.
 
-#include "bundle_adjustment.hpp"
 #include "fpp/calib/trueness.hpp"
+#include "stereo/bundle_adjustment.hpp"
 
 #include <Eigen/Dense>
 
