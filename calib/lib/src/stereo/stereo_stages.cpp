@@ -508,6 +508,7 @@ StereoResult StereoRun::finish() {
     } catch (const std::runtime_error& e) {
         say(std::string("trueness unknown: ") + e.what());
     }
+    stage.stop(); // into the result, before it is handed on
     return std::move(result);
 }
 

@@ -117,30 +117,9 @@ camera_first_covariance(const RigState& s, const std::vector<CornerObservation>&
                                                  regularisation, false, pool);
     const Eigen::MatrixXd two_inverse = inverse(two.A);
 
-    // M = d g_2 / d theta_1: the projector stage's gradient as the camera
-    // stage's parameters move (the poses its corners' board points and
-    // its samples' planes, the camera its samples' rays).
     const Eigen::Index n1 = sigma_1.rows(), n2 = two_inverse.rows();
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n2, n1);
-    std::vector<double> step(std::size_t(n1), 0.0);
-    std::vector<DenseObservation> moved;
-    const auto gradient_at = [&](Eigen::Index k, double h) {
-        RigState t = s;
-        step.assign(std::size_t(n1), 0.0);
-        step[std::size_t(k)] = h;
-        apply_increment(t, pose_used, camera_stage, step);
-        moved = dense;
-        place_dense_points(t, moved);
-        return normal_equations(t, corners, moved, pose_used, projector_stage, regularisation, true,
-                                pool)
-            .g;
-    };
-    for (Eigen::Index k = 0; k < n1; ++k) {
-        const double h = 0.1 * std::sqrt(std::max(sigma_1(k, k), 0.0));
-        if (!(h > 0))
-            continue;
-        M.col(k) = (gradient_at(k, h) - gradient_at(k, -h)) / (2 * h);
-    }
+    const Eigen::MatrixXd M = projector_response(s, corners, dense, pose_used, one.full_index,
+                                                 two.full_index, projector_stage);
     // d theta_2 = -B d theta_1.
     const Eigen::MatrixXd B = two_inverse * M;
 

@@ -16,7 +16,7 @@
 //                 it is given (its corners move with the poses, the dense
 //                 samples with the camera's rays and the boards' planes):
 //                 d theta_2 = -A_2^-1 M d theta_1 with M = d g_2 / d theta_1
-//                 (central differences of its gradient at 0.1 sigma_1), so
+//                 (projector_response below), so
 //                 Sigma_2 = s_2 A_2^-1 + B Sigma_1 B^T and Sigma_21 =
 //                 -B Sigma_1 (B = A_2^-1 M).
 //
@@ -68,6 +68,27 @@ camera_first_covariance(const RigState& s, const std::vector<CornerObservation>&
                         const std::vector<bool>& pose_used, const FreeParameters& camera_stage,
                         const FreeParameters& projector_stage,
                         const GridRegularisation& regularisation, ThreadPool* pool);
+
+// M = d g_2 / d theta_1: how the projector stage's gradient moves with the
+// camera stage's parameters (its corners' board points with the poses, its
+// dense samples with the camera's rays and the boards' planes), from the
+// analytic derivatives, second-order terms left out as the normal equations
+// leave them; rows and columns in the stages' column orders (their
+// NormalEquations::full_index).
+Eigen::MatrixXd projector_response(const RigState& s, const std::vector<CornerObservation>& corners,
+                                   const std::vector<DenseObservation>& dense,
+                                   const std::vector<bool>& pose_used,
+                                   const std::vector<int>& camera_index,
+                                   const std::vector<int>& projector_index,
+                                   const FreeParameters& projector_stage);
+// The same by central differences of the projector stage's gradient, one
+// step per camera-stage column (slow: two passes over every observation
+// per column; what the tests check projector_response with).
+Eigen::MatrixXd projector_response_by_differences(
+    const RigState& s, const std::vector<CornerObservation>& corners,
+    const std::vector<DenseObservation>& dense, const std::vector<bool>& pose_used,
+    const FreeParameters& camera_stage, const FreeParameters& projector_stage,
+    const GridRegularisation& regularisation, const std::vector<double>& steps);
 
 // The free set that opens every calibration parameter (each block up to
 // the poses, skew too): its columns are the full order's indices, so
