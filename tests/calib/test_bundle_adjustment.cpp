@@ -161,8 +161,7 @@ TEST(CalibrationCovariance, ProjectorResponseMatchesCentralDifferences) {
     for (DenseObservation& o : p.dense)
         o.projector = model.projector_pixel(o.camera_point);
     for (CornerObservation& o : p.corners)
-        o.projector =
-            model.projector_pixel(to_camera(p.state.poses[std::size_t(o.pose)], o.board));
+        o.projector = model.projector_pixel(to_camera(p.state.poses[std::size_t(o.pose)], o.board));
     FreeParameters camera;
     camera.camera_lens = camera.camera_grid = camera.poses = camera.camera_observations = true;
     camera.camera_weight = 4;
