@@ -235,7 +235,13 @@ int run_correct(const CorrectArgs& args) {
     hybrid.progress = [](const std::string& line) { std::cerr << "  " << line << "\n"; };
     StereoSessionOptions stereo;
     stereo.decode = hybrid.decode;
-    double scale = fit.scale;
+    // A correction within its noise is not made (the smallest model the
+    // lengths support is none): the session is calibrated as it was, and
+    // the artefact only sets the trueness.
+    const bool significant = std::abs(fit.scale - 1) > 2 * fit.sigma;
+    double scale = significant ? fit.scale : 1;
+    if (!significant)
+        std::cerr << "  within 2 sigma of none: no correction, the trueness from the artefact\n";
     stereo.stereo.camera_focal_scale = scale;
     std::vector<BoardView> views;
     keep_board_views(args.session, hybrid, stereo, views);
