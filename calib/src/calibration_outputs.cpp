@@ -23,13 +23,8 @@ void check_report_folder(const std::string& report, const std::string& what) {
                          "exists and is not a " + what + " report; choose another folder");
 }
 
-void write_stereo_outputs(const SessionResult& result, const std::filesystem::path& out,
-                          const std::string& report, const HeldOutCheck* held_out) {
+StereoCalibration session_calibration(const SessionResult& result) {
     const StereoResult& s = result.stereo;
-    if (!report.empty()) {
-        std::cerr << "writing the report to " << report << "\n";
-        write_calibration_report(report, result, held_out);
-    }
     StereoCalibration calibration = s.calibration;
     // Every pose of the session in order; skipped ones with their reason.
     calibration.poses.clear();
@@ -45,6 +40,17 @@ void write_stereo_outputs(const SessionResult& result, const std::filesystem::pa
         r.note = "skipped: " + p.skip_reason;
         calibration.poses.push_back(r);
     }
+    return calibration;
+}
+
+void write_stereo_outputs(const SessionResult& result, const std::filesystem::path& out,
+                          const std::string& report, const HeldOutCheck* held_out) {
+    const StereoResult& s = result.stereo;
+    if (!report.empty()) {
+        std::cerr << "writing the report to " << report << "\n";
+        write_calibration_report(report, result, held_out);
+    }
+    const StereoCalibration calibration = session_calibration(result);
     save_calibration(out, calibration);
     std::cerr << "time per stage (s, summed over the threads running it): "
               << result.time_split.summary() << "\n";

@@ -18,6 +18,10 @@ namespace fpp::calib {
 void check_output_file(const std::filesystem::path& out, const std::string& option);
 void check_report_folder(const std::string& report, const std::string& what);
 
+// The calibration a session gave, as its file holds it: every pose of the
+// session in order, skipped ones with their reason.
+StereoCalibration session_calibration(const SessionResult& result);
+
 // The stereo calibration file (every pose of the session in order, skipped
 // ones with their reason), the report when asked for, and the summary on
 // stdout (times on stderr).

@@ -26,6 +26,7 @@ struct SimulateSessionArgs {
     int binning = 1;
     double read_noise = -1;
     bool no_effects = false;
+    double max_tilt_deg = sim::SessionOptions{}.max_tilt_deg;
 };
 
 // The projector's response ramp at the first pose, as the scanner records it
@@ -60,6 +61,7 @@ int run_simulate_session(const SimulateSessionArgs& args) {
     options.kind = args.kind == "plane" ? sim::SessionKind::plane : sim::SessionKind::checkerboard;
     options.poses = args.poses;
     options.seed = args.seed;
+    options.max_tilt_deg = args.max_tilt_deg;
     std::cerr << "simulating a " << args.kind << " session: " << args.poses << " poses of "
               << frame_count(sequence) << " frames on rig '" << rig.name << "' (camera "
               << rig.camera_size.width << " x " << rig.camera_size.height << ")\n";
@@ -114,6 +116,12 @@ Action add_simulate_session_command(CLI::App& app) {
         ->capture_default_str()
         ->check(CLI::Range(1, 8));
     cmd->add_option("--read-noise", args->read_noise, "override the rig's read noise (DN)");
+    // A hurried session (small tilts) leaves the depth scale poorly
+    // determined: what `correct` with an artefact is for.
+    cmd->add_option("--max-tilt-deg", args->max_tilt_deg,
+                    "largest board tilt about its x and y axes (degrees)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 40.0));
     cmd->add_flag("--no-effects", args->no_effects,
                   "switch off every effect outside the stereo model, and noise");
     return action;

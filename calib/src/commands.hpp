@@ -22,6 +22,7 @@ Action add_calibrate_command(CLI::App& app);
 Action add_response_command(CLI::App& app);
 Action add_evaluate_command(CLI::App& app);
 Action add_verify_command(CLI::App& app);
+Action add_correct_command(CLI::App& app);
 Action add_paper_experiments_command(CLI::App& app);
 Action add_import_command(CLI::App& app);
 Action add_patterns_command(CLI::App& app);

@@ -2,7 +2,7 @@
 // simulate, simulate-session, demo (the virtual scanner); decode; stereo,
 // hybrid, calibrate (calibration and coefficient tables); reconstruct (one
 // camera with a table or calibration, or two cameras); evaluate; verify
-// (a certified artefact, VDI/VDE 2634-2);
+// (a certified artefact, VDI/VDE 2634-2); correct (the depth scale from it);
 // paper-experiments; response (projector response); import (other tools'
 // captures); patterns (projector images for capture by hand); scanner-status,
 // scanner-session, scanner-pull, scanner-push-table (a scanner over its HTTP
@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     add(fpp::calib::add_response_command);
     add(fpp::calib::add_evaluate_command);
     add(fpp::calib::add_verify_command);
+    add(fpp::calib::add_correct_command);
     add(fpp::calib::add_paper_experiments_command);
     add(fpp::calib::add_import_command);
     add(fpp::calib::add_patterns_command);
