@@ -3,7 +3,8 @@
 
 #include "fpp/calib/corners.hpp"
 
-#include <opencv2/calib3d.hpp>
+#include "corner_detect.hpp"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -35,43 +36,6 @@ Image<float> frame_to_float(const Frame& frame) {
 
 cv::Mat as_mat(const Image<float>& image) {
     return cv::Mat(image.height(), image.width(), CV_32F, const_cast<float*>(image.data()));
-}
-
-// Stretches finite values between the 0.5 % and 99.5 % quantiles to 0..255
-// (the finders work on 8-bit images; NaN becomes black).
-cv::Mat to_8bit(const Image<float>& image) {
-    std::vector<float> sample;
-    const std::size_t n = image.pixel_count();
-    const std::size_t stride = std::max<std::size_t>(1, n / 200000);
-    for (std::size_t i = 0; i < n; i += stride)
-        if (std::isfinite(image.data()[i]))
-            sample.push_back(image.data()[i]);
-    float lo = 0, hi = 1;
-    if (!sample.empty()) {
-        const auto q = [&](double f) {
-            const std::size_t k =
-                std::min(sample.size() - 1,
-                         static_cast<std::size_t>(f * static_cast<double>(sample.size())));
-            std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(k),
-                             sample.end());
-            return sample[k];
-        };
-        lo = q(0.005);
-        hi = q(0.995);
-    }
-    if (!(hi > lo))
-        hi = lo + 1;
-    cv::Mat out(image.height(), image.width(), CV_8U);
-    const float scale = 255.0f / (hi - lo);
-    for (int y = 0; y < image.height(); ++y) {
-        const float* src = image.row(y);
-        auto* dst = out.ptr<std::uint8_t>(y);
-        for (int x = 0; x < image.width(); ++x) {
-            const float v = std::isfinite(src[x]) ? (src[x] - lo) * scale : 0.0f;
-            dst[x] = static_cast<std::uint8_t>(std::clamp(v, 0.0f, 255.0f) + 0.5f);
-        }
-    }
-    return out;
 }
 
 double dist(const Vec2& a, const Vec2& b) {
@@ -149,41 +113,6 @@ double origin_black_evidence(const std::vector<Vec2>& p, int columns, int rows,
         evidence += black_if_origin_black ? dark_outside : -dark_outside;
     }
     return evidence;
-}
-
-// The classic finder takes seconds on a large image whose board its first
-// binarisation (by the histogram) misses, as it then tries adaptive
-// thresholds at every dilation, and milliseconds on a reduced copy: it looks
-// at one reduced to at most this many pixels a side first, and at the image
-// itself only when that fails. Its corners are starting points only: the
-// refinements on the full texture end where they would from the full
-// image's, to 1e-4 px (1e-5 px RMS; the corners' noise is ~3e-3 px).
-constexpr int kClassicFinderSide = 1000;
-
-bool try_finder(const cv::Mat& image8, int columns, int rows, bool sector,
-                std::vector<cv::Point2f>& found) {
-    found.clear();
-    const cv::Size pattern(columns, rows);
-    if (sector)
-        return cv::findChessboardCornersSB(image8, pattern, found,
-                                           cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
-    const int flags =
-        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
-    const int factor =
-        (std::max(image8.cols, image8.rows) + kClassicFinderSide - 1) / kClassicFinderSide;
-    if (factor > 1) {
-        cv::Mat reduced;
-        cv::resize(image8, reduced, cv::Size(image8.cols / factor, image8.rows / factor), 0, 0,
-                   cv::INTER_AREA);
-        if (cv::findChessboardCorners(reduced, pattern, found, flags)) {
-            // Pixel centres on integers at both scales.
-            const float f = static_cast<float>(factor);
-            for (cv::Point2f& p : found)
-                p = {(p.x + 0.5f) * f - 0.5f, (p.y + 0.5f) * f - 0.5f};
-            return true;
-        }
-    }
-    return cv::findChessboardCorners(image8, pattern, found, flags);
 }
 
 } // namespace
@@ -313,7 +242,10 @@ namespace {
 // Where the neighbours put corner (i, j): the component-wise median of the
 // midpoints of its row and column neighbours and of the extrapolations from
 // two neighbours on each side (perspective moves a midpoint by a few
-// hundredths of the spacing; one bad neighbour cannot carry the median).
+// hundredths of the spacing; one bad neighbour cannot carry the median). The
+// board's four outer corners have only two of those, and also get the
+// parallelogram of their three diagonal neighbours: without a third, one of
+// them was let through 14 px off (a classic detection of a 45-degree tilt).
 bool predicted_corner(const std::vector<cv::Point2f>& p, int columns, int rows, int i, int j,
                       cv::Point2f& out) {
     auto at = [&](int ii, int jj) { return p[static_cast<std::size_t>(jj * columns + ii)]; };
@@ -334,6 +266,11 @@ bool predicted_corner(const std::vector<cv::Point2f>& p, int columns, int rows, 
                 add(2.0f * at(i + sign * di, j + sign * dj) -
                     at(i + 2 * sign * di, j + 2 * sign * dj));
     }
+    if (count == 2)
+        for (const int si : {-1, 1})
+            for (const int sj : {-1, 1})
+                if (count < 3 && inside(i + si, j + sj) && inside(i + si, j) && inside(i, j + sj))
+                    add(at(i + si, j) + at(i, j + sj) - at(i + si, j + sj));
     if (count < 3)
         return false;
     auto median = [count](std::array<float, 6>& v) {
@@ -387,17 +324,17 @@ CheckerboardCorners find_checkerboard(const std::vector<CornerTexture>& textures
     std::vector<cv::Point2f> found;
     std::string tried;
     for (const CornerTexture& texture : textures) {
-        const cv::Mat image8 = to_8bit(texture.image);
-        for (int pass = 0; pass < 2; ++pass) {
-            const bool sector = pass == 1;
+        const int factor = detail::detector_factor(texture.image.size());
+        const cv::Mat image8 = detail::detector_image(texture.image, factor);
+        for (const detail::Finder finder : {detail::Finder::classic, detail::Finder::sector}) {
+            const bool sector = finder == detail::Finder::sector;
             if ((sector && !options.sector) || (!sector && !options.classic))
                 continue;
             if (!tried.empty())
                 tried += ", ";
             tried += (sector ? "sector" : "classic") + std::string(" on ") + texture.source;
-            if (!try_finder(image8, columns, rows, sector, found))
-                continue;
-            if (found.size() != static_cast<std::size_t>(columns * rows))
+            ++result.detector_attempts;
+            if (!detail::run_finder(image8, factor, columns, rows, finder, found))
                 continue;
             std::vector<Vec2> points(found.size());
             for (std::size_t k = 0; k < found.size(); ++k)
@@ -439,6 +376,7 @@ CheckerboardCorners find_checkerboard(const std::vector<CornerTexture>& textures
             result.finder = sector ? "sector" : "classic";
             result.texture = texture.source;
             result.spacing_px = median;
+            result.detector_factor = factor;
             return result;
         }
     }
