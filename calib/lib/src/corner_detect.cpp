@@ -54,6 +54,8 @@ int detector_factor(Size texture) {
 
 cv::Mat detector_image(const Image<float>& texture, int factor) {
     const int w = texture.width() / factor, h = texture.height() / factor;
+    if (w < 1 || h < 1)
+        return {};
     cv::Mat full(texture.height(), texture.width(), CV_32F, const_cast<float*>(texture.data()));
     cv::Mat reduced;
     // Cropped to whole blocks: pixel (x, y) of the copy is the mean of the
@@ -82,6 +84,8 @@ cv::Mat detector_image(const Image<float>& texture, int factor) {
 bool run_finder(const cv::Mat& image8, int factor, int columns, int rows, Finder finder,
                 std::vector<cv::Point2f>& found) {
     found.clear();
+    if (image8.empty())
+        return false;
     const cv::Size pattern(columns, rows);
     const bool ok =
         finder == Finder::sector

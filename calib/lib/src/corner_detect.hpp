@@ -25,11 +25,12 @@ enum class Finder {
 constexpr int kDetectorSide = 1000;
 int detector_factor(Size texture);
 
-// The 8-bit image the finders look at: `texture` (NaN read as 0) cropped to a
-// multiple of `factor`, area-averaged down by it, and divided by its local
-// white level (the dilation of a window an eighth of the image's smaller side
-// wide, smoothed), which is floored at a quarter of the image's bright level
-// so that unlit parts stay dark. A tilted board under a projector is lit
+// The 8-bit image the finders look at: `texture` cropped to a multiple of
+// `factor`, area-averaged down by it (a block holding NaN reads 0), and
+// divided by its local white level (the dilation of a window an eighth of
+// the image's smaller side wide, smoothed), which is floored at a quarter of
+// the image's bright level so that unlit parts stay dark (empty for a
+// texture under `factor` px a side). A tilted board under a projector is lit
 // unevenly across its squares; divided out, one threshold separates them
 // everywhere.
 cv::Mat detector_image(const Image<float>& texture, int factor);
