@@ -48,7 +48,7 @@ enum class CornerRefinement {
 };
 
 struct CornerFinderOptions {
-    bool classic = true; // cv::findChessboardCorners (adaptive threshold)
+    bool classic = true; // cv::findChessboardCorners (histogram and global thresholds)
     bool sector = true;  // cv::findChessboardCornersSB, tried when classic fails
     // Half-size of the cornerSubPix window, px; 0 = a fifth of the smallest
     // corner spacing, at least 3.
@@ -66,13 +66,23 @@ struct CheckerboardCorners {
     // measured on the texture (used to pick the white squares around each corner).
     bool origin_square_black = true;
     double spacing_px = 0; // median distance between neighbouring corners
+    // The detector's work: finder runs made, over every texture tried (at
+    // most 2 a texture), and the factor by which the image they found the
+    // board on was reduced (1: the texture itself; 0 when not found).
+    int detector_attempts = 0;
+    int detector_factor = 0;
 };
 
 // Finds, refines and orders the inner corners. Tries the classic finder then
-// the sector-based one on each texture in turn; the corners are refined on
-// the first (preferred) texture whichever one the board was found on. A
-// corner farther than a tenth of the spacing (at least 2 px) from where its
-// neighbours put it is sought again there; if it is still off, that
+// the sector-based one on each texture in turn, once each, on a copy reduced
+// to at most 1000 px a side with its shading divided out (a strongly tilted
+// or unevenly lit board costs the detector about what a frontal one does:
+// no adaptive-threshold retries, no search of the full-size image, so a
+// board is found at that size or not at all); the corners are refined at
+// full size on the first (preferred) texture whichever one the board was
+// found on. A corner farther than a tenth of the
+// spacing (at least 2 px) from where its neighbours put it (the board's four
+// outer corners included) is sought again there; if it is still off, that
 // detection is refused and the next finder or texture tried (the failure
 // names the corner).
 CheckerboardCorners find_checkerboard(const std::vector<CornerTexture>& textures, int columns,
