@@ -172,9 +172,9 @@ TEST(CalibrationCovariance, ProjectorResponseMatchesCentralDifferences) {
     projector.dense_weight = 2;
     const GridRegularisation regularisation;
     const NormalEquations one =
-        normal_equations(p.state, p.corners, {}, p.used, camera, regularisation, false);
+        normal_equations(p.state, p.corners, {}, p.used, camera, regularisation);
     const NormalEquations two =
-        normal_equations(p.state, p.corners, p.dense, p.used, projector, regularisation, false);
+        normal_equations(p.state, p.corners, p.dense, p.used, projector, regularisation);
     const FullOrder order = full_order(p.state);
     std::vector<double> steps;
     for (int full : one.full_index) {

@@ -23,6 +23,21 @@ inline sim::Rig model_rig() {
     return rig;
 }
 
+// Camera-frame points (mm) seen by both devices of `rig`, each coordinate
+// plus jitter() (camera u, v, then projector u, v, point by point).
+template <class Jitter>
+void see_points(const sim::Rig& rig, const std::vector<Vec3>& points, Jitter&& jitter,
+                calib::PoseObservations& o) {
+    for (const Vec3& x : points) {
+        const Vec2 c = rig.camera.project(x);
+        const Vec3 xp = mul(rig.R, x);
+        const Vec2 q =
+            rig.projector.project({xp[0] + rig.t[0], xp[1] + rig.t[1], xp[2] + rig.t[2]});
+        o.camera.push_back({c[0] + jitter(), c[1] + jitter()});
+        o.projector.push_back({q[0] + jitter(), q[1] + jitter()});
+    }
+}
+
 // The session's 11 x 8 board at the poses `session` draws for `rig`, seen by
 // both devices; `noise_px` Gaussian noise (seeded by `noise_seed`) on every
 // coordinate.
@@ -43,14 +58,7 @@ inline std::vector<calib::PoseObservations> observe(const sim::Rig& rig,
         calib::PoseObservations o;
         o.name = "pose-" + std::to_string(p + 1);
         o.board = board;
-        for (const Vec3& x : cb.inner_corners()) {
-            const Vec2 c = rig.camera.project(x);
-            const Vec3 xp = mul(rig.R, x);
-            const Vec2 q =
-                rig.projector.project({xp[0] + rig.t[0], xp[1] + rig.t[1], xp[2] + rig.t[2]});
-            o.camera.push_back({c[0] + jitter(), c[1] + jitter()});
-            o.projector.push_back({q[0] + jitter(), q[1] + jitter()});
-        }
+        see_points(rig, cb.inner_corners(), jitter, o);
         out.push_back(std::move(o));
     }
     return out;
@@ -66,16 +74,12 @@ inline calib::PoseObservations observe_pose(const sim::Rig& rig, const Mat3& R, 
     calib::PoseObservations o;
     o.name = name;
     o.board = board;
+    std::vector<Vec3> points;
     for (const Vec3& b : board) {
         const Vec3 rb = mul(R, b);
-        const Vec3 x{rb[0] + t[0], rb[1] + t[1], rb[2] + t[2]};
-        const Vec2 c = rig.camera.project(x);
-        const Vec3 xp = mul(rig.R, x);
-        const Vec2 q =
-            rig.projector.project({xp[0] + rig.t[0], xp[1] + rig.t[1], xp[2] + rig.t[2]});
-        o.camera.push_back({c[0] + jitter(), c[1] + jitter()});
-        o.projector.push_back({q[0] + jitter(), q[1] + jitter()});
+        points.push_back({rb[0] + t[0], rb[1] + t[1], rb[2] + t[2]});
     }
+    see_points(rig, points, jitter, o);
     return o;
 }
 

@@ -202,20 +202,13 @@ struct Normal {
     Eigen::MatrixXd A;
     Eigen::VectorXd g;
     double cost = 0;
-    // g and the cost only (A stays 0 x 0): a gradient at many nearby states.
-    bool gradient_only = false;
     void reset(int n) {
-        if (gradient_only)
-            A.resize(0, 0);
-        else
-            A.setZero(n, n);
+        A.setZero(n, n);
         g.setZero(n);
         cost = 0;
         run_.active = false;
     }
     void add(int a, int b, double value) {
-        if (gradient_only)
-            return;
         if (a >= b)
             A(a, b) += value;
         else
@@ -228,9 +221,8 @@ struct Normal {
         for (int a = 0; a < j.count; ++a) {
             const int ca = j.column[a];
             g(ca) += w * (j.du[a] * ru + j.dv[a] * rv);
-            if (!gradient_only)
-                for (int b = 0; b <= a; ++b)
-                    add(ca, j.column[b], w * (j.du[a] * j.du[b] + j.dv[a] * j.dv[b]));
+            for (int b = 0; b <= a; ++b)
+                add(ca, j.column[b], w * (j.du[a] * j.du[b] + j.dv[a] * j.dv[b]));
         }
         if (j.grid_count == 0)
             return;
@@ -239,8 +231,6 @@ struct Normal {
             g(j.grid_u[k]) += w * (wk * ru);
             g(j.grid_v[k]) += w * (wk * rv);
         }
-        if (gradient_only)
-            return;
         if (!run_.matches(j)) {
             flush();
             run_.start(j);
@@ -265,8 +255,7 @@ struct Normal {
     }
     // Adds another (flushed) set's terms.
     void add(const Normal& other) {
-        if (!gradient_only)
-            A.triangularView<Eigen::Lower>() += other.A;
+        A.triangularView<Eigen::Lower>() += other.A;
         g += other.g;
         cost += other.cost;
     }
@@ -345,7 +334,6 @@ public:
                     Normal* part = nullptr;
                     if (normal) {
                         part = &chunk_normals_[std::size_t(c)];
-                        part->gradient_only = normal->gradient_only;
                         part->reset(layout.columns());
                     }
                     chunk_terms_[std::size_t(c)] = evaluate_observations(
@@ -503,8 +491,6 @@ private:
                 const double fa = f[a / 2][a % 2];
                 const int ca = layout.column(offset + int(a));
                 normal->g(ca) += kGaugeWeight * fa * dot;
-                if (normal->gradient_only)
-                    continue;
                 for (std::size_t b = 0; b <= a; ++b) {
                     const int cb = layout.column(offset + int(b));
                     const double value = kGaugeWeight * fa * f[b / 2][b % 2];
@@ -527,8 +513,6 @@ private:
                     for (int a = 0; a < n; ++a) {
                         const int ca = layout.column(offset + 2 * idx[a] + axis);
                         normal->g(ca) += smoothness * c[a] * diff;
-                        if (normal->gradient_only)
-                            continue;
                         for (int b = 0; b < n; ++b) {
                             const int cb = layout.column(offset + 2 * idx[b] + axis);
                             if (ca >= cb)
@@ -542,8 +526,7 @@ private:
                 if (normal) {
                     const int c = layout.column(offset + 2 * k + axis);
                     normal->g(c) += reg_.ridge * value;
-                    if (!normal->gradient_only)
-                        normal->A(c, c) += reg_.ridge;
+                    normal->A(c, c) += reg_.ridge;
                 }
             }
         }
@@ -634,20 +617,17 @@ NormalEquations normal_equations(const RigState& state,
                                  const std::vector<CornerObservation>& corners,
                                  const std::vector<DenseObservation>& dense,
                                  const std::vector<bool>& pose_used, const FreeParameters& free,
-                                 const GridRegularisation& regularisation, bool gradient_only,
-                                 ThreadPool* pool) {
+                                 const GridRegularisation& regularisation, ThreadPool* pool) {
     const Layout layout(state, free, pose_used);
     Problem problem(state, corners, dense, pose_used, free, regularisation, pool);
     Normal normal;
-    normal.gradient_only = gradient_only;
     normal.reset(layout.columns());
     NormalEquations out;
     if (!std::isfinite(problem.evaluate(state, layout, &normal, &out.residuals)))
         throw std::runtime_error("bundle adjustment: a board point lies behind a device");
     out.data_cost = normal.cost;
     out.g = std::move(normal.g);
-    if (!gradient_only)
-        out.A = normal.A.selfadjointView<Eigen::Lower>();
+    out.A = normal.A.selfadjointView<Eigen::Lower>();
     out.full_index.assign(std::size_t(layout.columns()), -1);
     for (int k = 0; k < layout.size(); ++k)
         if (const int c = layout.column(k); c >= 0)

@@ -113,8 +113,7 @@ Linearisation linearise(const RigState& state, const std::vector<CornerObservati
 // grids' regularisation (both triangles) and g = J^T W r + the
 // regularisation's gradient, over the free parameters in the adjustment's
 // column order; `full_index[c]`: column c's place in the full order
-// (full_order()). gradient_only leaves A empty (the data terms' products are
-// most of the time). Throws std::runtime_error when a point lies behind a
+// (full_order()). Throws std::runtime_error when a point lies behind a
 // device. The grids' gauge comes from `state`'s lenses.
 struct NormalEquations {
     Eigen::MatrixXd A;
@@ -127,7 +126,7 @@ NormalEquations normal_equations(const RigState& state,
                                  const std::vector<CornerObservation>& corners,
                                  const std::vector<DenseObservation>& dense,
                                  const std::vector<bool>& pose_used, const FreeParameters& free,
-                                 const GridRegularisation& regularisation, bool gradient_only,
+                                 const GridRegularisation& regularisation,
                                  ThreadPool* pool = nullptr);
 
 // Where each block starts in the full order of every parameter the
@@ -147,6 +146,22 @@ FullOrder full_order(const RigState& state);
 // terms' own fields, all through `lens`. Empty for an empty grid. The
 // adjustment keeps each grid orthogonal to them (grid_gauge.cpp).
 std::vector<std::vector<Vec2>> gauge_fields(const CorrectionGrid& grid, const LensModel& lens);
+
+// The calibration a state holds: its lenses, grids, R and T, with the
+// sizes given (the poses are not part of it).
+inline StereoCalibration calibration_of(const RigState& s, Size camera_size = {},
+                                        Size projector_size = {}) {
+    StereoCalibration c;
+    c.camera_size = camera_size;
+    c.projector_size = projector_size;
+    c.camera = s.camera;
+    c.projector = s.projector;
+    c.camera_correction = s.camera_grid;
+    c.projector_correction = s.projector_grid;
+    c.R = s.R;
+    c.T = s.T;
+    return c;
+}
 
 // Adds `step` (free parameters, the same order) to `state`.
 void apply_increment(RigState& state, const std::vector<bool>& pose_used,

@@ -135,11 +135,7 @@ void StereoRun::place_dense_samples() {
 std::size_t StereoRun::drop_dense_outliers(double sigmas, double floor_px) {
     if (dense.empty())
         return 0;
-    StereoCalibration model;
-    model.projector = s.projector;
-    model.projector_correction = s.projector_grid;
-    model.R = s.R;
-    model.T = s.T;
+    const StereoCalibration model = calibration_of(s);
     std::vector<double> error(dense.size());
     for (std::size_t k = 0; k < dense.size(); ++k) {
         const Vec2 up = model.projector_pixel(dense[k].camera_point);
@@ -164,13 +160,7 @@ std::size_t StereoRun::drop_dense_outliers(double sigmas, double floor_px) {
 }
 
 ObservationNoise StereoRun::observation_noise(const RigState& at) const {
-    StereoCalibration model;
-    model.camera = at.camera;
-    model.camera_correction = at.camera_grid;
-    model.projector = at.projector;
-    model.projector_correction = at.projector_grid;
-    model.R = at.R;
-    model.T = at.T;
+    const StereoCalibration model = calibration_of(at);
     double sc = 0, sp = 0, sd = 0;
     std::size_t nc = 0, np = 0;
     for (const CornerObservation& o : corners) {
@@ -343,14 +333,7 @@ void StereoRun::residuals() {
     // Per-pose residuals and outliers among the used poses.
     StageTimer residuals_stage(result.time_split, "residuals");
     StereoCalibration& c = result.calibration;
-    c.camera_size = camera_size;
-    c.projector_size = projector_size;
-    c.camera = s.camera;
-    c.projector = s.projector;
-    c.camera_correction = s.camera_grid;
-    c.projector_correction = s.projector_grid;
-    c.R = s.R;
-    c.T = s.T;
+    c = calibration_of(s, camera_size, projector_size);
     result.camera_residuals.assign(poses.size(), {});
     result.projector_residuals.assign(poses.size(), {});
     std::vector<double> combined;

@@ -48,9 +48,7 @@ void scatter(Eigen::MatrixXd& out, const Eigen::MatrixXd& block, const std::vect
 
 void place_dense_points(const RigState& s, std::vector<DenseObservation>& dense,
                         std::vector<bool>* placed) {
-    StereoCalibration camera_model;
-    camera_model.camera = s.camera;
-    camera_model.camera_correction = s.camera_grid;
+    const StereoCalibration camera_model = calibration_of(s);
     if (placed)
         placed->assign(dense.size(), false);
     for (std::size_t k = 0; k < dense.size(); ++k) {
@@ -87,7 +85,7 @@ CalibrationCovariance joint_covariance(const RigState& s,
                                        const GridRegularisation& regularisation, ThreadPool* pool) {
     const int size = full_order(s).poses;
     const NormalEquations n =
-        normal_equations(s, corners, {}, pose_used, free, regularisation, false, pool);
+        normal_equations(s, corners, {}, pose_used, free, regularisation, pool);
     CalibrationCovariance out;
     out.pose_stage = free;
     out.pose_stage_variance = variance_factor(n);
@@ -110,11 +108,11 @@ camera_first_covariance(const RigState& s, const std::vector<CornerObservation>&
                         const GridRegularisation& regularisation, ThreadPool* pool) {
     const int size = full_order(s).poses;
     const NormalEquations one =
-        normal_equations(s, corners, {}, pose_used, camera_stage, regularisation, false, pool);
+        normal_equations(s, corners, {}, pose_used, camera_stage, regularisation, pool);
     const double s1 = variance_factor(one);
     const Eigen::MatrixXd sigma_1 = s1 * inverse(one.A);
-    const NormalEquations two = normal_equations(s, corners, dense, pose_used, projector_stage,
-                                                 regularisation, false, pool);
+    const NormalEquations two =
+        normal_equations(s, corners, dense, pose_used, projector_stage, regularisation, pool);
     const Eigen::MatrixXd two_inverse = inverse(two.A);
 
     const Eigen::Index n1 = sigma_1.rows(), n2 = two_inverse.rows();

@@ -47,7 +47,7 @@ Eigen::MatrixXd projector_response(const RigState& s, const std::vector<CornerOb
     FreeParameters both = projector_stage;
     both.poses = true;
     const NormalEquations n =
-        normal_equations(s, corners, {}, pose_used, both, GridRegularisation{0, 0, 0}, false);
+        normal_equations(s, corners, {}, pose_used, both, GridRegularisation{0, 0, 0});
     for (std::size_t a = 0; a < n.full_index.size(); ++a)
         for (std::size_t b = 0; b < n.full_index.size(); ++b) {
             const int r = col2[std::size_t(n.full_index[a])];
@@ -171,8 +171,7 @@ Eigen::MatrixXd projector_response_by_differences(
         apply_increment(t, pose_used, camera_stage, step);
         moved = dense;
         place_dense_points(t, moved);
-        return normal_equations(t, corners, moved, pose_used, projector_stage, regularisation, true)
-            .g;
+        return normal_equations(t, corners, moved, pose_used, projector_stage, regularisation).g;
     };
     for (Eigen::Index k = 0; k < n1; ++k) {
         const double h = steps[std::size_t(k)];

@@ -120,15 +120,7 @@ Advice suggest_poses(const AdviceInputs& in) {
     Advice out;
     out.sigma_mm = sigma_with(nullptr);
 
-    StereoCalibration model;
-    model.camera_size = in.camera_size;
-    model.projector_size = in.projector_size;
-    model.camera = s.camera;
-    model.projector = s.projector;
-    model.camera_correction = s.camera_grid;
-    model.projector_correction = s.projector_grid;
-    model.R = s.R;
-    model.T = s.T;
+    const StereoCalibration model = calibration_of(s, in.camera_size, in.projector_size);
     Vec3 centre_b{0, 0, 0};
     for (const Vec3& p : in.board)
         for (int k = 0; k < 3; ++k)
@@ -192,7 +184,7 @@ Advice suggest_poses(const AdviceInputs& in) {
             observed.push_back({0, b, model.camera_pixel(x), model.projector_pixel(x)});
         }
         const NormalEquations e =
-            normal_equations(one, observed, {}, {true}, cov.pose_stage, none, false, nullptr);
+            normal_equations(one, observed, {}, {true}, cov.pose_stage, none, nullptr);
         // Its columns: the stage's own (as A's first ones), then its pose.
         const Eigen::Index shared = e.A.rows() - 6;
         const Eigen::MatrixXd app = e.A.bottomRightCorner(6, 6);

@@ -82,18 +82,6 @@ double measure(const StereoCalibration& c, const SeenLength& s) {
     return distance(ends[0], ends[1]);
 }
 
-StereoCalibration to_calibration(const detail::RigState& s, Size camera_size) {
-    StereoCalibration c;
-    c.camera_size = camera_size;
-    c.camera = s.camera;
-    c.projector = s.projector;
-    c.camera_correction = s.camera_grid;
-    c.projector_correction = s.projector_grid;
-    c.R = s.R;
-    c.T = s.T;
-    return c;
-}
-
 std::string mm_text(double v) {
     std::ostringstream o;
     o << std::fixed << std::setprecision(v < 0.0995 ? 3 : 2) << v;
@@ -151,7 +139,7 @@ Trueness predict_trueness(const TruenessInputs& in, TruenessMap* map) {
     const RigState& s = *in.state;
     const Eigen::MatrixXd& cov = *in.covariance;
     const double half = in.length_mm / 2;
-    const StereoCalibration base = to_calibration(s, in.camera_size);
+    const StereoCalibration base = calibration_of(s, in.camera_size);
 
     // The lengths: along depth and across at the three depths, then one
     // along each map cell's ray at the middle depth.
@@ -198,7 +186,7 @@ Trueness predict_trueness(const TruenessInputs& in, TruenessMap* map) {
         step.assign(step.size(), 0.0);
         step[std::size_t(k)] = h;
         apply_increment(t, {}, all, step);
-        const StereoCalibration c = to_calibration(t, in.camera_size);
+        const StereoCalibration c = calibration_of(t, in.camera_size);
         out.resize(m);
         for (Eigen::Index j = 0; j < m; ++j)
             out(j) = measure(c, lengths[std::size_t(j)]);
