@@ -276,11 +276,13 @@ int run_correct(const CorrectArgs& args) {
     }
     record.final_focal_scale = scale;
 
-    // The trueness the artefact shows, then the table again: its header
-    // holds the calibration's trueness and the hash of the file's bytes.
+    // The trueness the artefact shows, in the calibration and the table's
+    // header (with the hash of the calibration file's bytes).
     record.corrected = trueness_from_fit(calibration.trueness, fit, certified);
     calibration.trueness = record.corrected;
-    refit_table(args, calibration, hybrid, views, table);
+    const std::string bytes = calibration_to_yaml(calibration);
+    table->set_provenance(fnv1a64(bytes.data(), bytes.size()),
+                          table_trueness(calibration.trueness));
 
     if (!args.held_out.empty()) {
         std::cerr << "== the held-out positions, with the input table and the corrected one\n";

@@ -487,6 +487,17 @@ TEST(TableFile, TruenessIsReadBackAndChecked) {
         fix_header_crc(b);
         EXPECT_EQ(load_error_field(w.damaged(b)), p.field) << "offset " << p.offset;
     }
+    // The header's provenance set after the fit: written and read back,
+    // refused (and left as it was) when the file could not hold it.
+    fpp::CoefficientTable later = make_table(make_info(fpp::TableModel::ray));
+    later.set_provenance(0x1122334455667788ull, {150.0f, 500.0f, 0.01f, 0.002f});
+    fpp::write_table(w.dir / "later.fpt", later);
+    const fpp::CoefficientTable back = fpp::load_table(w.dir / "later.fpt", nullptr, false);
+    EXPECT_EQ(back.info().calibration_hash, 0x1122334455667788ull);
+    EXPECT_EQ(back.info().trueness.depth_mm, 500.0f);
+    EXPECT_EQ(back.info().trueness.along_depth_mm, 0.01f);
+    EXPECT_THROW(later.set_provenance(1, {150.0f, 0.0f, 0.01f, 0.002f}), std::invalid_argument);
+    EXPECT_EQ(later.info().calibration_hash, 0x1122334455667788ull);
     // The writer refuses what the loader would.
     fpp::TableInfo info = make_info(fpp::TableModel::ray);
     info.trueness.across_mm = -1;

@@ -372,6 +372,16 @@ void CoefficientTable::AlignedFree::operator()(float* p) const noexcept {
     ::operator delete[](p, std::align_val_t{kBlockAlignment});
 }
 
+void CoefficientTable::set_provenance(std::uint64_t calibration_hash,
+                                      const TableTrueness& trueness) {
+    TableInfo info = info_;
+    info.calibration_hash = calibration_hash;
+    info.trueness = trueness;
+    if (auto p = check_info(info))
+        throw std::invalid_argument("coefficient table: " + p->field + ": " + p->message);
+    info_ = info;
+}
+
 CoefficientTable::CoefficientTable(const TableInfo& info) : info_(info) {
     if (auto p = check_info(info))
         throw std::invalid_argument("coefficient table: " + p->field + " " + p->message);

@@ -475,11 +475,7 @@ fit_hybrid_models(const HybridResult& common, const std::vector<PoseSamples>& sa
         info.phase_axis = Axis::x;
         info.projector = projector;
         info.calibration_hash = calibration_hash;
-        if (common.trueness.known())
-            info.trueness = {float(common.trueness.length_mm),
-                             float(common.trueness.middle().depth_mm),
-                             float(common.trueness.middle().along_depth_mm),
-                             float(common.trueness.middle().across_mm)};
+        info.trueness = table_trueness(common.trueness);
         info.created_unix_s =
             static_cast<std::int64_t>(std::chrono::duration_cast<std::chrono::seconds>(
                                           std::chrono::system_clock::now().time_since_epoch())

@@ -111,6 +111,11 @@ public:
     CoefficientTable& operator=(CoefficientTable&&) noexcept;
 
     const TableInfo& info() const { return info_; }
+    // What the header says of the calibration the table came from (its
+    // file's hash, its predicted trueness), for a calibration whose
+    // trueness is known only after the fit; no coefficient changes. Throws
+    // std::invalid_argument for a trueness the file cannot hold.
+    void set_provenance(std::uint64_t calibration_hash, const TableTrueness& trueness);
     int planes() const { return planes_; }
     bool empty() const { return data_ == nullptr; }
     // Whether the coefficients are a read-only mapping of the file.

@@ -17,6 +17,7 @@
 // The frame's own place (a rigid motion of the whole cloud) cannot be
 // observed and is no error here; lengths and form are what a user checks.
 
+#include "fpp/coefficient_table.hpp"
 #include "fpp/image.hpp"
 #include "fpp/lens_model.hpp"
 
@@ -79,6 +80,15 @@ struct PoseSuggestion {
     // camera), in the upper left of the image, at about 450 mm".
     std::string words() const;
 };
+
+// The figures a table's header holds (coefficient-table.md): the middle
+// depth's; all 0 when unknown.
+inline TableTrueness table_trueness(const Trueness& t) {
+    if (!t.known())
+        return {};
+    return {float(t.length_mm), float(t.middle().depth_mm), float(t.middle().along_depth_mm),
+            float(t.middle().across_mm)};
+}
 
 struct StereoCalibration;
 
