@@ -36,6 +36,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <sstream>
 
@@ -307,7 +308,15 @@ void compare_subject_with_truth(Subject& s, const Truth& truth) {
         mm("truth.dz_shape_rms", "Z error less its offset and tilt, RMS", t.dz_shape.rms),
         mm("truth.distance_rms", "3D distance, RMS", t.distance.rms),
         mm("truth.distance_mean", "3D distance, mean", t.distance.mean),
-        mm("truth.distance_max", "3D distance, largest", t.distance.max)};
+        mm("truth.distance_max", "3D distance, largest", t.distance.max),
+        mm("truth.rigid_distance_rms", "3D distance after one rigid motion of the whole cloud, RMS",
+           t.distance_rigid.rms),
+        mm("truth.rigid_distance_max",
+           "3D distance after one rigid motion of the whole cloud, largest", t.distance_rigid.max),
+        {"truth.rigid_angle", "that rigid motion's rotation",
+         t.rigid_angle_rad * 180 / std::numbers::pi, "deg", 4},
+        mm("truth.rigid_shift", "that rigid motion's translation",
+           std::hypot(t.rigid_translation[0], t.rigid_translation[1], t.rigid_translation[2]))};
 }
 
 // ---------------------------------------------------------------- report

@@ -7,6 +7,7 @@
 #include "fpp/calib/evaluation.hpp"
 #include "fpp/calib/plots.hpp"
 #include "fpp/error.hpp"
+#include "fpp/lens_model.hpp"
 #include "fpp/point_cloud.hpp"
 
 #include <Eigen/Dense>
@@ -21,7 +22,11 @@
 namespace {
 
 using fpp::Image;
+using fpp::Mat3;
+using fpp::mul;
+using fpp::rotation_from_euler_deg;
 using fpp::Size;
+using fpp::transpose;
 using fpp::Vec3;
 using fpp::calib::CloudPoints;
 using fpp::test::TempDir;
@@ -124,6 +129,40 @@ TEST(Evaluation, TruthShapeErrorLeavesOutOffsetAndTilt) {
     EXPECT_NEAR(t.dz_shape.rms, want, 1e-5);
     EXPECT_NEAR(t.dz_shape.mean, 0.0, 1e-6);
     EXPECT_EQ(t.dz_shape.count, bump.size());
+}
+
+TEST(Evaluation, TruthAfterOneRigidMotionOfTheWholeCloud) {
+    // The truth turned by 0.3 degrees about a far axis and shifted by
+    // (0.2, -0.1, 0.5) mm, then given a bump of 0.01 mm along X on half the
+    // pixels: the rigid motion found undoes the turn and shift (to the bump's
+    // small pull on it), and what is left is the bump, not the motion.
+    const Image<float> truth = truth_image();
+    const Mat3 turn = rotation_from_euler_deg(0.1, 0.3, -0.2);
+    const Vec3 shift{0.2, -0.1, 0.5};
+    CloudPoints cloud;
+    cloud.organised = {40, 30};
+    for (int y = 0; y < 30; ++y)
+        for (int x = 3; x < 40; ++x) {
+            const Vec3 p = mul(turn, Vec3{double(truth.at(x, y, 0)), double(truth.at(x, y, 1)),
+                                          double(truth.at(x, y, 2))});
+            const double bump = (x + y) % 2 ? 0.01 : -0.01;
+            cloud.points.push_back({p[0] + shift[0] + bump, p[1] + shift[1], p[2] + shift[2]});
+            cloud.pixels.push_back(static_cast<std::uint32_t>(y * 40 + x));
+        }
+    const auto t = fpp::calib::compare_with_truth(cloud, truth);
+    EXPECT_GT(t.distance.rms, 0.5); // the motion included
+    EXPECT_NEAR(t.distance_rigid.rms, 0.01, 1e-4);
+    EXPECT_NEAR(t.distance_rigid.max, 0.01, 2e-4);
+    EXPECT_EQ(t.distance_rigid_values.size(), t.compared);
+    // The motion found is the inverse of the one applied.
+    const Mat3 back = transpose(turn);
+    for (std::size_t i = 0; i < 9; ++i)
+        EXPECT_NEAR(t.rigid_rotation[i], back[i], 1e-5) << i; // the bump pulls 1.5e-6
+    const Vec3 undo = mul(back, shift);
+    for (std::size_t i = 0; i < 3; ++i)
+        EXPECT_NEAR(t.rigid_translation[i], -undo[i], 1e-3) << i;
+    const double trace = turn[0] + turn[4] + turn[8];
+    EXPECT_NEAR(t.rigid_angle_rad, std::acos((trace - 1) / 2), 1e-6);
 }
 
 TEST(Evaluation, TruthComparisonRejectsMismatches) {

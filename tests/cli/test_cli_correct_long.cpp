@@ -4,19 +4,27 @@
 // noise (k - 1 = -131 +- 32 ppm), calibrated, the ball bar simulated in the
 // seven VDI/VDE 2634-2 positions, 2, 3, 5, 7 used for the correction and 1,
 // 4, 6 held out. The held-out positions must come out within 0.010 mm, none
-// worse beyond noise, and those reaching in depth (4, 6) better.
+// worse beyond noise, and those reaching in depth (4, 6) better; on the same
+// scenes without noise, the wall and the spheres after one rigid motion of
+// the whole cloud.
 // The refusals: test_cli_correct.cpp.
 
 #include "ball_bar_scene.hpp"
 #include "test_support.hpp"
 
+#include "fpp/calib/evaluation.hpp"
+#include "fpp/coefficient_table.hpp"
+#include "fpp/image_io.hpp"
 #include "fpp/sim/rig.hpp"
+#include "rig_truth_table.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -40,6 +48,62 @@ std::vector<double> held_out_sd(const fs::path& verification_json) {
     const nlohmann::json j = nlohmann::json::parse(in);
     return j["sphere_spacing_error_mm"].get<std::vector<double>>();
 }
+
+// The error against the truth after one rigid motion of the whole cloud
+// (the camera frame's own place cannot be observed), RMS over the wall's
+// points and over the two spheres' points (told apart by their true place:
+// the wall is the plane Z = 575 mm, a sphere's points lie on it).
+struct RigidFigures {
+    double wall_rms = 0, spheres_rms = 0;
+    std::size_t wall = 0, spheres = 0;
+};
+RigidFigures rigid_figures(const fs::path& xyz_tiff, const fs::path& capture,
+                           const BallBarPlacement& p) {
+    const fpp::Image<float> xyz = fpp::read_tiff_float(xyz_tiff);
+    const fpp::Image<float> truth = fpp::read_tiff_float(capture / "truth_xyz.tiff");
+    fpp::calib::CloudPoints cloud;
+    cloud.organised = xyz.size();
+    for (std::size_t i = 0; i < xyz.pixel_count(); ++i) {
+        const float* v = xyz.data() + 3 * i;
+        if (std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])) {
+            cloud.points.push_back({v[0], v[1], v[2]});
+            cloud.pixels.push_back(static_cast<std::uint32_t>(i));
+        }
+    }
+    const fpp::calib::TruthComparison t = fpp::calib::compare_with_truth(cloud, truth);
+    const double n = std::hypot(p.axis[0], p.axis[1], p.axis[2]);
+    std::array<fpp::Vec3, 2> centres;
+    for (int s = 0; s < 2; ++s)
+        for (int c = 0; c < 3; ++c)
+            centres[std::size_t(s)][std::size_t(c)] =
+                p.centre[std::size_t(c)] + (s ? 0.5 : -0.5) * p.length * p.axis[std::size_t(c)] / n;
+    RigidFigures f;
+    double wall2 = 0, spheres2 = 0;
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+        const float* r = truth.data() + 3 * std::size_t{cloud.pixels[i]};
+        if (!(std::isfinite(r[0]) && std::isfinite(r[1]) && std::isfinite(r[2])))
+            continue;
+        const fpp::Vec3 ref{r[0], r[1], r[2]};
+        const double d = t.distance_rigid_values[k++];
+        bool on_sphere = false;
+        for (const fpp::Vec3& c : centres)
+            on_sphere |= std::hypot(ref[0] - c[0], ref[1] - c[1], ref[2] - c[2]) <
+                         fpp::test::kBallDiameterMm / 2 + 0.01;
+        if (std::abs(ref[2] - 575.0) < 0.01) {
+            wall2 += d * d;
+            ++f.wall;
+        } else if (on_sphere) {
+            spheres2 += d * d;
+            ++f.spheres;
+        }
+    }
+    f.wall_rms = std::sqrt(wall2 / double(std::max<std::size_t>(f.wall, 1)));
+    f.spheres_rms = std::sqrt(spheres2 / double(std::max<std::size_t>(f.spheres, 1)));
+    return f;
+}
+
+} // namespace
 
 TEST(CliCorrectLong, AHurriedSessionsDepthScaleIsCorrectedAndTheHeldOutPositionsImprove) {
     TempDir dir;
@@ -89,6 +153,62 @@ TEST(CliCorrectLong, AHurriedSessionsDepthScaleIsCorrectedAndTheHeldOutPositions
     // (measured: +0.0085 -> +0.0036 and +0.0036 -> -0.0009 mm).
     EXPECT_LT(std::abs(after[1]), std::abs(before[1]) - 0.002) << run.output;
     EXPECT_LT(std::abs(after[2]), std::abs(before[2]) - 0.001) << run.output;
-}
 
-} // namespace
+    // The wall and the spheres of every held-out position against the truth
+    // after one rigid motion of each whole cloud, on captures of the same
+    // scenes without shot and read noise (so that what is left is the
+    // calibration's, not the noise's): with the rig's true geometry as the
+    // table (the floor: 8-bit levels, gamma, blur and the table model's own
+    // error), before and after the correction.
+    std::ifstream rig_in(fpp::sim::effects_rig_path());
+    std::ostringstream rig_text;
+    rig_text << rig_in.rdbuf();
+    std::string quiet_rig = rig_text.str();
+    for (const char* key : {"read_noise_dn: 1.0", "gain_e_per_dn: 40"}) {
+        const std::size_t at = quiet_rig.find(key);
+        ASSERT_NE(at, std::string::npos) << key;
+        quiet_rig.replace(at, std::string(key).size(),
+                          std::string(key).substr(0, std::string(key).find(':')) + ": 0");
+    }
+    std::ofstream(dir / "quiet-rig.yaml") << quiet_rig;
+    fpp::write_table(dir / "truth.fpt",
+                     fpp::test::rig_truth_table(
+                         fpp::sim::load_rig(fpp::sim::effects_rig_path()).binned_camera(2)));
+    const char* tables[] = {"truth.fpt", "table.fpt", "corrected.fpt"};
+    for (int k : {1, 4, 6}) {
+        const BallBarPlacement& p = fpp::test::vdi_ball_bar_positions().at(std::size_t(k - 1));
+        const std::string quiet = "quiet-" + std::to_string(k);
+        run = run_calib("simulate --rig " + q(dir / "quiet-rig.yaml") + " --binning 2 --scene " +
+                            q(dir / ("pos-" + std::to_string(k) + ".scene.yaml")) +
+                            " --sequence gray-x --out " + q(dir / quiet),
+                        dir.path());
+        ASSERT_EQ(run.exit_code, 0) << run.output;
+        RigidFigures f[3];
+        for (int a = 0; a < 3; ++a) {
+            const std::string cloud = quiet + "-" + std::to_string(a);
+            run = run_calib("reconstruct " + q(dir / quiet) + " --table " + q(dir / tables[a]) +
+                                " --out " + q(dir / (cloud + ".ply")) + " --xyz " +
+                                q(dir / (cloud + ".tiff")),
+                            dir.path());
+            ASSERT_EQ(run.exit_code, 0) << run.output;
+            f[a] = rigid_figures(dir / (cloud + ".tiff"), dir / quiet, p);
+        }
+        std::printf("position %d after one rigid motion, RMS (true table / before / after): "
+                    "wall %.4f / %.4f / %.4f mm (%zu points), spheres %.4f / %.4f / %.4f mm "
+                    "(%zu points)\n",
+                    k, f[0].wall_rms, f[1].wall_rms, f[2].wall_rms, f[2].wall, f[0].spheres_rms,
+                    f[1].spheres_rms, f[2].spheres_rms, f[2].spheres);
+        // Measured (true table / before / after, mm): spheres 0.0126-0.0138 /
+        // 0.0221-0.0235 / 0.0143-0.0157: the bound is 0.022, and the
+        // depth scale was most of what separated them from the floor. The wall
+        // (0.0117 / 0.0201 / 0.0201-0.0203) keeps what a depth scale cannot
+        // move: lateral error outside the image's central half, where a
+        // hurried session's boards never reached (0.0122 mm RMS there against
+        // 0.0017 inside it and the floor's 0.0029); the 0.018 is not
+        // met by a depth-scale correction of such a session.
+        EXPECT_LE(f[2].spheres_rms, 0.022) << "position " << k;
+        EXPECT_LT(f[2].spheres_rms, f[1].spheres_rms - 0.004) << "position " << k;
+        EXPECT_LE(f[2].wall_rms, f[1].wall_rms + 0.0005) << "position " << k;
+        EXPECT_GT(f[2].wall_rms, f[0].wall_rms) << "the floor is below any calibration";
+    }
+}

@@ -219,6 +219,13 @@ TEST_F(CliEvaluate, CompareWithTruthAndLabels) {
     EXPECT_NEAR(figure(f, "other.truth.dz_shape_rms"), figure(f, "cloud.truth.dz_shape_rms"), 1e-4);
     EXPECT_LT(figure(f, "other.truth.dz_shape_rms"), figure(f, "other.truth.dz_rms") - 0.05);
     EXPECT_NEAR(figure(f, "other.fit.rms"), figure(f, "cloud.fit.rms"), 1e-4);
+    // One rigid motion of the whole cloud takes the 0.1 mm offset away and
+    // leaves the noise: both copies alike, no worse than without it.
+    EXPECT_NEAR(figure(f, "other.truth.rigid_shift"), 0.1, 0.005);
+    EXPECT_NEAR(figure(f, "other.truth.rigid_distance_rms"),
+                figure(f, "cloud.truth.rigid_distance_rms"), 1e-4);
+    EXPECT_LE(figure(f, "cloud.truth.rigid_distance_rms"), figure(f, "cloud.truth.distance_rms"));
+    EXPECT_LT(figure(f, "other.truth.rigid_distance_rms"), figure(f, "other.truth.distance_rms"));
     for (const char* png :
          {"fit-histogram.png", "fit-map.png", "fit-map-other.png", "truth-histogram.png",
           "truth-map.png", "truth-map-other.png", "difference-histogram.png", "difference-map.png"})

@@ -253,6 +253,37 @@ std::vector<double> without_planar_part(std::span<const double> values,
     return out;
 }
 
+// The least-squares rigid motion of the compared points onto their truth
+// (Umeyama without scale, about the centroids: conditioned for clouds
+// hundreds of mm from the camera) and the distances left after it.
+void fit_rigid_motion(const CloudPoints& cloud, const float* truth, TruthComparison& t) {
+    if (t.compared < 3)
+        return;
+    Eigen::Matrix3Xd a(3, Eigen::Index(t.compared)), b(3, Eigen::Index(t.compared));
+    Eigen::Index k = 0;
+    for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+        const float* ref = truth + 3 * std::size_t{cloud.pixels[i]};
+        if (!finite3(ref))
+            continue;
+        a.col(k) = Eigen::Vector3d(cloud.points[i][0], cloud.points[i][1], cloud.points[i][2]);
+        b.col(k) = Eigen::Vector3d(ref[0], ref[1], ref[2]);
+        ++k;
+    }
+    const Eigen::Matrix4d T = Eigen::umeyama(a, b, false);
+    const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c)
+            t.rigid_rotation[std::size_t(3 * r + c)] = R(r, c);
+        t.rigid_translation[std::size_t(r)] = T(r, 3);
+    }
+    t.rigid_angle_rad = Eigen::AngleAxisd(R).angle();
+    const Eigen::Matrix3Xd moved = (R * a).colwise() + T.topRightCorner<3, 1>();
+    t.distance_rigid_values.resize(t.compared);
+    for (Eigen::Index i = 0; i < a.cols(); ++i)
+        t.distance_rigid_values[std::size_t(i)] = (moved.col(i) - b.col(i)).norm();
+    t.distance_rigid = error_stats(t.distance_rigid_values);
+}
+
 } // namespace
 
 TruthComparison compare_with_truth(const CloudPoints& cloud, const Image<float>& truth) {
@@ -292,6 +323,7 @@ TruthComparison compare_with_truth(const CloudPoints& cloud, const Image<float>&
     t.dz = error_stats(t.dz_values);
     t.distance = error_stats(distances);
     t.dz_shape = error_stats(without_planar_part(t.dz_values, true_xy));
+    fit_rigid_motion(cloud, xyz, t);
     return t;
 }
 

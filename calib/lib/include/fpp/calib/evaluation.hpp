@@ -120,13 +120,22 @@ struct TruthComparison {
     // error's shape once a depth offset and a tilt, the pose errors a
     // calibration leaves, are taken out. mm.
     ErrorStats dz_shape;
-    ErrorStats distance;           // |point - truth|, mm
-    std::size_t truth_pixels = 0;  // pixels with a true surface
-    std::size_t compared = 0;      // pixels with both a point and a true surface
-    std::size_t no_surface = 0;    // points at pixels where the truth has no surface
-    double coverage = 0;           // compared / truth_pixels
-    std::vector<double> dz_values; // per compared point, in the cloud's point order
-    Image<float> dz_map;           // Z difference per pixel, NaN where not compared
+    ErrorStats distance; // |point - truth|, mm
+    // The one rigid motion of the whole cloud that brings it closest to the
+    // truth (least squares over every compared point; no scale): the place
+    // of a calibration's camera frame cannot be observed, so the truth error
+    // a user can hold a scanner to is the one left after it. X_truth ~ R X + t.
+    Mat3 rigid_rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    Vec3 rigid_translation{};   // mm
+    double rigid_angle_rad = 0; // rigid_rotation's angle
+    ErrorStats distance_rigid;  // |R point + t - truth|, mm (nothing if < 3 compared)
+    std::vector<double> distance_rigid_values; // per compared point, as dz_values
+    std::size_t truth_pixels = 0;              // pixels with a true surface
+    std::size_t compared = 0;                  // pixels with both a point and a true surface
+    std::size_t no_surface = 0;                // points at pixels where the truth has no surface
+    double coverage = 0;                       // compared / truth_pixels
+    std::vector<double> dz_values;             // per compared point, in the cloud's point order
+    Image<float> dz_map;                       // Z difference per pixel, NaN where not compared
 };
 // `truth_xyz`: 3-channel float image of the cloud's organised size (camera
 // frame, mm, NaN = no surface). Throws std::invalid_argument otherwise, or
