@@ -105,7 +105,27 @@ std::optional<MeasuredPosition> measure_capture(const fs::path& path, const Capt
                 how.table_path.string() + " gives none a point (no model " +
                 std::to_string(made.stats.no_model) + ", outside its phase range " +
                 std::to_string(made.stats.out_of_range) + "): is the table for this scanner?");
-    return measure_position(artefact, made.cloud.xyz, path, options, capture_truth(capture));
+    try {
+        return measure_position(artefact, made.cloud.xyz, path, options, capture_truth(capture));
+    } catch (const InputError& e) {
+        // A sphere missing or cut where the table has no model is the
+        // calibration session's reach, not the artefact's place: say so.
+        const std::size_t unmodelled = made.stats.no_model + made.stats.out_of_range;
+        const std::size_t decoded = scan->decode_stats.decoded;
+        if (e.field().rfind("sphere", 0) != 0 || decoded == 0 || 50 * unmodelled < decoded)
+            throw;
+        const std::string prefix = e.file().string() + ": " + e.field() + ": ";
+        const std::string reason = std::string(e.what()).substr(prefix.size());
+        throw InputError(
+            e.file(), e.field(),
+            reason + "; the table " + how.table_path.string() + " gives no point at " +
+                std::to_string(unmodelled) + " of the " + std::to_string(decoded) +
+                " decoded pixels (" + fixed_text(100.0 * double(unmodelled) / double(decoded), 1) +
+                " %: no model " + std::to_string(made.stats.no_model) +
+                ", outside its depth range " + std::to_string(made.stats.out_of_range) +
+                "), where the calibration session's boards did not reach: calibrate with boards "
+                "there, or place the artefact where the table has a model");
+    }
 }
 
 std::string position_line(std::size_t k, const MeasuredPosition& p) {

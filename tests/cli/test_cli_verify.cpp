@@ -18,6 +18,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -275,6 +276,25 @@ TEST_F(CliVerify, RefusesAMissingSphereNamingTheCapture) {
     TempDir out;
     expect_refused(verify(q(capture("one-sphere")), out / "report"), out / "report",
                    {"one-sphere: spheres: found 1 of the 2", "missing"});
+}
+
+TEST_F(CliVerify, ASphereWhereTheTableHasNoModelIsBlamedOnTheTable) {
+    // The table of a session whose boards never reached the right part of
+    // the view (no model from column 500 on): the right sphere of position 1
+    // (about column 610) is not measured, and the refusal says why.
+    TempDir out;
+    fpp::CoefficientTable table = fpp::test::rig_truth_table(small_rig());
+    for (int y = 0; y < table.info().camera.height; ++y)
+        for (int x = 500; x < table.info().camera.width; ++x)
+            table.set(fpp::table_plane::centre, x, y, std::numeric_limits<float>::quiet_NaN());
+    fpp::write_table(out / "left-only.fpt", table);
+    const ToolRun run = run_calib("verify --artefact " + q(path("bar.yaml")) + " --table " +
+                                      q(out / "left-only.fpt") + " --report " + q(out / "report") +
+                                      " " + q(capture("position-1")),
+                                  out.path());
+    expect_refused(run, out / "report",
+                   {"position-1: sphere", "left-only.fpt gives no point at",
+                    "where the calibration session's boards did not reach"});
 }
 
 TEST_F(CliVerify, RefusesACaptureOfAnotherCameraSize) {
