@@ -280,6 +280,15 @@ int run_correct(const CorrectArgs& args) {
     // header (with the hash of the calibration file's bytes).
     record.corrected = trueness_from_fit(calibration.trueness, fit, certified);
     calibration.trueness = record.corrected;
+    DepthCorrection applied;
+    applied.focal_scale = scale; // 1: within its noise, none made
+    applied.before_ppm = record.rounds.front().fit.correction_ppm();
+    applied.before_sigma_ppm = record.rounds.front().fit.sigma * 1e6;
+    applied.after_ppm = fit.correction_ppm();
+    applied.after_sigma_ppm = fit.sigma * 1e6;
+    applied.positions = static_cast<int>(args.captures.size());
+    applied.artefact = artefact.name.empty() ? args.artefact : artefact.name;
+    calibration.depth_correction = applied;
     const std::string bytes = calibration_to_yaml(calibration);
     table->set_provenance(fnv1a64(bytes.data(), bytes.size()),
                           table_trueness(calibration.trueness));

@@ -37,6 +37,8 @@ StereoCalibration sample() {
     c.trueness.at = {fpp::calib::LengthSigma{420, 0.015, 0.003},
                      fpp::calib::LengthSigma{478.5, 0.0191, 0.0034},
                      fpp::calib::LengthSigma{537, 0.024, 0.0039}};
+    c.depth_correction =
+        fpp::calib::DepthCorrection{0.999869, -131.2, 32.1, -8.3, 33.0, 4, "ball bar #17"};
     return c;
 }
 
@@ -84,6 +86,14 @@ TEST(CalibrationFile, RoundTripIsExact) {
         EXPECT_EQ(r.trueness.at[k].along_depth_mm, c.trueness.at[k].along_depth_mm);
         EXPECT_EQ(r.trueness.at[k].across_mm, c.trueness.at[k].across_mm);
     }
+    ASSERT_TRUE(r.depth_correction.has_value());
+    EXPECT_EQ(r.depth_correction->focal_scale, 0.999869);
+    EXPECT_EQ(r.depth_correction->before_ppm, -131.2);
+    EXPECT_EQ(r.depth_correction->before_sigma_ppm, 32.1);
+    EXPECT_EQ(r.depth_correction->after_ppm, -8.3);
+    EXPECT_EQ(r.depth_correction->after_sigma_ppm, 33.0);
+    EXPECT_EQ(r.depth_correction->positions, 4);
+    EXPECT_EQ(r.depth_correction->artefact, "ball bar #17");
     // Nothing but the file itself in the folder (atomic write, no temporaries).
     int entries = 0;
     for (const auto& e : fs::directory_iterator(dir.path())) {
@@ -250,6 +260,32 @@ TEST(CalibrationFile, TruenessIsOptionalAndChecked) {
     expect_input_error(with("0.01, 0.02", "0.01, -0.02"), "trueness.along_depth_mm[1]", "negative");
     expect_input_error(with("0.001, 0.002", "0.001, .nan"), "trueness.across_mm[1]", "finite");
     expect_input_error(with("along_depth_mm", "along_mm"), "trueness.along_depth_mm", "missing");
+}
+
+// The record of an in-field correction is optional (a calibration never
+// corrected has none); when present, every field is checked.
+TEST(CalibrationFile, DepthCorrectionIsOptionalAndChecked) {
+    EXPECT_FALSE(fpp::calib::parse_calibration(edited_yaml("depth_correction"), "calib.yaml")
+                     .depth_correction.has_value());
+    const auto with = [](const std::string& from, const std::string& to) {
+        std::string t = "{ focal_scale: 0.99987, before_ppm: -131, before_sigma_ppm: 32, "
+                        "after_ppm: -8, after_sigma_ppm: 33, positions: 4, artefact: bar }";
+        t.replace(t.find(from), from.size(), to);
+        return edited_yaml("", "depth_correction", t);
+    };
+    EXPECT_EQ(
+        fpp::calib::parse_calibration(with("-8", "-9"), "calib.yaml").depth_correction->after_ppm,
+        -9);
+    expect_input_error(edited_yaml("", "depth_correction", "0.9999"), "depth_correction", "map");
+    expect_input_error(with("0.99987", "1.2"), "depth_correction.focal_scale", "1 %");
+    expect_input_error(with("0.99987", ".nan"), "depth_correction.focal_scale", "");
+    expect_input_error(with("before_sigma_ppm: 32", "before_sigma_ppm: -1"),
+                       "depth_correction.before_sigma_ppm", "negative");
+    expect_input_error(with("positions: 4", "positions: 1"), "depth_correction.positions",
+                       "at least 2");
+    expect_input_error(with(", artefact: bar", ""), "depth_correction.artefact", "missing");
+    expect_input_error(with("after_ppm: -8", "after_ppm: x"), "depth_correction.after_ppm",
+                       "number");
 }
 
 TEST(CalibrationFile, WrongSizesAreRejected) {

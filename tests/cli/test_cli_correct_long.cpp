@@ -13,6 +13,7 @@
 #include "test_support.hpp"
 
 #include "fpp/calib/evaluation.hpp"
+#include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/image_io.hpp"
 #include "fpp/sim/rig.hpp"
@@ -139,6 +140,17 @@ TEST(CliCorrectLong, AHurriedSessionsDepthScaleIsCorrectedAndTheHeldOutPositions
     ASSERT_EQ(run.exit_code, 0) << run.output;
     ASSERT_TRUE(fs::exists(dir / "corrected.yaml"));
     ASSERT_TRUE(fs::exists(dir / "corrected.fpt"));
+    // The corrected calibration says what was done to it.
+    const fpp::calib::StereoCalibration corrected =
+        fpp::calib::load_calibration(dir / "corrected.yaml");
+    ASSERT_TRUE(corrected.depth_correction.has_value());
+    EXPECT_NEAR(corrected.depth_correction->before_ppm, -131, 15);
+    EXPECT_LT(std::abs(corrected.depth_correction->after_ppm),
+              2 * corrected.depth_correction->after_sigma_ppm);
+    EXPECT_NEAR(corrected.depth_correction->focal_scale, 1 - 131e-6, 40e-6);
+    EXPECT_EQ(corrected.depth_correction->positions, 4);
+    EXPECT_EQ(corrected.depth_correction->artefact, "virtual ball bar");
+    EXPECT_FALSE(fpp::calib::load_calibration(dir / "calib.yaml").depth_correction);
 
     const std::vector<double> before = held_out_sd(dir / "report/before/verification.json");
     const std::vector<double> after = held_out_sd(dir / "report/after/verification.json");

@@ -136,6 +136,42 @@ Trueness read_trueness(const Reader& in) {
     return t;
 }
 
+// depth_correction: { focal_scale: s, before_ppm: b, before_sigma_ppm: bs,
+//                     after_ppm: a, after_sigma_ppm: as, positions: n, artefact: name }
+DepthCorrection read_depth_correction(const Reader& in) {
+    const cv::FileNode node = in.require("depth_correction");
+    if (!node.isMap())
+        in.fail("depth_correction", "expected a map");
+    const auto field = [&](const char* name) {
+        const cv::FileNode n = node[name];
+        if (n.empty())
+            in.fail(std::string("depth_correction.") + name, "missing");
+        return n;
+    };
+    const auto number = [&](const char* name) {
+        return in.number(field(name), std::string("depth_correction.") + name);
+    };
+    DepthCorrection d;
+    d.focal_scale = number("focal_scale");
+    // A depth scale off by more than 1 % is no calibration's; correct refuses
+    // anything beyond 5 sigma of the predicted trueness long before.
+    if (!(std::abs(d.focal_scale - 1) < 0.01))
+        in.fail("depth_correction.focal_scale", "must be within 1 % of 1");
+    d.before_ppm = number("before_ppm");
+    d.before_sigma_ppm = number("before_sigma_ppm");
+    d.after_ppm = number("after_ppm");
+    d.after_sigma_ppm = number("after_sigma_ppm");
+    if (d.before_sigma_ppm < 0 || d.after_sigma_ppm < 0)
+        in.fail(d.before_sigma_ppm < 0 ? "depth_correction.before_sigma_ppm"
+                                       : "depth_correction.after_sigma_ppm",
+                "must not be negative");
+    d.positions = in.integer(field("positions"), "depth_correction.positions");
+    if (d.positions < 2)
+        in.fail("depth_correction.positions", "must be at least 2 (a fit needs two positions)");
+    d.artefact = in.text(field("artefact"), "depth_correction.artefact");
+    return d;
+}
+
 StereoCalibration read_fpp(const Reader& in) {
     StereoCalibration c;
     if (in.has("format")) {
@@ -184,6 +220,8 @@ StereoCalibration read_fpp(const Reader& in) {
     }
     if (in.has("trueness"))
         c.trueness = read_trueness(in);
+    if (in.has("depth_correction"))
+        c.depth_correction = read_depth_correction(in);
     if (in.has("origin"))
         c.origin = in.text(in.require("origin"), "origin");
     return c;
@@ -407,6 +445,17 @@ std::string calibration_to_yaml(const StereoCalibration& c) {
         three("along_depth_mm", &LengthSigma::along_depth_mm);
         three("across_mm", &LengthSigma::across_mm);
         out << "}";
+    }
+    if (const std::optional<DepthCorrection>& d = c.depth_correction) {
+        for (const double v :
+             {d->focal_scale, d->before_ppm, d->before_sigma_ppm, d->after_ppm, d->after_sigma_ppm})
+            require_finite(v, "depth_correction");
+        out << "depth_correction"
+            << "{"
+            << "focal_scale" << d->focal_scale << "before_ppm" << d->before_ppm
+            << "before_sigma_ppm" << d->before_sigma_ppm << "after_ppm" << d->after_ppm
+            << "after_sigma_ppm" << d->after_sigma_ppm << "positions" << d->positions << "artefact"
+            << d->artefact << "}";
     }
     if (!c.origin.empty())
         out << "origin" << c.origin;

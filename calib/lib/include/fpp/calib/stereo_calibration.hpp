@@ -22,6 +22,7 @@
 #include "fpp/lens_model.hpp"
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,6 +63,19 @@ struct PoseResidual {
     std::string note; // why it was dropped or skipped
 };
 
+// An in-field correction of the depth scale with a certified artefact
+// (`fpp-calib correct`): the camera's focal lengths scaled by focal_scale
+// before the session was calibrated again; what the artefact's lengths
+// showed of the depth scale k before (round 0) and after (the last round),
+// as (k - 1) in ppm with one sigma.
+struct DepthCorrection {
+    double focal_scale = 1;
+    double before_ppm = 0, before_sigma_ppm = 0;
+    double after_ppm = 0, after_sigma_ppm = 0;
+    int positions = 0;    // artefact positions the fit used
+    std::string artefact; // its certificate's name, or file
+};
+
 struct StereoCalibration {
     Size camera_size;
     Size projector_size;
@@ -79,6 +93,7 @@ struct StereoCalibration {
     // What the calibration's uncertainty means for lengths (trueness.hpp);
     // unknown for a calibration read without it or made elsewhere.
     Trueness trueness;
+    std::optional<DepthCorrection> depth_correction;   // none: never corrected
     std::string origin;                                // where it was read from or how it was made
     CalibrationFormat format = CalibrationFormat::fpp; // the format it was read from
 
