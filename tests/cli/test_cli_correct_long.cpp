@@ -22,6 +22,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -161,6 +162,21 @@ TEST(CliCorrectLong, AHurriedSessionsDepthScaleIsCorrectedAndTheHeldOutPositions
         EXPECT_LE(std::abs(after[i]), std::abs(before[i]) + 0.002) << "held-out " << i << "\n"
                                                                    << run.output;
     }
+    // A depth scale k changes a sphere seen from one side by about
+    // 0.5 x 30 mm x |k - 1| in diameter (measured: worst P_S 0.0072 -> 0.0093
+    // mm for k - 1 = -131 ppm): P_S may grow by that, and by no more than
+    // 1 um beyond it.
+    const auto worst_size = [](const fs::path& json_file) {
+        std::ifstream in(json_file);
+        double worst = 0;
+        for (const auto& position : nlohmann::json::parse(in)["probing_size_mm"])
+            for (const auto& v : position)
+                worst = std::max(worst, std::abs(v.get<double>()));
+        return worst;
+    };
+    const double k_minus_1 = std::abs(corrected.depth_correction->focal_scale - 1);
+    EXPECT_LE(worst_size(dir / "report/after/verification.json"),
+              worst_size(dir / "report/before/verification.json") + 0.5 * 30 * k_minus_1 + 0.001);
     // Positions 4 and 6 reach in depth: the correction must show there
     // (measured: +0.0085 -> +0.0036 and +0.0036 -> -0.0009 mm).
     EXPECT_LT(std::abs(after[1]), std::abs(before[1]) - 0.002) << run.output;
