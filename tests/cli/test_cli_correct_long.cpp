@@ -6,7 +6,7 @@
 // 4, 6 held out. The held-out positions must come out within 0.010 mm, none
 // worse beyond noise, and those reaching in depth (4, 6) better; on the same
 // scenes without noise, the wall and the spheres after one rigid motion of
-// the whole cloud.
+// the whole cloud; and a session reaching the image's corners, uncorrected.
 // The refusals: test_cli_correct.cpp.
 
 #include "ball_bar_scene.hpp"
@@ -105,6 +105,52 @@ RigidFigures rigid_figures(const fs::path& xyz_tiff, const fs::path& capture,
     return f;
 }
 
+// The effects rig without shot and read noise (8-bit levels, gamma and blur
+// kept), so that what is left against the truth is the calibration's.
+void write_quiet_rig(const fs::path& file) {
+    std::ifstream rig_in(fpp::sim::effects_rig_path());
+    std::ostringstream rig_text;
+    rig_text << rig_in.rdbuf();
+    std::string quiet_rig = rig_text.str();
+    for (const std::string key : {"read_noise_dn: 1.0", "gain_e_per_dn: 40"}) {
+        const std::size_t at = quiet_rig.find(key);
+        ASSERT_NE(at, std::string::npos) << key;
+        quiet_rig.replace(at, key.size(), key.substr(0, key.find(':')) + ": 0");
+    }
+    std::ofstream(file) << quiet_rig;
+}
+
+// Ball bar position k (1-based) on the quiet rig, binned 2, reconstructed
+// with each table: its wall and spheres after one rigid motion.
+std::vector<RigidFigures> quiet_position_figures(const fs::path& dir, int k,
+                                                 const std::vector<std::string>& tables) {
+    const BallBarPlacement& p = fpp::test::vdi_ball_bar_positions().at(std::size_t(k - 1));
+    const std::string quiet = "quiet-" + std::to_string(k);
+    std::ofstream(dir / (quiet + ".scene.yaml")) << fpp::test::ball_bar_scene_yaml(p);
+    ToolRun run = run_calib("simulate --rig " + q(dir / "quiet-rig.yaml") +
+                                " --binning 2 --scene " + q(dir / (quiet + ".scene.yaml")) +
+                                " --sequence gray-x --out " + q(dir / quiet),
+                            dir);
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    std::vector<RigidFigures> figures;
+    for (const std::string& table : tables) {
+        const std::string cloud = quiet + "-" + fs::path(table).stem().string();
+        run = run_calib("reconstruct " + q(dir / quiet) + " --table " + q(dir / table) + " --out " +
+                            q(dir / (cloud + ".ply")) + " --xyz " + q(dir / (cloud + ".tiff")),
+                        dir);
+        EXPECT_EQ(run.exit_code, 0) << run.output;
+        figures.push_back(run.exit_code == 0
+                              ? rigid_figures(dir / (cloud + ".tiff"), dir / quiet, p)
+                              : RigidFigures{1e9, 1e9, 0, 0});
+    }
+    return figures;
+}
+
+void write_truth_table(const fs::path& file) {
+    fpp::write_table(file, fpp::test::rig_truth_table(
+                               fpp::sim::load_rig(fpp::sim::effects_rig_path()).binned_camera(2)));
+}
+
 } // namespace
 
 TEST(CliCorrectLong, AHurriedSessionsDepthScaleIsCorrectedAndTheHeldOutPositionsImprove) {
@@ -184,43 +230,14 @@ TEST(CliCorrectLong, AHurriedSessionsDepthScaleIsCorrectedAndTheHeldOutPositions
 
     // The wall and the spheres of every held-out position against the truth
     // after one rigid motion of each whole cloud, on captures of the same
-    // scenes without shot and read noise (so that what is left is the
-    // calibration's, not the noise's): with the rig's true geometry as the
-    // table (the floor: 8-bit levels, gamma, blur and the table model's own
-    // error), before and after the correction.
-    std::ifstream rig_in(fpp::sim::effects_rig_path());
-    std::ostringstream rig_text;
-    rig_text << rig_in.rdbuf();
-    std::string quiet_rig = rig_text.str();
-    for (const char* key : {"read_noise_dn: 1.0", "gain_e_per_dn: 40"}) {
-        const std::size_t at = quiet_rig.find(key);
-        ASSERT_NE(at, std::string::npos) << key;
-        quiet_rig.replace(at, std::string(key).size(),
-                          std::string(key).substr(0, std::string(key).find(':')) + ": 0");
-    }
-    std::ofstream(dir / "quiet-rig.yaml") << quiet_rig;
-    fpp::write_table(dir / "truth.fpt",
-                     fpp::test::rig_truth_table(
-                         fpp::sim::load_rig(fpp::sim::effects_rig_path()).binned_camera(2)));
-    const char* tables[] = {"truth.fpt", "table.fpt", "corrected.fpt"};
+    // scenes without noise: with the rig's true geometry as the table (the
+    // floor: 8-bit levels, gamma, blur and the table model's own error),
+    // before and after the correction.
+    write_quiet_rig(dir / "quiet-rig.yaml");
+    write_truth_table(dir / "truth.fpt");
     for (int k : {1, 4, 6}) {
-        const BallBarPlacement& p = fpp::test::vdi_ball_bar_positions().at(std::size_t(k - 1));
-        const std::string quiet = "quiet-" + std::to_string(k);
-        run = run_calib("simulate --rig " + q(dir / "quiet-rig.yaml") + " --binning 2 --scene " +
-                            q(dir / ("pos-" + std::to_string(k) + ".scene.yaml")) +
-                            " --sequence gray-x --out " + q(dir / quiet),
-                        dir.path());
-        ASSERT_EQ(run.exit_code, 0) << run.output;
-        RigidFigures f[3];
-        for (int a = 0; a < 3; ++a) {
-            const std::string cloud = quiet + "-" + std::to_string(a);
-            run = run_calib("reconstruct " + q(dir / quiet) + " --table " + q(dir / tables[a]) +
-                                " --out " + q(dir / (cloud + ".ply")) + " --xyz " +
-                                q(dir / (cloud + ".tiff")),
-                            dir.path());
-            ASSERT_EQ(run.exit_code, 0) << run.output;
-            f[a] = rigid_figures(dir / (cloud + ".tiff"), dir / quiet, p);
-        }
+        const std::vector<RigidFigures> f =
+            quiet_position_figures(dir.path(), k, {"truth.fpt", "table.fpt", "corrected.fpt"});
         std::printf("position %d after one rigid motion, RMS (true table / before / after): "
                     "wall %.4f / %.4f / %.4f mm (%zu points), spheres %.4f / %.4f / %.4f mm "
                     "(%zu points)\n",
@@ -233,10 +250,38 @@ TEST(CliCorrectLong, AHurriedSessionsDepthScaleIsCorrectedAndTheHeldOutPositions
         // move: lateral error outside the image's central half, where a
         // hurried session's boards never reached (0.0122 mm RMS there against
         // 0.0017 inside it and the floor's 0.0029); the 0.018 is not
-        // met by a depth-scale correction of such a session.
+        // met by a depth-scale correction of such a session (a session that
+        // reaches there meets it uncorrected: the test below).
         EXPECT_LE(f[2].spheres_rms, 0.022) << "position " << k;
         EXPECT_LT(f[2].spheres_rms, f[1].spheres_rms - 0.004) << "position " << k;
         EXPECT_LE(f[2].wall_rms, f[1].wall_rms + 0.0005) << "position " << k;
         EXPECT_GT(f[2].wall_rms, f[0].wall_rms) << "the floor is below any calibration";
+    }
+}
+
+// What the hurried session lacked: an 8-pose session of simulate-session's
+// default spread (tilts up to about 28 degrees, boards over the whole view)
+// holds the wall and the spheres within the 0.018 / 0.022 mm after
+// one rigid motion, with no correction (measured: wall 0.0159-0.0160,
+// spheres 0.0148-0.0163 mm; over fewer of the wall's pixels than the hurried
+// table, 263-268 k against 329-334 k: this table leaves more of the wall, at
+// 575 mm beyond the session's boards, without a point).
+TEST(CliCorrectLong, ASessionReachingTheImageCornersHoldsTheWallWithoutCorrection) {
+    TempDir dir;
+    ToolRun run = run_calib(
+        "simulate-session --binning 2 --poses 8 --seed 5 --out " + q(dir / "session"), dir.path());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    run = run_calib("calibrate " + q(dir / "session") + " --out " + q(dir / "calib.yaml") +
+                        " --table " + q(dir / "table.fpt"),
+                    dir.path());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    write_quiet_rig(dir / "quiet-rig.yaml");
+    for (int k : {1, 4}) {
+        const RigidFigures f = quiet_position_figures(dir.path(), k, {"table.fpt"}).at(0);
+        std::printf("position %d after one rigid motion: wall %.4f mm (%zu points), spheres %.4f "
+                    "mm (%zu points)\n",
+                    k, f.wall_rms, f.wall, f.spheres_rms, f.spheres);
+        EXPECT_LE(f.wall_rms, 0.018) << "position " << k;
+        EXPECT_LE(f.spheres_rms, 0.022) << "position " << k;
     }
 }
