@@ -31,8 +31,21 @@ grep -q "^ Architecture: $arch$" <<< "$info" || fail "architecture is not $arch"
 depends="$(grep "^ Depends:" <<< "$info")"
 grep -qi "opencv\|gtk\|qt5\|qt6" <<< "$depends" && fail "heavy dependency: $depends"
 for dep in libaravis-0.8-0 libmicrohttpd12 libarchive13 libjs-three; do
-  grep -q "\b$dep\b" <<< "$depends" || fail "$dep missing from $depends"
+  grep -q "\b$dep" <<< "$depends" || fail "$dep missing from $depends"
 done
+# Every package it depends on exists, for its architecture, in this
+# machine's release (the names differ between Debian 12 and 13): apt would
+# refuse the package otherwise.
+mapfile -t names < <(sed 's/^ Depends: //; s/([^)]*)//g; s/,/\n/g' <<< "$depends" | tr -d ' ')
+for name in "${names[@]}"; do
+  [ -n "$name" ] || continue
+  # (the whole record first: grep -q's early exit would fail apt-cache under pipefail)
+  record="$(apt-cache show "$name" 2> /dev/null || true)"
+  grep -qx "Architecture: \($arch\|all\)" <<< "$record" ||
+    fail "Depends names $name, which this machine's package index has not for $arch" \
+         "($(. /etc/os-release && echo "$VERSION_CODENAME"))"
+done
+echo "Depends: ${#names[@]} packages, each in this release's index for $arch"
 
 contents="$(dpkg-deb -c "$deb")"
 for path in ./usr/bin/fpp-scanner ./etc/fpp-scanner/board.yaml \

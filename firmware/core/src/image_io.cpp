@@ -91,10 +91,10 @@ int png_read_create_c(PngReadJob* job) {
         png_create_read_struct(PNG_LIBPNG_VER_STRING, &job->error, on_png_error, on_png_warning);
     if (!job->png)
         return 0;
-    // Every byte of the compressed stream is already checked by its chunk's
-    // CRC; zlib's second checksum of the inflated bytes costs about 7 % of
-    // the decode (measured) and guards nothing more. Debian 13's libpng is
-    // built without the option (then the check stays).
+        // Every byte of the compressed stream is already checked by its chunk's
+        // CRC; zlib's second checksum of the inflated bytes costs about 7 % of
+        // the decode (measured) and guards nothing more. Debian 13's libpng is
+        // built without the option (then the check stays).
 #ifdef PNG_IGNORE_ADLER32
     png_set_option(job->png, PNG_IGNORE_ADLER32, PNG_OPTION_ON);
 #endif
