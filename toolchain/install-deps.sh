@@ -12,13 +12,18 @@
 #          packages of the firmware (preset aarch64)
 #   vm     the virtual ARM board (tests/vm): qemu-system-aarch64 and the
 #          guest's Debian packages, fetched into a cache now
+#   trixie a Debian 13 root in which the test command builds and tests again
+#          (toolchain/trixie): debootstrap, then this script inside it with
+#          main device-tests
+#   device-tests  GoogleTest and ccache only: what the tests placed 'device'
+#          need beyond main (the trixie root's)
 #   all    every profile (the default with no argument)
 # Non-interactive and idempotent: packages already present are left alone.
 # Usage: toolchain/install-deps.sh [PROFILE...]   (--native-only = main tests)
 set -euo pipefail
 
-want_main=0 want_tests=0 want_cross=0 want_vm=0
-usage() { echo "usage: $0 [main|tests|cross|vm|all|--native-only]..." >&2; exit 2; }
+want_main=0 want_tests=0 want_cross=0 want_vm=0 want_trixie=0 want_device_tests=0
+usage() { echo "usage: $0 [main|tests|cross|vm|trixie|device-tests|all|--native-only]..." >&2; exit 2; }
 [ $# -eq 0 ] && set -- all
 for profile in "$@"; do
   case "$profile" in
@@ -26,7 +31,9 @@ for profile in "$@"; do
     tests) want_main=1 want_tests=1 ;;
     cross) want_cross=1 ;;
     vm) want_vm=1 ;;
-    all) want_main=1 want_tests=1 want_cross=1 want_vm=1 ;;
+    trixie) want_trixie=1 ;;
+    device-tests) want_device_tests=1 ;;
+    all) want_main=1 want_tests=1 want_cross=1 want_vm=1 want_trixie=1 ;;
     --native-only) want_main=1 want_tests=1 ;;
     *) usage ;;
   esac
@@ -213,4 +220,9 @@ install_vm() {
 [ "$want_tests" -eq 1 ] && ensure_installed "test packages" "${test_packages[@]}"
 [ "$want_cross" -eq 1 ] && install_cross
 [ "$want_vm" -eq 1 ] && install_vm
+[ "$want_device_tests" -eq 1 ] && ensure_installed "device-test packages" libgtest-dev libgmock-dev ccache
+if [ "$want_trixie" -eq 1 ]; then
+  ensure_installed "Debian 13 root packages" debootstrap
+  as_root "$(dirname "$0")/trixie/make-root.sh"
+fi
 exit 0

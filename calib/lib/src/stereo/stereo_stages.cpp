@@ -142,10 +142,10 @@ std::size_t StereoRun::drop_dense_outliers(double sigmas, double floor_px) {
         error[k] = std::hypot(up[0] - dense[k].projector[0], up[1] - dense[k].projector[1]);
     }
     std::vector<double> sorted = error;
-    std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(sorted.size() / 2),
-                     sorted.end());
+    const auto middle = sorted.begin() + std::ptrdiff_t(sorted.size() / 2);
+    std::nth_element(sorted.begin(), middle, sorted.end());
     // The median of a 2D Gaussian error's magnitude is 1.1774 sigma.
-    const double limit = std::max(sigmas * sorted[sorted.size() / 2] / 1.1774, floor_px);
+    const double limit = std::max(sigmas * *middle / 1.1774, floor_px);
     std::size_t kept = 0;
     for (std::size_t k = 0; k < dense.size(); ++k)
         if (error[k] <= limit) {
