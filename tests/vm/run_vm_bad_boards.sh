@@ -19,6 +19,7 @@ test_name=run_vm_bad_boards
 source "$source_dir/tests/vm/common.sh"
 require_vm
 require_arm64_scanner "$build"
+require_libgpiod "$build"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-bad.XXXXXX")
 trap 'rm -rf "$work"' EXIT
@@ -89,12 +90,14 @@ expect() { # NAME TEXT...: exit 1 and an error line holding every TEXT
       fail "a failed start left files in $d"
   done
 }
-expect no-such-line "gpiochip0 line 9"
-expect line-held "gpiochip0 line 5"
+# The GPIO messages are the same whichever libgpiod the driver is built on
+# (drivers/gpiod/src/gpio_line_v1.cpp and gpio_line_v2.cpp).
+expect no-such-line "gpiochip0 line 9: no such line on the chip"
+expect line-held "gpiochip0 line 5: cannot request the line (held by another process?)"
 expect no-such-mode "1234x567"
 expect no-such-card "/dev/dri/card7"
 expect no-such-connector "HDMI-A-9"
-expect no-such-chip "gpiochip7"
+expect no-such-chip "gpiochip7 line 1: cannot open the chip"
 [ "$scanner" = fpp-scanner ] ||
   expect device "good.yaml: sim: " "built without the virtual scanner"
 grep -qx "good 0" "$results" || { cat "$work/out/good.log"; fail "the good board did not scan after the failures"; }
