@@ -33,6 +33,14 @@ grep -qi "opencv\|gtk\|qt5\|qt6" <<< "$depends" && fail "heavy dependency: $depe
 for dep in libaravis-0.8-0 libmicrohttpd12 libarchive13 libjs-three; do
   grep -q "\b$dep\b" <<< "$depends" || fail "$dep missing from $depends"
 done
+# libgpiod's package is the one whose library the scanner links: libgpiod2
+# ships libgpiod.so.2 (libgpiod 1.x), libgpiod3 libgpiod.so.3 (2.x).
+soname=$(readelf -d "$build/firmware/scanner/fpp-scanner" |
+  sed -n 's/.*(NEEDED).*\[libgpiod\.so\.\([0-9]*\)\]/\1/p')
+if [ -n "$soname" ]; then
+  grep -q "\blibgpiod$soname\b" <<< "$depends" ||
+    fail "fpp-scanner links libgpiod.so.$soname, the package does not depend on libgpiod$soname: $depends"
+fi
 
 contents="$(dpkg-deb -c "$deb")"
 for path in ./usr/bin/fpp-scanner ./etc/fpp-scanner/board.yaml \

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <new>
 #include <string_view>
 #include <sys/stat.h>
@@ -58,9 +59,12 @@ ChipPtr open_chip(const std::string& chip) {
     if (stat(by_name.c_str(), &st) == 0)
         return ChipPtr(gpiod_chip_open(by_name.c_str()));
     // A label: ask each chip (a board has a handful).
-    for (unsigned int n = 0; n < 64; ++n) {
-        const std::string path = "/dev/gpiochip" + std::to_string(n);
-        if (stat(path.c_str(), &st) != 0)
+    std::error_code ec;
+    for (std::filesystem::directory_iterator it("/dev", ec), end; !ec && it != end;
+         it.increment(ec)) {
+        const std::string path = it->path().string();
+        if (it->path().filename().string().rfind("gpiochip", 0) != 0 ||
+            !gpiod_is_gpiochip_device(path.c_str()))
             continue;
         ChipPtr candidate(gpiod_chip_open(path.c_str()));
         if (!candidate)
