@@ -4,7 +4,11 @@
 # arm64 libdrm and libgpiod, boots the board with it and checks that it lit
 # the virtio-gpu display and flipped pages, pulsed a PL061 line on each flip
 # (the flip-to-trigger latency, printed and bounded), and saw the button edge
-# that the harness made with QEMU's system_powerdown.
+# that the harness made with QEMU's system_powerdown; then, in the same boot,
+# tests/vm/vm_gpiod_driver.cpp runs the scanner's GPIO driver (drivers/gpiod,
+# compiled with it: gpio_line_v1.cpp, or gpio_line_v2.cpp with --libgpiod2)
+# on the same lines: trigger pulses timed, the LED's states, a press waited
+# for and two queued presses drained.
 # Usage: tests/vm/run_vm_probe.sh [--libgpiod2 [PREFIX]] [--keep DIR] [--timeout S]
 #   --libgpiod2 PREFIX  the probe built against the libgpiod 2 unpacked there
 #                       (default: the VM cache's libgpiod2/root, filled by
@@ -39,7 +43,7 @@ for f in /usr/lib/aarch64-linux-gnu/libdrm.so /usr/lib/aarch64-linux-gnu/libgpio
   /usr/include/libdrm/drm.h /usr/include/gpiod.h; do
   [ -e "$f" ] || skip "no $f (libdrm-dev:arm64, libgpiod-dev:arm64)"
 done
-gpiod_flags=() api=1
+gpiod_flags=() api=1 line_source=gpio_line_v1.cpp
 if [ "$gpiod2" -eq 1 ]; then
   gpiod2_prefix="${gpiod2_prefix:-$cache/libgpiod2/root}"
   lib="$gpiod2_prefix/usr/lib/aarch64-linux-gnu"
@@ -48,7 +52,7 @@ if [ "$gpiod2" -eq 1 ]; then
   # Its header before the system's 1.6 one; the RUNPATH tells make-initramfs.sh
   # where libgpiod.so.3 is.
   gpiod_flags=(-DFPP_PROBE_LIBGPIOD2=1 -I"$gpiod2_prefix/usr/include" -L"$lib" -Wl,-rpath,"$lib")
-  api=2
+  api=2 line_source=gpio_line_v2.cpp
 fi
 
 t_start=$EPOCHREALTIME
@@ -60,21 +64,31 @@ aarch64-linux-gnu-g++ -std=c++20 -O2 -Wall -Wextra -Wpedantic -Wshadow -Wconvers
   -Wdouble-promotion -Werror -I/usr/include/libdrm -I"$source_dir/firmware/core/include" "${gpiod_flags[@]}" \
   "$here/vm_probe.cpp" -o "$work/vm-probe" -ldrm -lgpiod ||
   fail "cannot cross-compile vm_probe.cpp"
+# The driver with the project's warnings (CMakeLists.txt's fpp_warnings).
+gpiod_src="$source_dir/drivers/gpiod/src"
+aarch64-linux-gnu-g++ -std=c++20 -O2 -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion \
+  -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Woverloaded-virtual -Wdouble-promotion \
+  -Wimplicit-fallthrough -Werror -I"$source_dir/drivers/gpiod/include" -I"$source_dir/drivers/include" \
+  -I"$source_dir/firmware/core/include" "${gpiod_flags[@]}" "$here/vm_gpiod_driver.cpp" \
+  "$gpiod_src/gpiod_lines.cpp" "$gpiod_src/$line_source" -o "$work/vm-gpiod" -lgpiod -pthread ||
+  fail "cannot cross-compile vm_gpiod_driver.cpp with $line_source"
 
 status=0
-"$source_dir/toolchain/vm/run-vm.sh" --bin "$work/vm-probe" --out "$out" --timeout "$timeout_s" --quiet \
-  --press-on '^vm-probe: waiting for the button' --presses 1 -- vm-probe --wait-ms 30000 \
-  2> "$work/run-vm.err" || status=$?
+"$source_dir/toolchain/vm/run-vm.sh" --bin "$work/vm-probe" --bin "$work/vm-gpiod" --out "$out" \
+  --timeout "$timeout_s" --quiet --press-on '^vm-(probe: waiting for the button|gpiod: press now)' \
+  --presses 4 -- sh -c 'vm-probe --wait-ms 30000 && vm-gpiod' 2> "$work/run-vm.err" || status=$?
 # The results folder is temporary unless --keep was given.
 if [ -n "$keep" ]; then cat "$work/run-vm.err"; else grep -v '^run-vm: results in' "$work/run-vm.err" || true; fi
-grep -E '^(fpp-vm-init: (drm|gpio gpiochip)|vm-probe: .*(OK|FAIL))' "$out/console.log" || true
+grep -E '^(fpp-vm-init: (drm|gpio gpiochip)|vm-probe: .*(OK|FAIL)|vm-gpiod: (OK|FAIL|button))' \
+  "$out/console.log" || true
 if [ "$status" -ne 0 ]; then
   echo "--- guest console:"
   cat "$out/console.log"
   fail "run-vm.sh returned $status"
 fi
 for expected in "^vm-probe: libgpiod $api\\." '^vm-probe: display OK' '^vm-probe: trigger OK' \
-  '^vm-probe: gpio OK: button rising edge' '^run-vm: button pressed'; do
+  '^vm-probe: gpio OK: button rising edge' '^run-vm: button pressed' '^vm-gpiod: OK trigger: 200 pulses' \
+  '^vm-gpiod: OK led' '^vm-gpiod: OK button: 1 press waited for, 2 queued presses drained, none left'; do
   grep -q "$expected" "$out/console.log" || fail "no line matching '$expected' on the console"
 done
 # A pulse on every flip, the line set high within a bound far above what the
@@ -86,5 +100,10 @@ read -r pulses median max <<< "$figures" || fail "cannot read the trigger figure
 [ "$median" -gt 0 ] && [ "$median" -lt 20000 ] ||
   fail "flip to trigger line high: median $median us (want 0 < median < 20000)"
 echo "run_vm_probe: libgpiod $api: $pulses pulses, flip to trigger line high median $median us, max $max us"
+# The driver's pulses last at least their width (100 us).
+pulse=$(sed -n 's/^vm-gpiod: OK trigger: 200 pulses of 100 us took median \([0-9]*\) us.*/\1/p' "$out/console.log")
+[ -n "$pulse" ] && [ "$pulse" -ge 100 ] && [ "$pulse" -lt 20000 ] ||
+  fail "the driver's 100 us trigger pulse took a median of '$pulse' us (want 100 to 20000)"
+echo "run_vm_probe: libgpiod $api: the driver's 100 us trigger pulse took a median of $pulse us"
 total=$(awk -v a="$t_start" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.1f", b - a }')
 echo "run_vm_probe: PASSED in ${total} s"
