@@ -47,11 +47,12 @@ gpiod_flags=() api=1 line_source=gpio_line_v1.cpp
 if [ "$gpiod2" -eq 1 ]; then
   gpiod2_prefix="${gpiod2_prefix:-$cache/libgpiod2/root}"
   lib="$gpiod2_prefix/usr/lib/aarch64-linux-gnu"
-  [ -e "$lib/libgpiod.so.3" ] && [ -f "$gpiod2_prefix/usr/include/gpiod.h" ] ||
+  if [ ! -e "$lib/libgpiod.so.3" ] || [ ! -f "$gpiod2_prefix/usr/include/gpiod.h" ]; then
     skip "no libgpiod 2 in $gpiod2_prefix (toolchain/vm/fetch-libgpiod2.sh fills it at install time)"
+  fi
   # Its header before the system's 1.6 one; the RUNPATH tells make-initramfs.sh
   # where libgpiod.so.3 is.
-  gpiod_flags=(-DFPP_PROBE_LIBGPIOD2=1 -I"$gpiod2_prefix/usr/include" -L"$lib" -Wl,-rpath,"$lib")
+  gpiod_flags=(-DFPP_PROBE_LIBGPIOD2=1 -I"$gpiod2_prefix/usr/include" -L"$lib" "-Wl,-rpath,$lib")
   api=2 line_source=gpio_line_v2.cpp
 fi
 
@@ -97,13 +98,15 @@ figures=$(sed -n 's/^vm-probe: trigger OK: \([0-9]*\) pulses; .*median \([0-9]*\
   "$out/console.log")
 read -r pulses median max <<< "$figures" || fail "cannot read the trigger figures"
 [ "$pulses" -eq 120 ] || fail "$pulses trigger pulses for 120 flips"
-[ "$median" -gt 0 ] && [ "$median" -lt 20000 ] ||
+if ! [ "$median" -gt 0 ] || ! [ "$median" -lt 20000 ]; then
   fail "flip to trigger line high: median $median us (want 0 < median < 20000)"
+fi
 echo "run_vm_probe: libgpiod $api: $pulses pulses, flip to trigger line high median $median us, max $max us"
 # The driver's pulses last at least their width (100 us).
 pulse=$(sed -n 's/^vm-gpiod: OK trigger: 200 pulses of 100 us took median \([0-9]*\) us.*/\1/p' "$out/console.log")
-[ -n "$pulse" ] && [ "$pulse" -ge 100 ] && [ "$pulse" -lt 20000 ] ||
+if [ -z "$pulse" ] || ! [ "$pulse" -ge 100 ] || ! [ "$pulse" -lt 20000 ]; then
   fail "the driver's 100 us trigger pulse took a median of '$pulse' us (want 100 to 20000)"
+fi
 echo "run_vm_probe: libgpiod $api: the driver's 100 us trigger pulse took a median of $pulse us"
 total=$(awk -v a="$t_start" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.1f", b - a }')
 echo "run_vm_probe: PASSED in ${total} s"
