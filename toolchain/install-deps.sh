@@ -11,7 +11,8 @@
 #          the cross compiler, qemu-user to run the arm64 tests, and the arm64
 #          packages of the firmware (preset aarch64)
 #   vm     the virtual ARM board (tests/vm): qemu-system-aarch64 and the
-#          guest's Debian packages, fetched into a cache now
+#          guest's Debian packages, fetched into a cache now, and Debian 13's
+#          arm64 libgpiod 2 for the second GPIO backend's cross build
 #   trixie a Debian 13 root in which the test command builds and tests again
 #          (toolchain/trixie): debootstrap, then this script inside it with
 #          main device-tests
@@ -214,6 +215,9 @@ install_vm() {
   # fetch-deps.sh reads the arm64 package index
   if [ "$arch_added" -eq 1 ] && [ "$updated" -eq 0 ]; then as_root apt-get update -q; updated=1; fi
   as_root "$(dirname "$0")/vm/fetch-deps.sh"
+  # libgpiod 2 unpacked beside the cache (preset aarch64-gpiod2): this
+  # machine keeps Debian 12's libgpiod 1.6 for every other build.
+  as_root "$(dirname "$0")/vm/fetch-libgpiod2.sh"
 }
 
 [ "$want_main" -eq 1 ] && ensure_installed "main-job packages" "${main_packages[@]}"

@@ -4,6 +4,8 @@
 #   install   toolchain/install-deps.sh tests cross vm
 #   aarch64   the firmware cross-built for the scanner, its tests under
 #             qemu-user (first: the ci preset's virtual ARM board runs it)
+#   aarch64-gpiod2  the same against libgpiod 2 (the scanner and the GPIO
+#             driver's tests only), for the ci preset's VM.Gpiod2 runs
 #   ci        the optimised build, its tests and the benchmarks' smoke runs
 #   asan      the tests under AddressSanitizer and UndefinedBehaviorSanitizer
 #   fuzz      every file reader and the HTTP API's handlers under libFuzzer
@@ -15,7 +17,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
-presets=(aarch64 ci asan fuzz)
+presets=(aarch64 aarch64-gpiod2 ci asan fuzz)
 rows=()          # one line of the table per phase
 # fpp's compiler cache and its limit: toolchain/ccache.cmake's defaults, or
 # what a build's CMakeCache.txt says (FPP_CCACHE_DIR, FPP_CCACHE_MAXSIZE).

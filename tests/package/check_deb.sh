@@ -33,12 +33,24 @@ grep -qi "opencv\|gtk\|qt5\|qt6" <<< "$depends" && fail "heavy dependency: $depe
 for dep in libaravis-0.8-0 libmicrohttpd12 libarchive13 libjs-three; do
   grep -q "\b$dep" <<< "$depends" || fail "$dep missing from $depends"
 done
+# libgpiod's package is the one whose library the scanner links: libgpiod2
+# ships libgpiod.so.2 (libgpiod 1.x), libgpiod3 libgpiod.so.3 (2.x).
+soname=$(readelf -d "$build/firmware/scanner/fpp-scanner" |
+  sed -n 's/.*(NEEDED).*\[libgpiod\.so\.\([0-9]*\)\]/\1/p')
+if [ -n "$soname" ]; then
+  grep -q "\blibgpiod$soname\b" <<< "$depends" ||
+    fail "fpp-scanner links libgpiod.so.$soname, the package does not depend on libgpiod$soname: $depends"
+fi
 # Every package it depends on exists, for its architecture, in this
 # machine's release (the names differ between Debian 12 and 13): apt would
 # refuse the package otherwise.
 mapfile -t names < <(sed 's/^ Depends: //; s/([^)]*)//g; s/,/\n/g' <<< "$depends" | tr -d ' ')
+# (A build against libgpiod 2 from outside this machine's index, preset
+# aarch64-gpiod2, names libgpiod3 on Debian 12: that one is only checked
+# against what fpp-scanner links, above.)
+outside="$(sed -n 's/^FPP_LIBGPIOD2_PREFIX:[A-Z]*=\(..*\)$/libgpiod3/p' "$build/CMakeCache.txt")"
 for name in "${names[@]}"; do
-  [ -n "$name" ] || continue
+  [ -n "$name" ] && [ "$name" != "$outside" ] || continue
   # (the whole record first: grep -q's early exit would fail apt-cache under pipefail)
   record="$(apt-cache show "$name" 2> /dev/null || true)"
   grep -qx "Architecture: \($arch\|all\)" <<< "$record" ||

@@ -105,6 +105,24 @@ TEST(GpiodLines, MissingChipIsADeviceErrorNamingChipAndLine) {
     }
 }
 
+TEST(GpiodLines, ChipNamedByNumberOrLabelThatIsNotThereIsADeviceError) {
+    // libgpiod 1.x looks a chip up by number and label itself; the 2.x
+    // backend does it by hand and must fail the same way.
+    for (const std::string chip : {"99", "no-such-label"}) {
+        GpioLineConfig config;
+        config.chip = chip;
+        config.offset = 2;
+        try {
+            fpp::drivers::GpiodButtonInput button(config, 20ms);
+            FAIL() << "chip '" << chip << "' exists here";
+        } catch (const DeviceError& e) {
+            EXPECT_EQ(e.device(), chip + " line 2");
+            EXPECT_NE(std::string(e.what()).find("cannot open the chip"), std::string::npos)
+                << e.what();
+        }
+    }
+}
+
 TEST(GpiodLines, ANonGpioDeviceIsADeviceError) {
     GpioLineConfig config;
     config.chip = "/dev/null";

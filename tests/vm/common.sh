@@ -29,3 +29,14 @@ require_arm64_scanner() {
 sim_scanner_name() {
   if [ -x "$1/firmware/scanner/fpp-scanner-sim" ]; then echo fpp-scanner-sim; else echo fpp-scanner; fi
 }
+# With FPP_VM_EXPECT_LIBGPIOD set (e.g. libgpiod.so.3: the aarch64-gpiod2
+# build, tests/CMakeLists.txt), the scanner of build folder $1 must link that
+# libgpiod: a build of the other backend would pass the same tests unseen.
+require_libgpiod() {
+  [ -n "${FPP_VM_EXPECT_LIBGPIOD:-}" ] || return 0
+  local scanner="$1/firmware/scanner/fpp-scanner" linked
+  linked=$(readelf -d "$scanner" | sed -n 's/.*(NEEDED).*\[\(libgpiod\.so\.[0-9]*\)\]/\1/p')
+  [ "$linked" = "$FPP_VM_EXPECT_LIBGPIOD" ] ||
+    fail "$scanner links '${linked:-no libgpiod}', not $FPP_VM_EXPECT_LIBGPIOD"
+  echo "$test_name: $scanner links $linked"
+}

@@ -2,7 +2,8 @@
 # Bad board files on the virtual ARM board's real kernel devices, in one
 # boot: a GPIO line the chip does not have, a line another process holds, a
 # display mode the connector does not offer, a DRM card, a connector and a
-# GPIO chip that do not exist.
+# GPIO chip that do not exist, and a line the chip named by its label does
+# not have.
 # Each must stop fpp-scanner at start with exit 1 and an error naming what is
 # wrong; then the good board must still scan (nothing was left claimed).
 # These boards simulate the camera (sim.camera_only): where fpp-scanner is
@@ -19,6 +20,7 @@ test_name=run_vm_bad_boards
 source "$source_dir/tests/vm/common.sh"
 require_vm
 require_arm64_scanner "$build"
+require_libgpiod "$build"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-bad.XXXXXX")
 trap 'rm -rf "$work"' EXIT
@@ -38,6 +40,12 @@ variant no-such-mode 'mode: 1280x800' 'mode: 1234x567'
 variant no-such-card 'card: auto' 'card: /dev/dri/card7'
 variant no-such-connector 'connector: auto' 'connector: HDMI-A-9'
 variant no-such-chip '  chip: gpiochip0' '  chip: gpiochip7'
+# The chip named by its label (the PL061's), with a line it does not have:
+# the error names the line, so the chip was found (1.x looks labels up
+# itself, the 2.x backend by hand).
+sed -e 's|  led_line: 1|  led_line: 9|' -e 's|  chip: gpiochip0|  chip: 9030000.pl061|' "$good" \
+  > "$files/label-no-such-line.yaml"
+grep -q 'chip: 9030000.pl061' "$files/label-no-such-line.yaml" || fail "vm-camera-only.yaml has no chip line"
 scanner=$(sim_scanner_name "$build")
 echo "scanner=$scanner" > "$files/bad-boards.sh"
 cat >> "$files/bad-boards.sh" << 'GUEST'
@@ -62,6 +70,7 @@ run no-such-mode
 run no-such-card
 run no-such-connector
 run no-such-chip
+run label-no-such-line
 if [ "$scanner" != fpp-scanner ]; then
   fpp-scanner --board good.yaml --once --mode capture --store /out/scans-device > /dev/null 2> /out/device.log
   echo "device $? $(grep -m 1 '^error: ' /out/device.log)" >> /out/results.txt
@@ -89,12 +98,15 @@ expect() { # NAME TEXT...: exit 1 and an error line holding every TEXT
       fail "a failed start left files in $d"
   done
 }
-expect no-such-line "gpiochip0 line 9"
-expect line-held "gpiochip0 line 5"
+# The GPIO messages are the same whichever libgpiod the driver is built on
+# (drivers/gpiod/src/gpio_line_v1.cpp and gpio_line_v2.cpp).
+expect no-such-line "gpiochip0 line 9: no such line on the chip"
+expect line-held "gpiochip0 line 5: cannot request the line (held by another process?)"
 expect no-such-mode "1234x567"
 expect no-such-card "/dev/dri/card7"
 expect no-such-connector "HDMI-A-9"
-expect no-such-chip "gpiochip7"
+expect no-such-chip "gpiochip7 line 1: cannot open the chip"
+expect label-no-such-line "9030000.pl061 line 9: no such line on the chip"
 [ "$scanner" = fpp-scanner ] ||
   expect device "good.yaml: sim: " "built without the virtual scanner"
 grep -qx "good 0" "$results" || { cat "$work/out/good.log"; fail "the good board did not scan after the failures"; }

@@ -51,12 +51,21 @@ grep -q '"board": "vm-camera-only"' "$scan/scan.json" || fail "not the VM board'
 flips=$(grep -c '"pattern": ' "$scan/scan.json" || true)
 frames=$(sed -n 's/^ *"frames": \([0-9]*\),$/\1/p' "$scan/scan.json")
 [ "$flips" -eq "$frames" ] || fail "$flips flips for $frames frames"
-awk '/"pattern": / {
-       match($0, /"pattern": [0-9]+/); p = substr($0, RSTART + 11, RLENGTH - 11) + 0
-       match($0, /"flip_ns": [0-9]+/); f = substr($0, RSTART + 11, RLENGTH - 11) + 0
-       match($0, /"frame_ns": [0-9]+/); e = substr($0, RSTART + 12, RLENGTH - 12) + 0
-       if (p != n++ || e < f) { print "pattern " p " out of order or exposed before its flip"; exit 1 }
-     }' "$scan/scan.json" || fail "flip log"
+# scan.json has one key a line (firmware/core/formats/scan-json.md): a flip's
+# pattern, flip_ns and frame_ns come on lines of their own. The flip-to-frame
+# times (the settle, the camera's trigger and the start of its exposure) are
+# printed, for the two GPIO backends side by side (README).
+timing=$(awk '
+     function value(key) { match($0, "\"" key "\": [0-9]+"); return substr($0, RSTART + length(key) + 4, RLENGTH - length(key) - 4) + 0 }
+     /"pattern": / { p = value("pattern") }
+     /"flip_ns": / { f = value("flip_ns") }
+     /"frame_ns": / {
+       e = value("frame_ns")
+       if (p != n++ || f <= 0 || e < f) { print "pattern " p " out of order, or exposed before its flip"; bad = 1; exit 1 }
+       sum += e - f; if (e - f > max) max = e - f
+     }
+     END { if (!bad && n > 0) printf "%d frames, flip to frame: mean %.2f ms, max %.2f ms", n, sum / n / 1e6, max / 1e6 }' \
+  "$scan/scan.json") || fail "flip log: $timing"
 
 # Against the truth of the same scene.
 "$calib" simulate --rig "$source_dir/board/sim/paper-rig-effects.yaml" --scene composite \
@@ -69,7 +78,7 @@ mean=$(figure cloud.truth.dz_mean)
 shape=$(figure cloud.truth.dz_shape_rms)
 points=$(figure cloud.points)
 echo "run_vm_board_scan: $points points from the VM, 3D RMS $rms mm against the truth" \
-  "(Z mean $mean, shape $shape), $flips flips"
+  "(Z mean $mean, shape $shape), $flips flips; $timing"
 # The bounds of tests/cli/test_cli_scanner_calibration.cpp, which calibrates
 # from the same session: at 400 x 300 the calibration's focal length is known
 # to about 107 ppm (its reported sigma), 0.05 mm of depth at 480 mm.

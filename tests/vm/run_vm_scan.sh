@@ -50,6 +50,7 @@ test_name=run_vm_scan
 source "$source_dir/tests/vm/common.sh"
 require_vm
 require_arm64_scanner "$build"
+require_libgpiod "$build"
 
 t_start=$EPOCHREALTIME
 work=$(mktemp -d "${TMPDIR:-/tmp}/fpp-vm-scan.XXXXXX")

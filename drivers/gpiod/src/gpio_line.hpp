@@ -1,7 +1,8 @@
 #pragma once
 // One requested GPIO line, independent of the libgpiod version. Each libgpiod
 // major version implements open_output_line / open_edge_line in a file of its
-// own (gpio_line_v1.cpp for 1.x).
+// own (gpio_line_v1.cpp for 1.x, gpio_line_v2.cpp for 2.x); CMakeLists.txt
+// builds the one of the libgpiod it finds.
 #include <fpp/drivers/gpiod_lines.hpp>
 
 #include <chrono>

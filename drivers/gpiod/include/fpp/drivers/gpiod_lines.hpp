@@ -4,9 +4,9 @@
 // scanner keeps them for the life of the process. Active-low wiring is set in
 // the request, so callers and the kernel speak logical levels.
 //
-// Built against the libgpiod 1.x API (Debian 12); the calls are confined to
-// src/gpio_line_v1.cpp behind an internal line interface so that a 2.x
-// implementation can sit beside it.
+// Built against libgpiod 1.x (Debian 12) or 2.x (Debian 13, Raspberry Pi OS):
+// the calls are confined to src/gpio_line_v1.cpp and src/gpio_line_v2.cpp
+// behind an internal line interface, and behave the same (messages included).
 #include <chrono>
 #include <memory>
 #include <string>
