@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
 # Installs what the tests need, builds and runs every test: the README's test
 # command, and CI's gate (.ci/run). In order, stopping at the first failure:
-#   install   toolchain/install-deps.sh tests cross vm
+#   install   toolchain/install-deps.sh tests cross vm trixie
 #   aarch64   the firmware cross-built for the scanner, its tests under
 #             qemu-user (first: the ci preset's virtual ARM board runs it)
 #   aarch64-gpiod2  the same against libgpiod 2 (the scanner and the GPIO
 #             driver's tests only), for the ci preset's VM.Gpiod2 runs
+#   trixie    the firmware, the virtual scanner and the host tool built on
+#             Debian 13 (GCC 14, libgpiod 2), the tests placed 'device' run
+#             there, in the Debian 13 root (toolchain/trixie/run.sh)
 #   ci        the optimised build, its tests and the benchmarks' smoke runs
 #   asan      the tests under AddressSanitizer and UndefinedBehaviorSanitizer
 #   fuzz      every file reader and the HTTP API's handlers under libFuzzer
@@ -17,7 +20,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
-presets=(aarch64 aarch64-gpiod2 ci asan fuzz)
+presets=(aarch64 aarch64-gpiod2 trixie ci asan fuzz)
 rows=()          # one line of the table per phase
 # fpp's compiler cache and its limit: toolchain/ccache.cmake's defaults, or
 # what a build's CMakeCache.txt says (FPP_CCACHE_DIR, FPP_CCACHE_MAXSIZE).
@@ -88,8 +91,15 @@ finish() {
 }
 trap finish EXIT
 
-run_phase install no ./toolchain/install-deps.sh tests cross vm || exit
+run_phase install no ./toolchain/install-deps.sh tests cross vm trixie || exit
 for preset in "${presets[@]}"; do
+  if [ "$preset" = trixie ]; then
+    # Inside the Debian 13 root, with its own compiler cache (not counted here).
+    run_phase "trixie configure+build" no toolchain/trixie/run.sh -- \
+      sh -c "cmake --preset trixie && cmake --build --preset trixie" || exit
+    run_phase "trixie tests" no toolchain/trixie/run.sh -- ctest --preset trixie || exit
+    continue
+  fi
   configured=$(sed -n 's/^FPP_CCACHE_DIR:PATH=//p' "build/$preset/CMakeCache.txt" 2>/dev/null)
   cache_dir=${configured:-$cache_dir}
   configured=$(sed -n 's/^FPP_CCACHE_MAXSIZE:STRING=//p' "build/$preset/CMakeCache.txt" 2>/dev/null)
