@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# Installs fpp's dependencies from Debian 12 packages, by profile: each of the
-# README's commands installs only what it runs.
+# Installs fpp's dependencies from Debian packages, by profile: each of the
+# README's commands installs only what it runs. Debian 12 (bookworm) and 13
+# (trixie) are known: where their package names differ, the release's own
+# are picked (release_packages below).
 #   main   the main job: build the firmware, the virtual scanner and the host
 #          tool (preset release: no tests, no benchmarks)
 #   tests  main, plus what the tests and benchmarks need (presets ci, dev,
 #          asan, fuzz): GoogleTest, Google Benchmark, OpenCV's contrib
 #          modules, a browser and WebDriver, the point-cloud viewers,
-#          Aravis's fake camera, clang 14 and its libFuzzer, ccache
+#          Aravis's fake camera, clang and its libFuzzer, ccache
 #   cross  the cross build for the scanner's target, AArch64 (Debian arm64):
 #          the cross compiler, qemu-user to run the arm64 tests, and the arm64
 #          packages of the firmware (preset aarch64)
@@ -40,6 +42,20 @@ for profile in "$@"; do
   esac
 done
 
+# Where Debian 12 and 13 name things differently: yaml-cpp's library (0.7,
+# 0.8), and clang-format 14, the version that formats this tree (the ci
+# preset's FormatCheck; Debian 13 has none, and 19 formats 14 files
+# otherwise: there the check is left out, tests/CMakeLists.txt).
+codename="$(. /etc/os-release 2> /dev/null && echo "${VERSION_CODENAME:-}")"
+case "$codename" in
+  bookworm) yaml_cpp_library=libyaml-cpp0.7 format_packages=(clang-format-14) ;;
+  trixie) yaml_cpp_library=libyaml-cpp0.8 format_packages=() ;;
+  *)
+    echo "install-deps: Debian 12 (bookworm) and 13 (trixie) are known, not" \
+         "'${codename:-?}': trying Debian 12's package names" >&2
+    yaml_cpp_library=libyaml-cpp0.7 format_packages=(clang-format-14) ;;
+esac
+
 main_packages=(
   # build
   cmake g++ ninja-build pkg-config
@@ -65,11 +81,12 @@ test_packages=(
   # PLY interoperability tests: the viewers' own readers, headless
   # (MeshLab's meshlabserver needs an X server for its OpenGL context)
   python3-open3d cloudcompare meshlab xvfb xauth
-  # the fuzz preset (tests/fuzz): clang 14 with libFuzzer and the sanitizers'
-  # runtimes (Debian ships them in libclang-rt-14-dev, not with clang)
-  clang-14 libclang-rt-14-dev
+  # the asan and fuzz presets: the release's clang (clang++: 14 on Debian 12,
+  # 19 on 13) with libFuzzer and the sanitizers' runtimes (Debian ships them
+  # in libclang-rt-dev, not with clang)
+  clang libclang-rt-dev
   # the ci preset's FormatCheck (tests/format/check-format.sh)
-  clang-format-14
+  "${format_packages[@]}"
   # the compiler cache of every preset (toolchain/ccache.cmake)
   ccache
   # packet loss on the GigE link in a test's network namespace
@@ -90,7 +107,7 @@ cross_packages=(
   # to run the arm64 test binaries
   g++-aarch64-linux-gnu qemu-user-static
   # core and virtual scanner; yaml-cpp: the library only, see below
-  libpng-dev:arm64 libtiff-dev:arm64 libyaml-cpp0.7:arm64
+  libpng-dev:arm64 libtiff-dev:arm64 "$yaml_cpp_library:arm64"
   # device drivers (as above)
   libaravis-dev:arm64 libusb-1.0-0-dev:arm64 libdrm-dev:arm64 libgpiod-dev:arm64
   # HTTP API (nlohmann-json is headers only, the same for every architecture)
@@ -156,7 +173,7 @@ install_cross() {
 
   # libyaml-cpp-dev:arm64 unpacked beside the system (see cross_extra_prefix),
   # the same version as the installed arm64 library; redone when that changes.
-  yaml_version="$(dpkg-query -W -f='${Version}' libyaml-cpp0.7:arm64)"
+  yaml_version="$(dpkg-query -W -f='${Version}' "$yaml_cpp_library:arm64")"
   stamp="$cross_extra_prefix/libyaml-cpp-dev.version"
   if [ "$(cat "$stamp" 2>/dev/null)" = "$yaml_version" ]; then
     echo "install-deps: libyaml-cpp-dev:$cross_arch $yaml_version unpacked in $cross_extra_prefix"
@@ -173,11 +190,12 @@ install_cross() {
     as_root mkdir -p "$cross_extra_prefix"
     as_root dpkg-deb -x "$download"/libyaml-cpp-dev_*_"$cross_arch".deb "$cross_extra_prefix"
     # The package's CMake file points at the shared library beside it, which
-    # the installed libyaml-cpp0.7:arm64 provides in the system folder.
+    # the installed yaml-cpp library (arm64) provides in the system folder.
     libdir="$cross_extra_prefix/usr/lib/aarch64-linux-gnu"
-    shared="$(readlink -f /usr/lib/aarch64-linux-gnu/libyaml-cpp.so.0.7)"
+    soname="libyaml-cpp.so.${yaml_cpp_library#libyaml-cpp}" # libyaml-cpp.so.0.7 or .0.8
+    shared="$(readlink -f "/usr/lib/aarch64-linux-gnu/$soname")"
     as_root ln -sf "$shared" "$libdir/$(basename "$shared")"
-    as_root ln -sf "$(basename "$shared")" "$libdir/libyaml-cpp.so.0.7"
+    as_root ln -sf "$(basename "$shared")" "$libdir/$soname"
     echo "$yaml_version" | as_root tee "$stamp" > /dev/null
   fi
 
