@@ -69,6 +69,15 @@ PoseRms pose_rms(const std::vector<Vec2>& cam_res, const std::vector<Vec2>& proj
     return r;
 }
 
+// The middle value (the upper median); 0 for none.
+double median_of(std::vector<double> values) {
+    if (values.empty())
+        return 0;
+    const auto middle = values.begin() + std::ptrdiff_t(values.size() / 2);
+    std::nth_element(values.begin(), middle, values.end());
+    return *middle;
+}
+
 } // namespace
 
 StereoRun::StereoRun(const std::vector<PoseObservations>& poses_, Size camera_size_,
@@ -141,11 +150,8 @@ std::size_t StereoRun::drop_dense_outliers(double sigmas, double floor_px) {
         const Vec2 up = model.projector_pixel(dense[k].camera_point);
         error[k] = std::hypot(up[0] - dense[k].projector[0], up[1] - dense[k].projector[1]);
     }
-    std::vector<double> sorted = error;
-    const auto middle = sorted.begin() + std::ptrdiff_t(sorted.size() / 2);
-    std::nth_element(sorted.begin(), middle, sorted.end());
     // The median of a 2D Gaussian error's magnitude is 1.1774 sigma.
-    const double limit = std::max(sigmas * *middle / 1.1774, floor_px);
+    const double limit = std::max(sigmas * median_of(error) / 1.1774, floor_px);
     std::size_t kept = 0;
     for (std::size_t k = 0; k < dense.size(); ++k)
         if (error[k] <= limit) {
@@ -368,9 +374,7 @@ void StereoRun::residuals() {
         dense_sum += e[0] * e[0] + e[1] * e[1];
     }
     result.dense_rms = dense.empty() ? -1 : std::sqrt(dense_sum / double(dense.size()));
-    std::vector<double> sorted = combined;
-    std::sort(sorted.begin(), sorted.end());
-    const double median = sorted.empty() ? 0 : sorted[sorted.size() / 2];
+    const double median = median_of(combined);
     result.outliers.clear();
     for (std::size_t i = 0; i < poses.size(); ++i)
         if (used[i] && rms[i].combined > options.outlier_factor * median)
