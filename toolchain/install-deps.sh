@@ -18,7 +18,8 @@
 #   trixie a Debian 13 root in which the test command builds and tests again
 #          (toolchain/trixie): debootstrap, then this script inside it with
 #          main device-tests
-#   device-tests  GoogleTest and ccache only: what the tests placed 'device'
+#   device-tests  GoogleTest, ccache and systemd (the package test verifies the
+#          unit with its systemd-analyze): what the tests placed 'device'
 #          need beyond main (the trixie root's)
 #   all    every profile (the default with no argument)
 # Non-interactive and idempotent: packages already present are left alone.
@@ -242,7 +243,7 @@ install_vm() {
 [ "$want_tests" -eq 1 ] && ensure_installed "test packages" "${test_packages[@]}"
 [ "$want_cross" -eq 1 ] && install_cross
 [ "$want_vm" -eq 1 ] && install_vm
-[ "$want_device_tests" -eq 1 ] && ensure_installed "device-test packages" libgtest-dev libgmock-dev ccache
+[ "$want_device_tests" -eq 1 ] && ensure_installed "device-test packages" libgtest-dev libgmock-dev ccache systemd
 if [ "$want_trixie" -eq 1 ]; then
   ensure_installed "Debian 13 root packages" debootstrap
   as_root "$(dirname "$0")/trixie/make-root.sh"

@@ -13,11 +13,17 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-cpack --config "$build/CPackConfig.cmake" -B "$work/out" \
-  -D "CPACK_DEBIAN_PACKAGE_DEPENDS=$depends" > "$work/cpack.log" 2>&1 ||
+# The build's CPack configuration with the other list set after it (cpack's
+# -D comes before the configuration file on newer CMake, which then wins).
+cat > "$work/other-release.cmake" << CONFIG
+include("$(cd "$build" && pwd)/CPackConfig.cmake")
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "$depends")
+CONFIG
+cpack --config "$work/other-release.cmake" -B "$work/out" > "$work/cpack.log" 2>&1 ||
   { cat "$work/cpack.log" >&2; fail "cpack"; }
 deb="$(ls "$work"/out/*.deb)"
-dpkg-deb -I "$deb" | grep -q "Depends: .*$missing" || fail "the package does not name $missing"
+info="$(dpkg-deb -I "$deb")" # whole, then searched: grep -q's early exit fails a pipe
+grep -q "Depends: .*$missing" <<< "$info" || fail "the package does not name $missing"
 before="$(dpkg-query -W -f='${Status}' fpp-scanner 2> /dev/null || echo "not installed")"
 status=0
 apt-get install --simulate -q --no-install-recommends "$deb" > "$work/apt.log" 2>&1 || status=$?
