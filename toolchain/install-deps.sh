@@ -200,13 +200,18 @@ install_cross() {
 # --- The virtual ARM board (toolchain/vm, tests/vm) --------------------------
 # qemu-system-aarch64 and cpio from packages; the arm64 kernel, busybox and
 # the guest's tools are downloaded as Debian packages into a cache now, by
-# toolchain/vm/fetch-deps.sh (idempotent), so that no test downloads.
+# toolchain/vm/fetch-deps.sh (idempotent), so that no test downloads. Then
+# the board's Debian disk with systemd (toolchain/vm/make-rootfs.sh:
+# debootstrap, its second stage run in the virtual board itself; e2fsprogs'
+# mkfs.ext4 -d makes the image), cached beside it and rebuilt only when its
+# scripts or the package's Depends change.
 install_vm() {
   add_cross_architecture
-  ensure_installed "virtual ARM board packages" qemu-system-arm cpio
+  ensure_installed "virtual ARM board packages" qemu-system-arm cpio debootstrap e2fsprogs
   # fetch-deps.sh reads the arm64 package index
   if [ "$arch_added" -eq 1 ] && [ "$updated" -eq 0 ]; then as_root apt-get update -q; updated=1; fi
   as_root "$(dirname "$0")/vm/fetch-deps.sh"
+  as_root "$(dirname "$0")/vm/make-rootfs.sh"
 }
 
 [ "$want_main" -eq 1 ] && ensure_installed "main-job packages" "${main_packages[@]}"
