@@ -11,7 +11,8 @@
 #          the cross compiler, qemu-user to run the arm64 tests, and the arm64
 #          packages of the firmware (preset aarch64)
 #   vm     the virtual ARM board (tests/vm): qemu-system-aarch64 and the
-#          guest's Debian packages, fetched into a cache now
+#          guest's Debian packages, fetched into a cache now, and its
+#          Debian disk with systemd, built there now (about 10 minutes once)
 #   all    every profile (the default with no argument)
 # Non-interactive and idempotent: packages already present are left alone.
 # Usage: toolchain/install-deps.sh [PROFILE...]   (--native-only = main tests)
