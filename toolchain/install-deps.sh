@@ -13,8 +13,10 @@
 #          the cross compiler, qemu-user to run the arm64 tests, and the arm64
 #          packages of the firmware (preset aarch64)
 #   vm     the virtual ARM board (tests/vm): qemu-system-aarch64 and the
-#          guest's Debian packages, fetched into a cache now, and Debian 13's
-#          arm64 libgpiod 2 for the second GPIO backend's cross build
+#          guest's Debian packages, fetched into a cache now, Debian 13's
+#          arm64 libgpiod 2 for the second GPIO backend's cross build, and
+#          the board's Debian disk with systemd, built there now (about 10
+#          minutes once)
 #   trixie a Debian 13 root in which the test command builds and tests again
 #          (toolchain/trixie): debootstrap, then this script inside it with
 #          main device-tests
@@ -227,16 +229,21 @@ install_cross() {
 # --- The virtual ARM board (toolchain/vm, tests/vm) --------------------------
 # qemu-system-aarch64 and cpio from packages; the arm64 kernel, busybox and
 # the guest's tools are downloaded as Debian packages into a cache now, by
-# toolchain/vm/fetch-deps.sh (idempotent), so that no test downloads.
+# toolchain/vm/fetch-deps.sh (idempotent), so that no test downloads. Then
+# the board's Debian disk with systemd (toolchain/vm/make-rootfs.sh:
+# debootstrap, its second stage run in the virtual board itself; e2fsprogs'
+# mkfs.ext4 -d makes the image), cached beside it and rebuilt only when its
+# scripts or the package's Depends change.
 install_vm() {
   add_cross_architecture
-  ensure_installed "virtual ARM board packages" qemu-system-arm cpio
+  ensure_installed "virtual ARM board packages" qemu-system-arm cpio debootstrap e2fsprogs
   # fetch-deps.sh reads the arm64 package index
   if [ "$arch_added" -eq 1 ] && [ "$updated" -eq 0 ]; then as_root apt-get update -q; updated=1; fi
   as_root "$(dirname "$0")/vm/fetch-deps.sh"
   # libgpiod 2 unpacked beside the cache (preset aarch64-gpiod2): this
   # machine keeps Debian 12's libgpiod 1.6 for every other build.
   as_root "$(dirname "$0")/vm/fetch-libgpiod2.sh"
+  as_root "$(dirname "$0")/vm/make-rootfs.sh"
 }
 
 [ "$want_main" -eq 1 ] && ensure_installed "main-job packages" "${main_packages[@]}"

@@ -17,10 +17,12 @@
 #   /fpp/net             with --net: the virtio-net driver is loaded and
 #                        guest-init.sh gives eth0 QEMU's user-network address
 #   any folder           --tree HOSTDIR=GUESTDIR (e.g. three.js, a web page)
+# With --init FILE, FILE is /init instead of guest-init.sh (make-rootfs.sh:
+# boot-init.sh, which mounts the Debian disk and hands over to systemd).
 #
 # Usage: make-initramfs.sh --out FILE [--cache DIR] [--bin ELF]... [--files DIR]
 #          [--cmd-file FILE] [--collect-file FILE] [--module NAME]...
-#          [--lib-dir DIR]... [--net] [--tree HOSTDIR=GUESTDIR]...
+#          [--lib-dir DIR]... [--net] [--tree HOSTDIR=GUESTDIR]... [--init FILE]
 #   --lib-dir DIR  searched for libraries before the arm64 multiarch folders
 #   --net          a network card (virtio-net-pci on QEMU's user network)
 #   --tree H=G     host folder H copied to guest folder G (links dereferenced)
@@ -32,6 +34,7 @@ out=""
 files=""
 cmd_file=""
 collect_file=""
+init="$here/guest-init.sh"
 bins=()
 lib_dirs=()
 trees=()
@@ -51,6 +54,7 @@ while [ $# -gt 0 ]; do
     --module) modules+=("$2"); shift 2 ;;
     --lib-dir) lib_dirs+=("$2"); shift 2 ;;
     --net) net=1; shift ;;
+    --init) init="$2"; shift 2 ;;
     --tree)
       case "$2" in
         /*=/*) trees+=("$2") ;;
@@ -78,7 +82,7 @@ trap 'rm -rf "$stage"' EXIT
 mkdir -p "$stage"/{bin,dev,proc,sys,tmp,out,etc,usr/bin,lib/modules,fpp/bin,fpp/files}
 chmod 1777 "$stage/tmp"
 
-install -m 0755 "$here/guest-init.sh" "$stage/init"
+install -m 0755 "$init" "$stage/init"
 install -m 0755 "$root/bin/busybox" "$stage/bin/busybox"
 install -m 0755 "$here/guest-until.sh" "$stage/fpp/bin/fpp-vm-until"
 
