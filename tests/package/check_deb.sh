@@ -98,7 +98,8 @@ grep -v "^[[:space:]]*#" "$work/control/postinst" | grep -q "systemctl enable" &
   fail "postinst must not enable the service"
 
 # postinst configure makes /etc/fpp-scanner/token once: 64 hex digits,
-# root:fpp-scanner 0640; an upgrade keeps it; postrm purge removes it.
+# root:fpp-scanner 0640; an upgrade keeps it; postrm purge removes it, and
+# the state folder (scans, table, settings) that remove keeps.
 stubs="$work/stubs"
 mkdir -p "$stubs" "$work/pkgroot/etc/fpp-scanner"
 for c in systemd-sysusers udevadm systemctl chown; do
@@ -125,11 +126,16 @@ maint postrm remove || fail "postrm remove"
 wants="$work/pkgroot/etc/systemd/system/multi-user.target.wants/fpp-scanner.service"
 mkdir -p "$(dirname "$wants")"
 ln -s /lib/systemd/system/fpp-scanner.service "$wants"
+state="$work/pkgroot/var/lib/fpp-scanner"
+mkdir -p "$state/scans/scan-1" && touch "$state/table.fpt" "$state/scans/scan-1/cloud.ply"
+maint postrm remove || fail "postrm remove (with a store)"
+[ -f "$state/scans/scan-1/cloud.ply" ] || fail "postrm remove took the scans (only purge may)"
 maint postrm purge || fail "postrm purge"
 [ ! -e "$token" ] || fail "postrm purge left the token"
 [ ! -L "$wants" ] || fail "postrm purge left the enabled service's link"
+[ ! -e "$state" ] || fail "postrm purge left the state folder: $(find "$state" | head -3)"
 echo "postinst: token made once (64 hex digits, root:fpp-scanner 0640), kept on upgrade, purged" \
-  "with the service's enablement link"
+  "with the service's enablement link and its state folder"
 
 dpkg-deb -x "$deb" "$work/root"
 binary="$work/root/usr/bin/fpp-scanner"

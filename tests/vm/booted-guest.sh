@@ -193,6 +193,7 @@ wait_host upgraded
 apt-get remove -y fpp-scanner > /out/apt-remove.log 2>&1
 res remove_status $?
 res after_remove "$([ -e "$token" ] && echo token) $([ -e /etc/fpp-scanner/board.yaml ] && echo board) $([ -e /usr/bin/fpp-scanner ] && echo binary) $(systemctl is-active fpp-scanner.service 2> /dev/null)"
+res after_remove_scans "$(find /var/lib/fpp-scanner/scans -mindepth 1 -maxdepth 1 2> /dev/null | wc -l)"
 apt-get purge -y fpp-scanner > /out/apt-purge.log 2>&1
 res purge_status $?
 res purged "$(dpkg-query -W -f '${db:Status-Status}' fpp-scanner 2> /dev/null || echo not-installed)"
@@ -200,5 +201,5 @@ res after_purge_etc "$(if [ -e /etc/fpp-scanner ]; then find /etc/fpp-scanner | 
 res after_purge_unit "$([ -e /lib/systemd/system/fpp-scanner.service ] && echo present || echo gone) $(systemctl is-enabled fpp-scanner.service 2> /dev/null || true)"
 res after_purge_wants "$([ -L /etc/systemd/system/multi-user.target.wants/fpp-scanner.service ] && echo link || echo none)"
 res after_purge_user "$(getent passwd fpp-scanner > /dev/null && echo kept || echo gone)"
-res after_purge_scans "$(find /var/lib/fpp-scanner/scans -mindepth 1 -maxdepth 1 2> /dev/null | wc -l)"
+res after_purge_state "$([ -e /var/lib/fpp-scanner ] && echo present || echo gone)"
 res "done" yes

@@ -30,8 +30,9 @@
 #   upgrade to the newer version: token, edited board file and scan store
 #     kept, the running service restarted on the new binary, the same token
 #     still opens the API
-#   remove, then purge: the token, /etc/fpp-scanner and the unit's
-#     enablement link go with the purge; the scans and the system user stay
+#   remove, then purge: the token, /etc/fpp-scanner, the unit's
+#     enablement link and the state folder (scans, table) go with the purge;
+#     the system user stays
 #     (board/debian/postrm: the scans are the user's data)
 # Usage: tests/vm/run_vm_booted.sh [AARCH64_BUILD] [--keep DIR]
 #   AARCH64_BUILD  default: build/aarch64 of this tree
@@ -305,8 +306,10 @@ check purge_status 0
 check after_purge_etc gone
 check after_purge_unit "gone "
 check after_purge_wants none
-# Kept by design (board/debian/postrm): the scans, and the system user.
-check_num after_purge_scans 'v >= 1'
+# Remove keeps the scans, purge takes them (board/debian/postrm); the
+# system user stays (Debian keeps system users).
+check_num after_remove_scans 'v >= 1'
+check after_purge_state gone
 check after_purge_user kept
 check "done" yes
 
@@ -315,8 +318,8 @@ echo "run_vm_booted: guest: boot finished in $(value boot_finished) s (systemd-a
   "$(value install_s) s, listening $(value listening_s) s after enable --now, restarted" \
   "$(value restarted_s) s after SIGKILL, upgrade $(value upgrade_s) s; exposure $exposure;" \
   "host reached the API at $t_http s, whole run $t_total s"
-echo "run_vm_booted: SocketBindDeny $socket_bind; purge left the user and" \
-  "$(value after_purge_scans) scan(s) in /var/lib/fpp-scanner/scans"
+echo "run_vm_booted: SocketBindDeny $socket_bind; remove kept" \
+  "$(value after_remove_scans) scan(s) in /var/lib/fpp-scanner/scans, purge took them; the user stays"
 if [ ${#failures[@]} -gt 0 ]; then
   printf 'run_vm_booted: %s\n' "${failures[@]}"
   echo "--- guest results:"; cat "$out/results"
