@@ -52,7 +52,10 @@ outside="$(sed -n 's/^FPP_LIBGPIOD2_PREFIX:[A-Z]*=\(..*\)$/libgpiod3/p' "$build/
 for name in "${names[@]}"; do
   [ -n "$name" ] && [ "$name" != "$outside" ] || continue
   # (the whole record first: grep -q's early exit would fail apt-cache under pipefail)
-  record="$(apt-cache show "$name" 2> /dev/null || true)"
+  # (name:arch for another architecture's records; the plain name for
+  # Architecture: all, which has no name:arch)
+  # (apt-cache show NAME:ARCH prints nothing, successfully, for those)
+  record="$(apt-cache show "$name:$arch" "$name" 2> /dev/null || true)"
   grep -qx "Architecture: \($arch\|all\)" <<< "$record" ||
     fail "Depends names $name, which this machine's package index has not for $arch" \
          "($(. /etc/os-release && echo "$VERSION_CODENAME"))"
