@@ -46,3 +46,5 @@ fi
 echo "make-root: $root: Debian $(cat "$root/etc/debian_version")"
 # The packages, by this checkout's own install script, run inside the root.
 "$here/run.sh" --root "$root" --as-root -- ./toolchain/install-deps.sh main device-tests
+# The downloaded packages are installed: their files (about 480 MB) not kept.
+"$here/run.sh" --root "$root" --as-root -- apt-get clean
