@@ -76,31 +76,10 @@ if [ -n "$in" ]; then
     -device virtio-9p-pci,fsdev=fppin,mount_tag=fppin)
 fi
 
-port_in_use() {
-  local hex
-  hex=$(printf ':%04X' "$1")
-  awk -v p="$hex" 'FNR > 1 && substr($2, length($2) - 4) == p { found = 1 } END { exit !found }' \
-    /proc/net/tcp /proc/net/tcp6 2> /dev/null
-}
-net_args=()
-if [ ${#forwards[@]} -gt 0 ]; then
-  netdev="user,id=net0,restrict=on"
-  : > "$out/forwards"
-  for f in "${forwards[@]}"; do
-    guest_port=${f#*:} host_port=""
-    [ "$f" = "$guest_port" ] || host_port=${f%%:*}
-    if [ -z "$host_port" ]; then
-      for _ in $(seq 1 100); do
-        host_port=$((20000 + RANDOM % 40000))
-        port_in_use "$host_port" || break
-      done
-    fi
-    netdev+=",hostfwd=tcp:127.0.0.1:$host_port-:$guest_port"
-    echo "$guest_port $host_port" >> "$out/forwards"
-    echo "run-booted: the guest's port $guest_port is 127.0.0.1:$host_port here" >&2
-  done
-  net_args=(-netdev "$netdev" -device "virtio-net-pci,netdev=net0,romfile=")
-fi
+# The user network with the forwarded ports (toolchain/vm/forwards.sh).
+# shellcheck source=toolchain/vm/forwards.sh
+. "$(dirname "$0")/forwards.sh"
+forwarded_network run-booted "$out" "${forwards[@]}"
 
 # cache=unsafe: QEMU ignores the guest's flushes (dpkg syncs every file it
 # unpacks, each a sync of the image file here, which made the second stage

@@ -150,34 +150,10 @@ if ! "$here/make-initramfs.sh" "${initramfs_args[@]}" >&2; then
 fi
 t_initramfs=$(seconds_since "$t_start")
 
-# The user network with the forwarded ports (picked just before QEMU starts,
-# among those no socket of this machine uses).
-port_in_use() {
-  local hex
-  hex=$(printf ':%04X' "$1")
-  awk -v p="$hex" 'FNR > 1 && substr($2, length($2) - 4) == p { found = 1 } END { exit !found }' \
-    /proc/net/tcp /proc/net/tcp6 2> /dev/null
-}
-net_args=()
-if [ ${#forwards[@]} -gt 0 ]; then
-  netdev="user,id=net0,restrict=on"
-  : > "$out/forwards"
-  for f in "${forwards[@]}"; do
-    guest_port=${f#*:} host_port=""
-    [ "$f" = "$guest_port" ] || host_port=${f%%:*}
-    if [ -z "$host_port" ]; then
-      for _ in $(seq 1 100); do
-        host_port=$((20000 + RANDOM % 40000))
-        port_in_use "$host_port" || break
-      done
-    fi
-    netdev+=",hostfwd=tcp:127.0.0.1:$host_port-:$guest_port"
-    echo "$guest_port $host_port" >> "$out/forwards"
-    echo "run-vm: the guest's port $guest_port is 127.0.0.1:$host_port here" >&2
-  done
-  # romfile= : no option ROM (its iPXE file is in ipxe-qemu; the kernel needs none).
-  net_args=(-netdev "$netdev" -device "virtio-net-pci,netdev=net0,romfile=")
-fi
+# The user network with the forwarded ports (toolchain/vm/forwards.sh).
+# shellcheck source=toolchain/vm/forwards.sh
+. "$here/forwards.sh"
+forwarded_network run-vm "$out" "${forwards[@]}"
 
 # The console comes through a FIFO so that every line is seen as it is
 # printed; the monitor is a pair of FIFOs (monitor.in, monitor.out).
