@@ -30,8 +30,9 @@ if [ ! -f "$root/.fpp-debootstrap-complete" ]; then
   exit 77
 fi
 if [ "$(id -u)" -ne 0 ]; then
-  exec sudo --preserve-env=FPP_TRIXIE_ROOT,CI "$0" --root "$root" \
-    $([ "$as_root" -eq 1 ] && echo --as-root) -- "$@"
+  again=(--root "$root")
+  [ "$as_root" -eq 0 ] || again+=(--as-root)
+  exec sudo --preserve-env=FPP_TRIXIE_ROOT,CI "$0" "${again[@]}" -- "$@"
 fi
 
 user_id="${SUDO_UID:-0}" group_id="${SUDO_GID:-0}"
@@ -45,6 +46,7 @@ shared="$(dirname "$source_dir")/shared"
 
 # The mounts, then the command, inside a new mount namespace (unshare -m):
 # they vanish with it. Arguments are passed through the environment, quoted.
+# shellcheck disable=SC2016 # expanded by the inner shell
 inner='
 set -euo pipefail
 mount --make-rprivate /

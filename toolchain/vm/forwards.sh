@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by run-vm.sh and run-booted.sh: the virtual board's user network
 # with the host ports forwarded to the guest's.
 #
@@ -28,6 +29,7 @@ forwarded_network() {
     echo "$name: the guest's port $guest_port is 127.0.0.1:$host_port here" >&2
   done
   # romfile= : no option ROM (its iPXE file is in ipxe-qemu; the kernel needs none).
+  # shellcheck disable=SC2034 # the caller's
   net_args=(-netdev "$netdev" -device "virtio-net-pci,netdev=net0,romfile=")
 }
 
