@@ -43,6 +43,13 @@ CLI::Option* add_threads_option(CLI::App& cmd, int& threads) {
         ->capture_default_str();
 }
 
+CLI::Option* add_min_modulation_option(CLI::App& cmd, double& min_modulation) {
+    return cmd
+        .add_option("--min-modulation", min_modulation,
+                    "minimum modulation as a fraction of full scale")
+        ->capture_default_str();
+}
+
 std::string size_text(Size s) {
     return std::to_string(s.width) + "x" + std::to_string(s.height);
 }

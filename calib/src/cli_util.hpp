@@ -45,6 +45,8 @@ void check_output_path(const std::filesystem::path& path, const char* option);
 // --threads, the same in every command that takes it: worker threads, 0 for
 // all cores (the default shown is `threads`' value).
 CLI::Option* add_threads_option(CLI::App& cmd, int& threads);
+// --min-modulation, the decoder's threshold (DecodeOptions::min_modulation).
+CLI::Option* add_min_modulation_option(CLI::App& cmd, double& min_modulation);
 
 // A standard sequence name (fpp/sequences.hpp) or the path of a YAML file
 // holding a `sequence:` list.

@@ -341,9 +341,7 @@ Action add_correct_command(CLI::App& app) {
         ->required();
     cmd->add_option("--out-table", args->out_table, "refitted table to write (new)")->required();
     cmd->add_option("--report", args->report, "report folder (summary.md, before/, after/)");
-    cmd->add_option("--min-modulation", args->decode.min_modulation,
-                    "minimum modulation as a fraction of full scale")
-        ->capture_default_str();
+    add_min_modulation_option(*cmd, args->decode.min_modulation);
     add_threads_option(*cmd, args->decode.threads);
     return action;
 }

@@ -70,9 +70,7 @@ Action add_decode_command(CLI::App& app) {
         ->required()
         ->check(CLI::ExistingDirectory);
     cmd->add_option("--out", args->out, "output folder (created if needed)")->required();
-    cmd->add_option("--min-modulation", args->options.min_modulation,
-                    "minimum modulation as a fraction of full scale")
-        ->capture_default_str();
+    add_min_modulation_option(*cmd, args->options.min_modulation);
     add_threads_option(*cmd, args->options.threads);
     cmd->add_flag("--correct-phase-error", args->options.correct_phase_error,
                   "remove, from the capture alone, the periodic phase error a non-linear "

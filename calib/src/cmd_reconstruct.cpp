@@ -430,9 +430,7 @@ Action add_reconstruct_command(CLI::App& app) {
     cmd->add_option("--projector-size", args->projector_size,
                     "projector WIDTHxHEIGHT for calibrations that do not record it (SLMaster); "
                     "default: the capture's");
-    cmd->add_option("--min-modulation", args->decode.min_modulation,
-                    "minimum modulation as a fraction of full scale")
-        ->capture_default_str();
+    add_min_modulation_option(*cmd, args->decode.min_modulation);
     cmd->add_option("--smooth", args->smooth.radius,
                     "smooth the decoded projector coordinates over (2 RADIUS + 1)^2 camera "
                     "pixels first, keeping depth edges and masked pixels apart (0 = off, at most "

@@ -194,9 +194,7 @@ Action add_verify_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_flag("--any-table", args->any_table,
                   "verify the table even on captures whose scan.json names another table");
-    cmd->add_option("--min-modulation", args->decode.min_modulation,
-                    "minimum modulation as a fraction of full scale")
-        ->capture_default_str();
+    add_min_modulation_option(*cmd, args->decode.min_modulation);
     add_threads_option(*cmd, args->decode.threads);
     return action;
 }
