@@ -6,6 +6,7 @@
 // test_cli_correct_long.cpp.
 
 #include "ball_bar_scene.hpp"
+#include "calib_run.hpp"
 #include "rig_truth_table.hpp"
 #include "test_support.hpp"
 
@@ -31,9 +32,7 @@ std::string q(const fs::path& p) {
     return fpp::test::shell_quote(p.string());
 }
 
-ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
-}
+using fpp::test::run_calib;
 
 fpp::sim::Rig rig(int binning) {
     fpp::sim::Rig r = fpp::sim::load_rig(fpp::sim::effects_rig_path()).binned_camera(binning);

@@ -10,6 +10,7 @@
 // The refusals: test_cli_correct.cpp.
 
 #include "ball_bar_scene.hpp"
+#include "calib_run.hpp"
 #include "test_support.hpp"
 
 #include "fpp/calib/evaluation.hpp"
@@ -41,9 +42,7 @@ std::string q(const fs::path& p) {
     return fpp::test::shell_quote(p.string());
 }
 
-ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
-}
+using fpp::test::run_calib;
 
 std::vector<double> held_out_sd(const fs::path& verification_json) {
     std::ifstream in(verification_json);

@@ -3,6 +3,7 @@
 // shifted copy), a partial 168 mm cylinder, an unorganised sphere; and bad
 // inputs that must exit with 2, name what is wrong and leave no output.
 
+#include "calib_run.hpp"
 #include "test_support.hpp"
 
 #include "fpp/capture_set.hpp"
@@ -41,9 +42,7 @@ std::string q(const fs::path& p) {
     return quote(p.string());
 }
 
-ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
-}
+using fpp::test::run_calib;
 
 // figures.csv as name -> value (checks the header and the three columns).
 std::map<std::string, double> read_figures(const fs::path& file) {

@@ -2,6 +2,7 @@
 // to end (PLY and XYZ TIFF against the ground truth), and bad inputs that
 // must exit with 2, name what is wrong and leave no output behind.
 
+#include "calib_run.hpp"
 #include "test_support.hpp"
 
 #include "fpp/calib/rig_calibration.hpp"
@@ -36,9 +37,7 @@ std::string q(const fs::path& p) {
     return quote(p.string());
 }
 
-ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
-}
+using fpp::test::run_calib;
 
 // The paper rig with the camera binned 4x (400 x 300, same field of view).
 fpp::sim::Rig small_rig() {

@@ -6,6 +6,7 @@
 // sequences, nothing matched, no calibration) exits 2 naming the file and
 // field, and leaves no output behind.
 
+#include "calib_run.hpp"
 #include "test_support.hpp"
 
 #include "fpp/calib/two_camera.hpp"
@@ -34,9 +35,7 @@ std::string q(const fs::path& p) {
     return fpp::test::shell_quote(p.string());
 }
 
-ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
-}
+using fpp::test::run_calib;
 
 cv::Mat camera_matrix(const fpp::LensModel& l) {
     return (cv::Mat_<double>(3, 3) << l.fu, l.skew, l.cu, 0.0, l.fv, l.cv, 0.0, 0.0, 1.0);

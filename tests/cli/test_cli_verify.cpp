@@ -7,6 +7,7 @@
 // writes no report.
 
 #include "ball_bar_scene.hpp"
+#include "calib_run.hpp"
 #include "rig_truth_table.hpp"
 #include "test_support.hpp"
 
@@ -34,9 +35,7 @@ std::string q(const fs::path& p) {
     return fpp::test::shell_quote(p.string());
 }
 
-ToolRun run_calib(const std::string& args, const fs::path& log_folder) {
-    return fpp::test::run_tool(fpp::test::calib_exe(), args, log_folder);
-}
+using fpp::test::run_calib;
 
 // The effects rig (gamma, defocus, noise) with the camera binned 2x: 800 x
 // 600, a sphere about 85 px across.
