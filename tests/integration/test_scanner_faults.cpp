@@ -1,9 +1,9 @@
 // Faults a scanner meets in the field, met by the running service (the
 // daemon's ScannerService loop, in process, never restarted): the store's
 // disk full or read-only, the table file copied over or damaged on disk, the
-// projector's output disconnected. Each ends in the error state with its
-// reason, leaves nothing half written, and the first scan after the fault is
-// gone succeeds. (The camera's loss and return: ScannerGige.CameraLost*;
+// projector's output disconnected, the GPIO chip gone. Each ends in the
+// error state with its reason, leaves nothing half written, and the first
+// scan after the fault is gone succeeds. (The camera's loss and return: ScannerGige.CameraLost*;
 // power cuts: ScannerPowerCut.*.)
 #include <gtest/gtest.h>
 
@@ -18,11 +18,13 @@
 #include <sys/mount.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -211,4 +213,58 @@ TEST(ScannerFaults, DisplayDisconnectedFailsTheScanAndItsReturnEndsTheError) {
     EXPECT_EQ(rs.service->status()["state"], "idle");
     EXPECT_EQ(list_scans(store).size(), 2u);
     EXPECT_LT(rms_against_truth(rs, list_scans(store).back()), 0.1);
+}
+
+// The chip of the button and the trigger goes away while the scanner is
+// idle (on the device: the driver unbound, a module unloaded; the VM tests
+// do it to the PL061, VM.ArmBoardDevicesWork): the scanner says so within a
+// poll, stays up, says it once, fails a scan through the API naming the
+// trigger, and ends the error by itself when the chip is back; then the
+// button scans again.
+TEST(ScannerFaults, GpioChipGoneIsAnErrorUntilItReturnsThenTheButtonScans) {
+    fpp::test::Journal journal;
+    RunningService rs(journal.sink());
+    const auto state = [&] { return rs.service->status()["state"].get<std::string>(); };
+    const auto wait_for_state = [&](const std::string& wanted) {
+        for (int i = 0; i < 100 && state() != wanted; ++i)
+            std::this_thread::sleep_for(std::chrono::milliseconds(30));
+        return state();
+    };
+
+    rs.sim.button().set_connected(false);
+    rs.sim.trigger().set_connected(false);
+    ASSERT_EQ(wait_for_state("error"), "error");
+    EXPECT_EQ(rs.service->status()["error"],
+              "sim button: reading an edge failed: the chip went away");
+    EXPECT_EQ(rs.sim.led().state(), drivers::LedState::error);
+
+    auto [name, data] = scan_through_api(rs);
+    EXPECT_EQ(name, "failed");
+    EXPECT_NE(data.find("sim trigger: cannot open the chip"), std::string::npos) << data;
+    EXPECT_TRUE(list_scans(rs.store()).empty());
+    // Asked again once a second (2.5 s: at least two more tries), said once,
+    // and back in the error state after the failed scan's own error.
+    std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+    EXPECT_EQ(journal.count("button: sim button: reading an edge failed"), 1);
+    EXPECT_EQ(rs.service->status()["error"],
+              "sim button: reading an edge failed: the chip went away");
+    rs.sim.button().press(); // lost: no chip, no edge
+    EXPECT_EQ(journal.count("button answers again"), 0);
+
+    rs.sim.button().set_connected(true);
+    rs.sim.trigger().set_connected(true);
+    // Within the retry second (and a poll).
+    const auto back = std::chrono::steady_clock::now();
+    ASSERT_EQ(wait_for_state("idle"), "idle");
+    EXPECT_LT(std::chrono::steady_clock::now() - back, std::chrono::milliseconds(1500));
+    EXPECT_EQ(journal.count("button answers again"), 1);
+    EXPECT_EQ(rs.sim.led().state(), drivers::LedState::ready);
+    EXPECT_TRUE(list_scans(rs.store()).empty()); // the press made while away started nothing
+
+    rs.sim.button().press();
+    const auto end = next_event(*rs.stream, {"written", "failed"});
+    ASSERT_TRUE(end.has_value());
+    EXPECT_EQ(end->first, "written") << end->second;
+    ASSERT_EQ(list_scans(rs.store()).size(), 1u);
+    EXPECT_LT(rms_against_truth(rs, list_scans(rs.store()).back()), 0.1);
 }

@@ -100,13 +100,13 @@ expect() { # NAME TEXT...: exit 1 and an error line holding every TEXT
 }
 # The GPIO messages are the same whichever libgpiod the driver is built on
 # (drivers/gpiod/src/gpio_line_v1.cpp and gpio_line_v2.cpp).
-expect no-such-line "gpiochip0 line 9: no such line on the chip"
-expect line-held "gpiochip0 line 5: cannot request the line (held by another process?)"
+expect no-such-line "gpiochip0 line 9 (no-such-line.yaml gpio.led_line): no such line on the chip"
+expect line-held "gpiochip0 line 5 (line-held.yaml gpio.led_line): cannot request the line (held by another process?)"
 expect no-such-mode "1234x567"
 expect no-such-card "/dev/dri/card7"
 expect no-such-connector "HDMI-A-9"
-expect no-such-chip "gpiochip7 line 1: cannot open the chip"
-expect label-no-such-line "9030000.pl061 line 9: no such line on the chip"
+expect no-such-chip "gpiochip7 line 1 (no-such-chip.yaml gpio.led_line): cannot open the chip"
+expect label-no-such-line "9030000.pl061 line 9 (label-no-such-line.yaml gpio.led_line): no such line on the chip"
 [ "$scanner" = fpp-scanner ] ||
   expect device "good.yaml: sim: " "built without the virtual scanner"
 grep -qx "good 0" "$results" || { cat "$work/out/good.log"; fail "the good board did not scan after the failures"; }

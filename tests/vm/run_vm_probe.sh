@@ -8,7 +8,8 @@
 # tests/vm/vm_gpiod_driver.cpp runs the scanner's GPIO driver (drivers/gpiod,
 # compiled with it: gpio_line_v1.cpp, or gpio_line_v2.cpp with --libgpiod2)
 # on the same lines: trigger pulses timed, the LED's states, a press waited
-# for and two queued presses drained.
+# for and two queued presses drained; then the PL061 unbound and bound again
+# (its chip gone and back): the driver reports it and works again.
 # Usage: tests/vm/run_vm_probe.sh [--libgpiod2 [PREFIX]] [--keep DIR] [--timeout S]
 #   --libgpiod2 PREFIX  the probe built against the libgpiod 2 unpacked there
 #                       (default: the VM cache's libgpiod2/root, filled by
@@ -71,16 +72,16 @@ aarch64-linux-gnu-g++ -std=c++20 -O2 -Wall -Wextra -Wpedantic -Wshadow -Wconvers
   -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Woverloaded-virtual -Wdouble-promotion \
   -Wimplicit-fallthrough -Werror -I"$source_dir/drivers/gpiod/include" -I"$source_dir/drivers/include" \
   -I"$source_dir/firmware/core/include" "${gpiod_flags[@]}" "$here/vm_gpiod_driver.cpp" \
-  "$gpiod_src/gpiod_lines.cpp" "$gpiod_src/$line_source" -o "$work/vm-gpiod" -lgpiod -pthread ||
+  "$gpiod_src/gpiod_lines.cpp" "$gpiod_src/reopening_line.cpp" "$gpiod_src/$line_source" -o "$work/vm-gpiod" -lgpiod -pthread ||
   fail "cannot cross-compile vm_gpiod_driver.cpp with $line_source"
 
 status=0
 "$source_dir/toolchain/vm/run-vm.sh" --bin "$work/vm-probe" --bin "$work/vm-gpiod" --out "$out" \
   --timeout "$timeout_s" --quiet --press-on '^vm-(probe: waiting for the button|gpiod: press now)' \
-  --presses 4 -- sh -c 'vm-probe --wait-ms 30000 && vm-gpiod' 2> "$work/run-vm.err" || status=$?
+  --presses 5 -- sh -c 'vm-probe --wait-ms 30000 && vm-gpiod' 2> "$work/run-vm.err" || status=$?
 # The results folder is temporary unless --keep was given.
 if [ -n "$keep" ]; then cat "$work/run-vm.err"; else grep -v '^run-vm: results in' "$work/run-vm.err" || true; fi
-grep -E '^(fpp-vm-init: (drm|gpio gpiochip)|vm-probe: .*(OK|FAIL)|vm-gpiod: (OK|FAIL|button))' \
+grep -E '^(fpp-vm-init: (drm|gpio gpiochip)|vm-probe: .*(OK|FAIL)|vm-gpiod: (OK|FAIL|button|chip))' \
   "$out/console.log" || true
 if [ "$status" -ne 0 ]; then
   echo "--- guest console:"
@@ -89,7 +90,8 @@ if [ "$status" -ne 0 ]; then
 fi
 for expected in "^vm-probe: libgpiod $api\\." '^vm-probe: display OK' '^vm-probe: trigger OK' \
   '^vm-probe: gpio OK: button rising edge' '^run-vm: button pressed' '^vm-gpiod: OK trigger: 200 pulses' \
-  '^vm-gpiod: OK led' '^vm-gpiod: OK button: 1 press waited for, 2 queued presses drained, none left'; do
+  '^vm-gpiod: OK led' '^vm-gpiod: OK button: 1 press waited for, 2 queued presses drained, none left' \
+  '^vm-gpiod: OK chip gone and back'; do
   grep -q "$expected" "$out/console.log" || fail "no line matching '$expected' on the console"
 done
 # A pulse on every flip, the line set high within a bound far above what the

@@ -10,9 +10,13 @@
 # logs "idle: waiting for the button", and the scanner is stopped (SIGTERM)
 # when it is back waiting after that scan; it must then exit 0. That needs a
 # board whose button is line 3, active high (e.g. tests/vm/vm-hardware.yaml).
+# With --chip-gone as well, the PL061's driver is unbound for 3 s once the
+# scanner is idle (its GPIO chip gone, back as another gpiochip number): the
+# scanner must say so naming the board file's line, say the button answers
+# again, and only then is the button pressed for the scan.
 #
 # Usage: tests/vm/run_vm_scan.sh [--build DIR] [--board FILE] [--mode capture|scan]
-#          [--table FILE] [--button] [--fake-camera | --late-camera S] [--keep DIR]
+#          [--table FILE] [--button [--chip-gone]] [--fake-camera | --late-camera S] [--keep DIR]
 #          [--timeout S]
 #   --build DIR     the AArch64 build folder (default: build/aarch64 of this tree)
 #   --board FILE    board file, used as is; its whole folder goes into the guest
@@ -27,7 +31,7 @@ set -euo pipefail
 
 source_dir=$(cd "$(dirname "$0")/../.." && pwd)
 build="$source_dir/build/aarch64"
-board="" table="" mode=capture button=0 fake_camera=0 camera_delay=0 keep="" timeout_s=240
+board="" table="" mode=capture button=0 chip_gone=0 fake_camera=0 camera_delay=0 keep="" timeout_s=240
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
@@ -35,6 +39,7 @@ while [ $# -gt 0 ]; do
     --table) table="$2"; shift 2 ;;
     --mode) mode="$2"; shift 2 ;;
     --button) button=1; shift ;;
+    --chip-gone) chip_gone=1; shift ;;
     --fake-camera) fake_camera=1; shift ;;
     --late-camera) fake_camera=1; camera_delay="$2"; shift 2 ;;
     --keep) keep="$2"; shift 2 ;;
@@ -44,6 +49,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 case "$mode" in capture|scan) ;; *) echo "run_vm_scan: --mode capture or scan" >&2; exit 2 ;; esac
+[ "$chip_gone" -eq 0 ] || [ "$button" -eq 1 ] || { echo "run_vm_scan: --chip-gone needs --button" >&2; exit 2; }
 
 test_name=run_vm_scan
 # shellcheck source=tests/vm/common.sh
@@ -81,7 +87,24 @@ fi
 
 vm_args=(--build "$build" --files "$files" --out "$out" --timeout "$timeout_s" --quiet)
 [ "$fake_camera" -eq 0 ] || vm_args+=(--fake-camera)
-if [ "$button" -eq 1 ]; then
+if [ "$button" -eq 1 ] && [ "$chip_gone" -eq 1 ]; then
+  # Idle, chip gone and back (idle again), pressed, scanned, idle: stopped.
+  cat > "$files/chip-gone.sh" << 'EOF'
+log=/tmp/scanner.log
+: > "$log"
+(
+  while ! grep -q 'idle: waiting for the button' "$log"; do sleep 0.2; done
+  echo 9030000.pl061 > /sys/bus/amba/drivers/pl061_gpio/unbind
+  echo "chip-gone: PL061 unbound: $(ls /dev | grep -c gpiochip) gpio chips"
+  sleep 3
+  echo 9030000.pl061 > /sys/bus/amba/drivers/pl061_gpio/bind
+  echo "chip-gone: PL061 bound again: $(ls /dev | grep gpiochip)"
+) &
+FPP_VM_UNTIL_COPY=$log exec "$@"
+EOF
+  guest=(sh chip-gone.sh fpp-vm-until 3 '*idle: waiting for the button*' "${scanner_args[@]}")
+  vm_args+=(--press-on 'button answers again' --presses 1)
+elif [ "$button" -eq 1 ]; then
   # Stopped when back waiting after the first scan; one press only, so that
   # the second "waiting" line does not start another scan.
   guest=(fpp-vm-until 2 '*idle: waiting for the button*' "${scanner_args[@]}")
@@ -139,6 +162,13 @@ if [ "$mode" = capture ]; then
 fi
 if [ "$button" -eq 1 ]; then
   grep -q '^run-vm: button pressed' "$out/console.log" || fail "the button was never pressed"
+fi
+if [ "$chip_gone" -eq 1 ]; then
+  for expected in 'chip-gone: PL061 unbound: 0 gpio chips' \
+    "button: gpiochip0 line 3 ($board_name gpio.button_line): reading an edge failed: No such device" \
+    'chip-gone: PL061 bound again: gpiochip1' 'button answers again'; do
+    grep -qF "$expected" "$out/console.log" || { show_console; fail "no console line with '$expected'"; }
+  done
 fi
 if [ "$camera_delay" -gt 0 ]; then
   grep -q 'camera 127.0.0.1.*waiting for it' "$out/console.log" ||

@@ -8,7 +8,13 @@
 //      made while nobody reads the line: their four edges wait in the
 //      kernel and drain() must count exactly 2 presses (the 2.x backend
 //      reads them in one batch); then nothing is left (drain() 0, no press
-//      within 300 ms).
+//      within 300 ms);
+//   4. the chip goes away (the PL061's driver unbound through sysfs) and
+//      comes back (bound again): while away the trigger's pulse and the
+//      button's wait fail with DeviceError naming the line, the LED's set
+//      does not throw; once back (numbered anew while the old number is
+//      held: found by its label) the trigger pulses, the LED is set and a
+//      press is waited for, with the same objects.
 // Prints "vm-gpiod: OK ..." lines with the figures, "vm-gpiod: FAIL ..." and
 // exit 1 on the first failure.
 #include <fpp/drivers/device_error.hpp>
@@ -19,6 +25,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <fstream>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -31,7 +40,36 @@ GpioLineConfig line(unsigned int offset) {
     GpioLineConfig config;
     config.chip = "gpiochip0";
     config.offset = offset;
+    config.field = "vm-gpiod line " + std::to_string(offset);
     return config;
+}
+
+// The PL061 of QEMU's virt machine, as its platform driver names it.
+constexpr const char* kPl061 = "9030000.pl061";
+
+bool write_sysfs(const char* file, const char* text) {
+    std::ofstream out(file);
+    out << text;
+    out.flush();
+    return static_cast<bool>(out);
+}
+
+std::string gpio_chips() {
+    std::string names;
+    for (const auto& entry : std::filesystem::directory_iterator("/dev"))
+        if (entry.path().filename().string().rfind("gpiochip", 0) == 0)
+            names += (names.empty() ? "" : " ") + entry.path().filename().string();
+    return names.empty() ? "none" : names;
+}
+
+// The DeviceError text of `call`, or "" when it did not throw one.
+template <class Call> std::string device_error_of(Call call) {
+    try {
+        call();
+    } catch (const fpp::drivers::DeviceError& e) {
+        return e.what();
+    }
+    return {};
 }
 
 void say(const char* text) {
@@ -93,6 +131,34 @@ int run() {
     if (button.drain() != 0 || button.wait_press(300ms))
         return fail("button: a press left after drain()");
     say("OK button: 1 press waited for, 2 queued presses drained, none left");
+
+    led.set(fpp::drivers::LedState::ready);
+    if (!write_sysfs("/sys/bus/amba/drivers/pl061_gpio/unbind", kPl061))
+        return fail("cannot unbind the PL061 (/sys/bus/amba/drivers/pl061_gpio/unbind)");
+    std::printf("vm-gpiod: chip gone: /dev has %s\n", gpio_chips().c_str());
+    const std::string pulse_gone = device_error_of([&] { trigger.pulse(100us); });
+    const std::string button_gone = device_error_of([&] { button.wait_press(100ms); });
+    const std::string pulse_still_gone = device_error_of([&] { trigger.pulse(100us); });
+    const std::string led_gone = device_error_of([&] { led.set(fpp::drivers::LedState::error); });
+    std::printf("vm-gpiod: chip gone: trigger '%s', button '%s', trigger again '%s'\n",
+                pulse_gone.c_str(), button_gone.c_str(), pulse_still_gone.c_str());
+    if (pulse_gone.find("gpiochip0 line 0 (vm-gpiod line 0): ") != 0 ||
+        button_gone.find("gpiochip0 line 3 (vm-gpiod line 3): ") != 0 ||
+        pulse_still_gone.find("cannot open the chip") == std::string::npos)
+        return fail("chip gone: the trigger and the button did not both fail naming their line");
+    if (!led_gone.empty())
+        return fail(("chip gone: the LED threw: " + led_gone).c_str());
+    if (!write_sysfs("/sys/bus/amba/drivers/pl061_gpio/bind", kPl061))
+        return fail("cannot bind the PL061 again");
+    std::printf("vm-gpiod: chip back: /dev has %s\n", gpio_chips().c_str());
+    trigger.pulse(100us);
+    led.set(fpp::drivers::LedState::ready);
+    if (button.drain() != 0)
+        return fail("chip back: a press before any was made");
+    say("press now (4)");
+    if (!button.wait_press(20s))
+        return fail("chip back: no press within 20 s");
+    say("OK chip gone and back: trigger, LED and button work again");
     return 0;
 }
 

@@ -6,6 +6,8 @@
 #   fpp-vm-until 2 '*idle: waiting for the button*' fpp-scanner --board b.yaml
 # stops the scanner when it is back waiting after the first button scan
 # (run-vm.sh --press-on 'idle: waiting for the button' --presses 1).
+# With FPP_VM_UNTIL_COPY=FILE each line is also appended to FILE, for a
+# watcher in the guest that acts on the command's log.
 # Part of the virtual board's initramfs (/fpp/bin/fpp-vm-until).
 if [ $# -lt 3 ]; then
   echo "usage: fpp-vm-until COUNT PATTERN COMMAND [ARG...]" >&2
@@ -21,6 +23,7 @@ pid=$!
 seen=0
 while IFS= read -r line; do
   echo "$line"
+  [ -z "${FPP_VM_UNTIL_COPY:-}" ] || echo "$line" >> "$FPP_VM_UNTIL_COPY"
   # shellcheck disable=SC2254 # the pattern is a glob on purpose
   case "$line" in
     $pattern)

@@ -26,22 +26,33 @@ public:
     // Waits up to `timeout` for an edge of an input line; nullopt on timeout.
     virtual std::optional<Edge> wait_edge(std::chrono::nanoseconds timeout) = 0;
     const std::string& name() const { return name_; }
+    // The chip's label ("9030000.pl061", "pinctrl-rp1"): how it is found
+    // again when it comes back under another number. Empty if it has none.
+    const std::string& chip_label() const { return chip_label_; }
 
 protected:
-    explicit Line(std::string name) : name_(std::move(name)) {}
+    Line(std::string name, std::string chip_label)
+        : name_(std::move(name)), chip_label_(std::move(chip_label)) {}
 
 private:
     std::string name_;
+    std::string chip_label_;
 };
 
-// "gpiochip0 line 17": the device name in DeviceError messages.
+// "gpiochip0 line 17 (board.yaml gpio.led_line)": the device name in
+// DeviceError messages.
 inline std::string line_name(const GpioLineConfig& config) {
-    return config.chip + " line " + std::to_string(config.offset);
+    return config.chip + " line " + std::to_string(config.offset) +
+           (config.field.empty() ? "" : " (" + config.field + ")");
 }
 
-// Throw DeviceError(line_name(config), ...) when the chip or line cannot be had.
-std::unique_ptr<Line> open_output_line(const GpioLineConfig& config, const std::string& consumer,
+// Throw DeviceError(name, ...) when the chip or line cannot be had. `chip`
+// is where to look (config.chip, or a label when opened again); `name` is
+// the one messages use (line_name(config) from the board file).
+std::unique_ptr<Line> open_output_line(const GpioLineConfig& config, const std::string& chip,
+                                       const std::string& name, const std::string& consumer,
                                        bool initial_active);
-std::unique_ptr<Line> open_edge_line(const GpioLineConfig& config, const std::string& consumer);
+std::unique_ptr<Line> open_edge_line(const GpioLineConfig& config, const std::string& chip,
+                                     const std::string& name, const std::string& consumer);
 
 } // namespace fpp::drivers::gpio_detail

@@ -24,13 +24,9 @@ using RequestPtr = std::unique_ptr<gpiod_line, LineRelease>;
 
 class LineV1 final : public Line {
 public:
-    LineV1(const GpioLineConfig& config, const std::string& consumer, bool output,
-           bool initial_active)
-        : Line(line_name(config)) {
-        chip_.reset(gpiod_chip_open_lookup(config.chip.c_str()));
-        if (!chip_)
-            throw DeviceError(DeviceKind::gpio, name(),
-                              "cannot open the chip: " + std::string(std::strerror(errno)));
+    LineV1(ChipPtr chip, const GpioLineConfig& config, const std::string& device,
+           const std::string& consumer, bool output, bool initial_active)
+        : Line(device, gpiod_chip_label(chip.get())), chip_(std::move(chip)) {
         gpiod_line* line = gpiod_chip_get_line(chip_.get(), config.offset);
         if (line == nullptr)
             throw DeviceError(DeviceKind::gpio, name(),
@@ -84,15 +80,27 @@ private:
     RequestPtr request_;
 };
 
-} // namespace
-
-std::unique_ptr<Line> open_output_line(const GpioLineConfig& config, const std::string& consumer,
-                                       bool initial_active) {
-    return std::make_unique<LineV1>(config, consumer, true, initial_active);
+// 1.x's lookup takes a path, "gpiochip0", "0" or a label.
+ChipPtr open_chip(const std::string& chip, const std::string& name) {
+    ChipPtr opened(gpiod_chip_open_lookup(chip.c_str()));
+    if (!opened)
+        throw DeviceError(DeviceKind::gpio, name,
+                          "cannot open the chip: " + std::string(std::strerror(errno)));
+    return opened;
 }
 
-std::unique_ptr<Line> open_edge_line(const GpioLineConfig& config, const std::string& consumer) {
-    return std::make_unique<LineV1>(config, consumer, false, false);
+} // namespace
+
+std::unique_ptr<Line> open_output_line(const GpioLineConfig& config, const std::string& chip,
+                                       const std::string& name, const std::string& consumer,
+                                       bool initial_active) {
+    return std::make_unique<LineV1>(open_chip(chip, name), config, name, consumer, true,
+                                    initial_active);
+}
+
+std::unique_ptr<Line> open_edge_line(const GpioLineConfig& config, const std::string& chip,
+                                     const std::string& name, const std::string& consumer) {
+    return std::make_unique<LineV1>(open_chip(chip, name), config, name, consumer, false, false);
 }
 
 } // namespace fpp::drivers::gpio_detail

@@ -79,21 +79,9 @@ ChipPtr open_chip(const std::string& chip) {
 
 class LineV2 final : public Line {
 public:
-    LineV2(const GpioLineConfig& config, const std::string& consumer, bool output,
-           bool initial_active)
-        : Line(line_name(config)), offset_(config.offset) {
-        const ChipPtr chip = open_chip(config.chip);
-        if (!chip)
-            throw DeviceError(DeviceKind::gpio, name(), "cannot open the chip: " + errno_text());
-        // The kernel would refuse an offset past the end with EINVAL too, but
-        // as a failed request; 1.x tells it apart, and so does this.
-        const ChipInfoPtr info(gpiod_chip_get_info(chip.get()));
-        if (!info)
-            throw DeviceError(DeviceKind::gpio, name(), "cannot open the chip: " + errno_text());
-        if (config.offset >= gpiod_chip_info_get_num_lines(info.get()))
-            throw DeviceError(DeviceKind::gpio, name(),
-                              "no such line on the chip: " + std::string(std::strerror(EINVAL)));
-
+    LineV2(const ChipPtr& chip, std::string label, const GpioLineConfig& config,
+           const std::string& device, const std::string& consumer, bool output, bool initial_active)
+        : Line(device, std::move(label)), offset_(config.offset) {
         const SettingsPtr settings(gpiod_line_settings_new());
         const LineConfigPtr line_config(gpiod_line_config_new());
         const RequestConfigPtr request_config(gpiod_request_config_new());
@@ -178,15 +166,37 @@ private:
     std::size_t next_ = 0;  // the next one to hand out
 };
 
-} // namespace
-
-std::unique_ptr<Line> open_output_line(const GpioLineConfig& config, const std::string& consumer,
-                                       bool initial_active) {
-    return std::make_unique<LineV2>(config, consumer, true, initial_active);
+// The chip where `config`'s line is, and its label. The kernel would refuse
+// an offset past the end with EINVAL too, but as a failed request; 1.x tells
+// it apart, and so does this.
+std::unique_ptr<Line> open_line(const GpioLineConfig& config, const std::string& chip,
+                                const std::string& name, const std::string& consumer, bool output,
+                                bool initial_active) {
+    const ChipPtr opened = open_chip(chip);
+    if (!opened)
+        throw DeviceError(DeviceKind::gpio, name, "cannot open the chip: " + errno_text());
+    const ChipInfoPtr info(gpiod_chip_get_info(opened.get()));
+    if (!info)
+        throw DeviceError(DeviceKind::gpio, name, "cannot open the chip: " + errno_text());
+    if (config.offset >= gpiod_chip_info_get_num_lines(info.get()))
+        throw DeviceError(DeviceKind::gpio, name,
+                          "no such line on the chip: " + std::string(std::strerror(EINVAL)));
+    const char* label = gpiod_chip_info_get_label(info.get());
+    return std::make_unique<LineV2>(opened, label ? label : "", config, name, consumer, output,
+                                    initial_active);
 }
 
-std::unique_ptr<Line> open_edge_line(const GpioLineConfig& config, const std::string& consumer) {
-    return std::make_unique<LineV2>(config, consumer, false, false);
+} // namespace
+
+std::unique_ptr<Line> open_output_line(const GpioLineConfig& config, const std::string& chip,
+                                       const std::string& name, const std::string& consumer,
+                                       bool initial_active) {
+    return open_line(config, chip, name, consumer, true, initial_active);
+}
+
+std::unique_ptr<Line> open_edge_line(const GpioLineConfig& config, const std::string& chip,
+                                     const std::string& name, const std::string& consumer) {
+    return open_line(config, chip, name, consumer, false, false);
 }
 
 } // namespace fpp::drivers::gpio_detail

@@ -1,10 +1,11 @@
-// The three GPIO roles over a version-independent line (gpio_line.hpp).
+// The three GPIO roles over a version-independent line that is requested
+// again after its chip returns (reopening_line.hpp).
 #include <fpp/drivers/gpiod_lines.hpp>
 
 #include <fpp/drivers/debounce.hpp>
 #include <fpp/drivers/device_error.hpp>
 
-#include "gpio_line.hpp"
+#include "reopening_line.hpp"
 
 #include <condition_variable>
 #include <mutex>
@@ -15,7 +16,7 @@ namespace fpp::drivers {
 // --- trigger ---------------------------------------------------------------
 
 GpiodTriggerOutput::GpiodTriggerOutput(const GpioLineConfig& config, const std::string& consumer)
-    : line_(gpio_detail::open_output_line(config, consumer, false)) {}
+    : line_(std::make_unique<gpio_detail::ReopeningLine>(config, consumer, true, false)) {}
 
 GpiodTriggerOutput::~GpiodTriggerOutput() = default;
 
@@ -30,14 +31,15 @@ void GpiodTriggerOutput::pulse(std::chrono::microseconds width) {
 // --- button ----------------------------------------------------------------
 
 struct GpiodButtonInput::State {
-    std::unique_ptr<gpio_detail::Line> line;
+    gpio_detail::ReopeningLine line;
     Debouncer debouncer;
 };
 
 GpiodButtonInput::GpiodButtonInput(const GpioLineConfig& config, std::chrono::milliseconds debounce,
                                    const std::string& consumer)
     : state_(std::make_unique<State>(
-          State{gpio_detail::open_edge_line(config, consumer), Debouncer(debounce)})) {}
+          State{gpio_detail::ReopeningLine(config, consumer, false, false), Debouncer(debounce)})) {
+}
 
 GpiodButtonInput::~GpiodButtonInput() = default;
 
@@ -45,7 +47,7 @@ bool GpiodButtonInput::wait_press(std::chrono::milliseconds timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     for (;;) {
         const auto left = deadline - std::chrono::steady_clock::now();
-        const auto edge = state_->line->wait_edge(std::max(left, std::chrono::nanoseconds(0)));
+        const auto edge = state_->line.wait_edge(std::max(left, std::chrono::nanoseconds(0)));
         if (!edge)
             return false;
         if (state_->debouncer.edge(edge->timestamp_ns, edge->rising))
@@ -55,7 +57,7 @@ bool GpiodButtonInput::wait_press(std::chrono::milliseconds timeout) {
 
 int GpiodButtonInput::drain() {
     int presses = 0;
-    while (const auto edge = state_->line->wait_edge(std::chrono::nanoseconds(0)))
+    while (const auto edge = state_->line.wait_edge(std::chrono::nanoseconds(0)))
         presses += state_->debouncer.edge(edge->timestamp_ns, edge->rising) ? 1 : 0;
     return presses;
 }
@@ -63,7 +65,7 @@ int GpiodButtonInput::drain() {
 // --- LED -------------------------------------------------------------------
 
 struct GpiodStatusLed::State {
-    std::unique_ptr<gpio_detail::Line> line;
+    std::unique_ptr<gpio_detail::ReopeningLine> line;
     std::mutex mutex;
     std::condition_variable changed;
     LedState state = LedState::off;
@@ -82,6 +84,15 @@ struct GpiodStatusLed::State {
         }
     }
 
+    // The LED is best effort: the button and the trigger on the same chip
+    // report a chip that went away; a lamp must not fail a scan.
+    void set_quietly(bool lit) noexcept {
+        try {
+            line->set(lit);
+        } catch (const DeviceError&) {
+        }
+    }
+
     void run() {
         std::unique_lock lock(mutex);
         bool lit = false;
@@ -92,11 +103,7 @@ struct GpiodStatusLed::State {
                 continue;
             }
             lit = !lit;
-            try {
-                line->set(lit);
-            } catch (const DeviceError&) {
-                // The LED is best effort; the scanner logs the error it shows.
-            }
+            set_quietly(lit);
             changed.wait_for(lock, half);
         }
     }
@@ -104,7 +111,7 @@ struct GpiodStatusLed::State {
 
 GpiodStatusLed::GpiodStatusLed(const GpioLineConfig& config, const std::string& consumer)
     : state_(std::make_unique<State>()) {
-    state_->line = gpio_detail::open_output_line(config, consumer, false);
+    state_->line = std::make_unique<gpio_detail::ReopeningLine>(config, consumer, true, false);
     state_->blinker = std::thread([s = state_.get()] { s->run(); });
 }
 
@@ -115,10 +122,7 @@ GpiodStatusLed::~GpiodStatusLed() {
     }
     state_->changed.notify_all();
     state_->blinker.join();
-    try {
-        state_->line->set(false);
-    } catch (const DeviceError&) {
-    }
+    state_->set_quietly(false);
 }
 
 void GpiodStatusLed::set(LedState state) {
@@ -126,7 +130,7 @@ void GpiodStatusLed::set(LedState state) {
         const std::lock_guard lock(state_->mutex);
         state_->state = state;
         if (State::half_period(state).count() == 0)
-            state_->line->set(state == LedState::ready);
+            state_->set_quietly(state == LedState::ready);
     }
     state_->changed.notify_all();
 }

@@ -1,11 +1,16 @@
 #include "fpp/sim/sim_gpio.hpp"
 
+#include <fpp/drivers/device_error.hpp>
+
 namespace fpp::sim {
 
 SimTrigger::SimTrigger(drivers::Clock& clock, std::function<void(std::int64_t)> wire)
     : clock_(clock), wire_(std::move(wire)) {}
 
 void SimTrigger::pulse(std::chrono::microseconds width) {
+    if (!connected_)
+        throw drivers::DeviceError(drivers::DeviceKind::gpio, "sim trigger",
+                                   "cannot open the chip: it went away");
     const std::int64_t rise = clock_.now_ns();
     pulses_.push(rise);
     if (wire_)
@@ -19,11 +24,29 @@ SimButton::SimButton(std::chrono::milliseconds debounce) : debounce_(debounce) {
 void SimButton::press(int bounces) {
     {
         std::lock_guard lock(mutex_);
+        if (!connected_)
+            return; // no chip, no edge
         const auto now = std::chrono::steady_clock::now();
         for (int i = 0; i <= bounces; ++i)
             edges_.push_back(now + std::chrono::microseconds(100 * i));
     }
     edge_.notify_all();
+}
+
+void SimButton::set_connected(bool connected) {
+    {
+        std::lock_guard lock(mutex_);
+        connected_ = connected;
+        if (!connected)
+            edges_.clear();
+    }
+    edge_.notify_all();
+}
+
+void SimButton::require_connected_locked() const {
+    if (!connected_)
+        throw drivers::DeviceError(drivers::DeviceKind::gpio, "sim button",
+                                   "reading an edge failed: the chip went away");
 }
 
 void SimButton::take_press_locked() {
@@ -34,14 +57,17 @@ void SimButton::take_press_locked() {
 
 bool SimButton::wait_press(std::chrono::milliseconds timeout) {
     std::unique_lock lock(mutex_);
-    if (!edge_.wait_for(lock, timeout, [&] { return !edges_.empty(); }))
+    require_connected_locked();
+    if (!edge_.wait_for(lock, timeout, [&] { return !edges_.empty() || !connected_; }))
         return false;
+    require_connected_locked();
     take_press_locked();
     return true;
 }
 
 int SimButton::drain() {
     std::lock_guard lock(mutex_);
+    require_connected_locked();
     int presses = 0;
     while (!edges_.empty()) {
         take_press_locked();

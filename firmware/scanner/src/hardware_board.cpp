@@ -29,11 +29,14 @@ namespace {
 }
 
 #if FPP_HAVE_GPIOD
-drivers::GpioLineConfig line(const GpioConfig& gpio, int offset, bool active_low) {
+// `field`: the board file's key for the line, named in its errors.
+drivers::GpioLineConfig line(const BoardConfig& board, const char* field, int offset,
+                             bool active_low) {
     drivers::GpioLineConfig c;
-    c.chip = gpio.chip;
+    c.chip = board.gpio.chip;
     c.offset = static_cast<unsigned int>(offset);
     c.active_low = active_low;
+    c.field = board.file.filename().string() + " gpio." + field;
     return c;
 }
 #endif
@@ -54,8 +57,8 @@ HardwareBoard::HardwareBoard(const BoardConfig& board) : camera_config_(board.ca
         throw std::logic_error("HardwareBoard on a simulated board");
     const GpioConfig& gpio = board.gpio;
 #if FPP_HAVE_GPIOD
-    led_ =
-        std::make_unique<drivers::GpiodStatusLed>(line(gpio, gpio.led_line, gpio.led_active_low));
+    led_ = std::make_unique<drivers::GpiodStatusLed>(
+        line(board, "led_line", gpio.led_line, gpio.led_active_low));
 #else
     not_built(drivers::DeviceKind::gpio, gpio.chip, "libgpiod");
 #endif
@@ -73,9 +76,9 @@ HardwareBoard::HardwareBoard(const BoardConfig& board) : camera_config_(board.ca
 #endif
 #if FPP_HAVE_GPIOD
         trigger_ = std::make_unique<drivers::GpiodTriggerOutput>(
-            line(gpio, gpio.trigger_line, gpio.trigger_active_low));
+            line(board, "trigger_line", gpio.trigger_line, gpio.trigger_active_low));
         button_ = std::make_unique<drivers::GpiodButtonInput>(
-            line(gpio, gpio.button_line, gpio.button_active_low), gpio.debounce);
+            line(board, "button_line", gpio.button_line, gpio.button_active_low), gpio.debounce);
 #endif
     } catch (...) {
         // The line is released with the board; most GPIO controllers keep

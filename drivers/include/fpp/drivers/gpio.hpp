@@ -44,6 +44,8 @@ protected:
 enum class LedState { off, ready, scanning, error };
 
 // The status LED. How a state looks (steady, blinking) is the board's business.
+// An implementation may keep set() from throwing (the hardware LED does: a
+// scan must not fail for its lamp).
 class StatusLed {
 public:
     virtual ~StatusLed() = default;

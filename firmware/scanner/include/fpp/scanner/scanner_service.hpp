@@ -87,7 +87,14 @@ private:
     // Queues `work` for the scanning thread and waits for it (ApiError 409
     // while a scan is queued or running, 503 when it does not run in 30 s).
     void run_on_scanner_thread(std::function<void()> work);
-    void set_state(const std::string& state, const std::string& error);
+    bool set_state(const std::string& state, const std::string& error); // true if it changed
+    // On the scanning thread: the idle wait for a press (50 ms), true on
+    // one. A button whose line failed (DeviceError: its GPIO chip went away)
+    // puts the scanner in the error state with the reason, and is asked
+    // again once a second; when it answers the error ends.
+    bool wait_for_button();
+    void button_lost(const std::string& why);
+    void button_back();
     void drop_presses_during_scan(); // on the scanning thread
     bool change_state_locked(const std::string& state, const std::string& error); // under mutex_
     void publish_state(const std::string& state, const std::string& error);
@@ -123,6 +130,9 @@ private:
     std::string current_source_;
     std::string current_session_;
     ScanMode current_mode_ = ScanMode::scan;
+    // The button's failure while it lasts, and when to ask again.
+    std::optional<std::string> button_error_;
+    std::chrono::steady_clock::time_point button_retry_at_{};
 };
 
 } // namespace fpp::scanner
