@@ -201,12 +201,16 @@ install_cross() {
     as_root ln -sf "$(basename "$shared")" "$libdir/$soname"
     echo "$yaml_version" | as_root tee "$stamp" > /dev/null
   fi
+  ensure_qemu_binfmt
+}
 
-  # The arm64 programs that tests start themselves (fpp-scanner through
-  # /bin/sh, fork/exec) run on this machine only if the kernel hands arm64 ELF
-  # files to qemu: register qemu-user-static's binfmt_misc entry, as
-  # systemd-binfmt does at boot on a Debian system (not inside a container).
-  # Its "F" flag opens qemu now, so that it also works in other mount namespaces.
+# The arm64 programs that tests start themselves (fpp-scanner through
+# /bin/sh, fork/exec) and the board disk's debootstrap (make-rootfs.sh) run
+# on this machine only if the kernel hands arm64 ELF files to qemu: register
+# qemu-user-static's binfmt_misc entry, as systemd-binfmt does at boot on a
+# Debian system (not inside a container). Its "F" flag opens qemu now, so
+# that it also works in other mount namespaces and chroots.
+ensure_qemu_binfmt() {
   binfmt=/proc/sys/fs/binfmt_misc
   register_qemu_binfmt() {
     mountpoint -q "$binfmt" || as_root mount -t binfmt_misc binfmt_misc "$binfmt" || return 1
@@ -222,7 +226,7 @@ install_cross() {
     echo "install-deps: registered qemu-aarch64 with binfmt_misc"
   else
     echo "install-deps: warning: cannot register qemu-aarch64 with binfmt_misc: the aarch64" \
-         "tests that start programs (fpp-scanner) will fail" >&2
+         "tests that start programs (fpp-scanner) and the board's disk (make-rootfs.sh) will fail" >&2
   fi
 }
 
@@ -230,13 +234,15 @@ install_cross() {
 # qemu-system-aarch64 and cpio from packages; the arm64 kernel, busybox and
 # the guest's tools are downloaded as Debian packages into a cache now, by
 # toolchain/vm/fetch-deps.sh (idempotent), so that no test downloads. Then
-# the board's Debian disk with systemd (toolchain/vm/make-rootfs.sh:
-# debootstrap, its second stage run in the virtual board itself; e2fsprogs'
-# mkfs.ext4 -d makes the image), cached beside it and rebuilt only when its
-# scripts or the package's Depends change.
+# the board's Debian 13 disk with systemd (toolchain/vm/make-rootfs.sh:
+# debootstrap, its arm64 second stage through qemu-user; e2fsprogs' mkfs.ext4
+# -d makes the image), cached beside it and rebuilt only when its scripts or
+# the package's Depends change.
 install_vm() {
   add_cross_architecture
-  ensure_installed "virtual ARM board packages" qemu-system-arm cpio debootstrap e2fsprogs
+  ensure_installed "virtual ARM board packages" qemu-system-arm qemu-user-static cpio debootstrap \
+    e2fsprogs
+  ensure_qemu_binfmt
   # fetch-deps.sh reads the arm64 package index
   if [ "$arch_added" -eq 1 ] && [ "$updated" -eq 0 ]; then as_root apt-get update -q; updated=1; fi
   as_root "$(dirname "$0")/vm/fetch-deps.sh"

@@ -8,7 +8,9 @@
 #             driver's tests only), for the ci preset's VM.Gpiod2 runs
 #   trixie    the firmware, the virtual scanner and the host tool built on
 #             Debian 13 (GCC 14, libgpiod 2), the tests placed 'device' run
-#             there, in the Debian 13 root (toolchain/trixie/run.sh)
+#             there, in the Debian 13 root (toolchain/trixie/run.sh); then
+#             the scanner cross-built there for arm64 and its Debian 13
+#             package made (trixie-aarch64), for the ci preset's booted board
 #   ci        the optimised build, its tests and the benchmarks' smoke runs
 #   asan      the tests under AddressSanitizer and UndefinedBehaviorSanitizer
 #   fuzz      every file reader and the HTTP API's handlers under libFuzzer
@@ -98,6 +100,9 @@ for preset in "${presets[@]}"; do
     run_phase "trixie configure+build" no toolchain/trixie/run.sh -- \
       sh -c "cmake --preset trixie && cmake --build --preset trixie" || exit
     run_phase "trixie tests" no toolchain/trixie/run.sh -- ctest --preset trixie || exit
+    run_phase "trixie-aarch64 + .deb" no toolchain/trixie/run.sh -- \
+      sh -c "cmake --workflow --preset trixie-aarch64 && rm -rf build/trixie-aarch64/deb &&
+             cpack --config build/trixie-aarch64/CPackConfig.cmake -B build/trixie-aarch64/deb" || exit
     continue
   fi
   configured=$(sed -n 's/^FPP_CCACHE_DIR:PATH=//p' "build/$preset/CMakeCache.txt" 2>/dev/null)

@@ -164,11 +164,14 @@ if command -v systemd-analyze > /dev/null; then
   [ -z "$exposure" ] || awk -v e="$exposure" 'BEGIN { exit !(e <= 2.0) }' ||
     fail "the service's exposure is $exposure (at most 2.0)"
 fi
-# The default board's API port is the one port the unit lets it bind.
+# The default board's API port is the one TCP port the unit lets it bind;
+# UDP is Aravis's (GigE Vision sockets bound to port 0).
 port="$(sed -n 's/^  listen: .*:\([0-9]*\)$/\1/p' "$work/root/etc/fpp-scanner/board.yaml")"
 [ -n "$port" ] || fail "the default board has no http.listen"
 grep -qx "SocketBindAllow=tcp:$port" "$work/fpp-scanner.service" ||
   fail "the unit does not let the service bind the board's port $port"
+grep -qx "SocketBindAllow=udp" "$work/fpp-scanner.service" ||
+  fail "the unit does not let Aravis bind its UDP sockets"
 grep -qx "token_file: /etc/fpp-scanner/token" <<< "$(sed 's/^ *//' "$work/root/etc/fpp-scanner/board.yaml")" ||
   fail "the default board does not read the package's token"
 echo "OK"

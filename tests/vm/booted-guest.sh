@@ -123,23 +123,27 @@ res exposure "$(sed -n 's/^.*Overall exposure level for fpp-scanner.service: \([
 
 # --- SocketBindDeny= on the running unit ----------------------------------------------------
 # A process placed in the service's own cgroup (whose BPF programs enforce
-# SocketBindAllow/Deny) tries TCP binds: the errno, 0 when bound.
+# SocketBindAllow/Deny) tries binds (TCP, or UDP with a second argument):
+# the errno, 0 when bound.
 cgroup=/sys/fs/cgroup$(systemctl show -p ControlGroup --value fpp-scanner.service)
 cat > /run/bind-probe.pl << 'EOF2'
 use Socket;
-socket(my $s, PF_INET, SOCK_STREAM, 0) or die "socket: $!";
+my $udp = ($ARGV[1] // "") eq "udp";
+socket(my $s, PF_INET, $udp ? SOCK_DGRAM : SOCK_STREAM, 0) or die "socket: $!";
 print bind($s, pack_sockaddr_in($ARGV[0], INADDR_ANY)) ? "0\n" : ($! + 0) . "\n";
 EOF2
-bind_probe() { perl /run/bind-probe.pl "$1"; }
+bind_probe() { perl /run/bind-probe.pl "$@"; }
 in_unit_bind() {
   # shellcheck disable=SC2016 # $$ is the inner shell's
-  sh -c 'echo $$ > "$1/cgroup.procs" && exec perl /run/bind-probe.pl "$2"' sh "$cgroup" "$1"
+  sh -c 'echo $$ > "$1/cgroup.procs" && shift && exec perl /run/bind-probe.pl "$@"' sh "$cgroup" "$@"
 }
 res bind_outside_8081 "$(bind_probe 8081)"
 res bind_unit_8081 "$(in_unit_bind 8081)"
 res bind_unit_9000 "$(in_unit_bind 9000)"
 res bind_unit_8080 "$(in_unit_bind 8080)"
 res bind_unit_0 "$(in_unit_bind 0)"
+res bind_unit_udp_0 "$(in_unit_bind 0 udp)"
+res bind_unit_udp_40000 "$(in_unit_bind 40000 udp)"
 res socket_bind_props "$(systemctl show -p SocketBindAllow -p SocketBindDeny fpp-scanner.service | tr '\n' ' ')"
 
 # --- Restart= after SIGKILL ----------------------------------------------------------------

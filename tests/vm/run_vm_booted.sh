@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# The scanner's Debian package on a booted Debian 12 with systemd, on the
-# virtual ARM board (toolchain/vm/run-booted.sh: the disk that
+# The scanner's Debian package on a booted Debian with systemd (13, the
+# release the board files name; 12 with --suite bookworm), on the virtual
+# ARM board (toolchain/vm/run-booted.sh: the disk that
 # toolchain/vm/make-rootfs.sh built at install time, booted from a throwaway
-# overlay). The package is made here from the AArch64 build (cpack, as
-# tests/package/check_deb.sh does), with a copy repacked at a newer version;
+# overlay). The package is the one --deb names (Debian 13's, which cpack
+# makes in the Debian 13 root: the test command's trixie-aarch64 phase), or
+# made here from the AArch64 build (cpack, as tests/package/check_deb.sh
+# does); a copy is repacked at a newer version;
 # the guest (tests/vm/booted-guest.sh, run by the disk's fpp-vm-hook.service)
 # installs it with apt, offline, and the live checks are:
 #   install: apt succeeds with the disk's packages alone; the unit is not
@@ -18,11 +21,12 @@
 #     a capture through the API (POST /api/v1/scans) lands in the scan store
 #   systemd-analyze security on the running unit: its exposure at most
 #     1.5, what it measures (check_deb.sh's offline bound is 2.0)
-#   SocketBindDeny: a process placed in the unit's cgroup binds TCP 8081 or
-#     9000: EPERM where systemd enforces it (+BPF_FRAMEWORK); Debian 12's
-#     systemd is built without, and the bind succeeds (asserted, reported);
-#     8080 is allowed (in use by the scanner: EADDRINUSE), port 0 binds;
-#     outside the cgroup 8081 binds
+#   SocketBindDeny: a process placed in the unit's cgroup binds TCP 8081,
+#     9000 or 0: EPERM where systemd enforces it (+BPF_FRAMEWORK: Debian
+#     13's, required there); Debian 12's systemd is built without, and the
+#     bind succeeds (asserted, reported); TCP 8080 is allowed (in use by the
+#     scanner: EADDRINUSE), UDP is (port 0 and 40000: Aravis's GigE Vision
+#     sockets); outside the cgroup 8081 binds
 #   Restart=: after SIGKILL the main PID changes and the unit is active
 #     again (RestartSec=3), listening again
 #   the journal: the scanner's lines under its identifier, its warnings at
@@ -34,36 +38,57 @@
 #     enablement link and the state folder (scans, table) go with the purge;
 #     the system user stays
 #     (board/debian/postrm: the scans are the user's data)
-# Usage: tests/vm/run_vm_booted.sh [AARCH64_BUILD] [--keep DIR]
-#   AARCH64_BUILD  default: build/aarch64 of this tree
+# Usage: tests/vm/run_vm_booted.sh [AARCH64_BUILD] [--suite trixie|bookworm]
+#          [--deb FILE] [--keep DIR]
+#   AARCH64_BUILD  the build the package is of (default: build/trixie-aarch64
+#                  for trixie, build/aarch64 for bookworm)
+#   --suite S      the disk's release (default trixie: CACHE/rootfs-trixie)
+#   --deb PATH     the package, or the folder holding it (default: made with
+#                  cpack from AARCH64_BUILD)
 #   --keep DIR     keep the results there (console.log, guest.log, results,
 #                  the journal, systemd-analyze security's table, apt logs)
 # Exit status: 0 passed, 1 failed, 77 skipped (no QEMU, no disk in the VM
 # cache, no cross build or cpack; in CI a skip is a failure).
 set -euo pipefail
 source_dir=$(cd "$(dirname "$0")/../.." && pwd)
-build="$source_dir/build/aarch64" keep=""
-# The running unit's exposure (systemd 252's systemd-analyze security),
-# measured 1.5 on this disk: more is a loss of hardening.
+build="" keep="" suite=trixie deb=""
+# The running unit's exposure (systemd-analyze security), measured 1.5 on
+# both disks (systemd 252 and 257): more is a loss of hardening.
 exposure_max=1.5
 positional=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --keep) keep="$2"; shift 2 ;;
+    --suite) suite="$2"; shift 2 ;;
+    --deb) deb="$2"; shift 2 ;;
     -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
     *) positional+=("$1"); shift ;;
   esac
 done
-[ ${#positional[@]} -lt 1 ] || build="${positional[0]}"
+case "$suite" in
+  trixie) build="${positional[0]:-$source_dir/build/trixie-aarch64}" ;;
+  bookworm) build="${positional[0]:-$source_dir/build/aarch64}" ;;
+  *) echo "run_vm_booted: --suite trixie or bookworm" >&2; exit 2 ;;
+esac
 test_name=run_vm_booted
 # shellcheck source=tests/vm/common.sh
 source "$source_dir/tests/vm/common.sh"
 require_vm
-{ [ -s "$cache/rootfs/debian-arm64.img" ] && [ -s "$cache/rootfs/boot-initrd.cpio" ]; } ||
-  skip "no Debian disk in $cache/rootfs (toolchain/vm/make-rootfs.sh builds it at install time)"
+disk="$cache/rootfs-$suite"
+{ [ -s "$disk/debian-arm64.img" ] && [ -s "$disk/boot-initrd.cpio" ]; } ||
+  skip "no Debian $suite disk in $disk (toolchain/vm/make-rootfs.sh --suite $suite builds it)"
 require_arm64_scanner "$build"
-[ -f "$build/CPackConfig.cmake" ] || skip "no $build/CPackConfig.cmake"
-command -v cpack > /dev/null || skip "cpack not installed"
+if [ -n "$deb" ]; then
+  if [ -d "$deb" ]; then
+    debs=("$deb"/fpp-scanner_*_arm64.deb)
+    [ ${#debs[@]} -eq 1 ] || fail "${#debs[@]} fpp-scanner_*_arm64.deb in $deb, not one"
+    deb=${debs[0]}
+  fi
+  [ -f "$deb" ] || skip "no package $deb (the test command's trixie-aarch64 phase makes it)"
+else
+  [ -f "$build/CPackConfig.cmake" ] || skip "no $build/CPackConfig.cmake"
+  command -v cpack > /dev/null || skip "cpack not installed"
+fi
 command -v curl > /dev/null || skip "curl not installed"
 
 t_start=$EPOCHREALTIME
@@ -87,9 +112,20 @@ mkdir -p "$out"
 # --- The packages ---------------------------------------------------------------
 in="$work/in"
 mkdir -p "$in/new"
-cpack --config "$build/CPackConfig.cmake" -B "$work/cpack" > "$work/cpack.log" 2>&1 ||
-  { cat "$work/cpack.log"; fail "cpack in $build"; }
-deb=$(ls "$work"/cpack/fpp-scanner_*_arm64.deb)
+if [ -z "$deb" ]; then
+  cpack --config "$build/CPackConfig.cmake" -B "$work/cpack" > "$work/cpack.log" 2>&1 ||
+    { cat "$work/cpack.log"; fail "cpack in $build"; }
+  deb=$(ls "$work"/cpack/fpp-scanner_*_arm64.deb)
+fi
+# The package must be of the build the test names (a stale one would pass
+# unseen): the same GNU build id (the install drops the build's RUNPATH, so
+# the bytes differ).
+build_id() { readelf -n "$1" | sed -n 's/^ *Build ID: //p'; }
+dpkg-deb --fsys-tarfile "$deb" | tar -xO ./usr/bin/fpp-scanner > "$work/packaged-scanner"
+packaged_id=$(build_id "$work/packaged-scanner")
+if [ -z "$packaged_id" ] || [ "$packaged_id" != "$(build_id "$build/firmware/scanner/fpp-scanner")" ]; then
+  fail "$deb does not hold $build/firmware/scanner/fpp-scanner (GNU build ids differ)"
+fi
 version=$(dpkg-deb -f "$deb" Version)
 cp "$deb" "$in/"
 # The same package at a newer version (VERSION+1 sorts after VERSION).
@@ -111,7 +147,8 @@ grep -q '^store: {directory: /var/lib/fpp-scanner/scans' "$in/board.yaml" ||
 cp "$source_dir/tests/vm/booted-guest.sh" "$in/guest.sh"
 
 # --- Boot ------------------------------------------------------------------------------
-"$source_dir/toolchain/vm/run-booted.sh" --in "$in" --out "$out" --forward 8080 --timeout 840 --quiet \
+"$source_dir/toolchain/vm/run-booted.sh" --image "$disk/debian-arm64.img" --in "$in" --out "$out" \
+  --forward 8080 --timeout 840 --quiet \
   > "$work/run-booted.out" 2> "$work/run-booted.err" &
 vm_pid=$!
 show_console() { echo "--- guest console (last 80 lines):"; tail -n 80 "$out/console.log" || true; }
@@ -258,22 +295,28 @@ awk -v e="${exposure%% *}" -v m="$exposure_max" 'BEGIN { exit !(e ~ /^[0-9.]+$/ 
   failures+=("exposure: '$exposure', above $exposure_max")
 check bind_outside_8081 0
 bpf=$(value systemd_bpf_framework)
+[ "$suite" = bookworm ] || [ "$bpf" = +BPF_FRAMEWORK ] ||
+  failures+=("systemd_bpf_framework: '$bpf' on Debian $suite, whose systemd enforces SocketBindDeny")
 case "$bpf" in
   +BPF_FRAMEWORK)
     check bind_unit_8081 1 # EPERM
     check bind_unit_9000 1
-    socket_bind="enforced: EPERM for 8081 and 9000" ;;
+    check bind_unit_0 1 # the rules apply to port 0 too
+    socket_bind="enforced: EPERM for TCP 8081, 9000 and 0; UDP free" ;;
   -BPF_FRAMEWORK)
     # Debian 12's systemd 252 is built without it: the unit's
     # SocketBindDeny=any is accepted and not enforced. Checked, so that the
     # day it is enforced (a systemd with +BPF_FRAMEWORK) this test says so.
     check bind_unit_8081 0
     check bind_unit_9000 0
+    check bind_unit_0 0
     socket_bind="NOT enforced: systemd without BPF_FRAMEWORK, 8081 and 9000 bound from the unit's cgroup" ;;
   *) failures+=("systemd_bpf_framework: '$bpf'") ;;
 esac
 check bind_unit_8080 98 # EADDRINUSE: allowed, and the scanner holds it
-check bind_unit_0 0
+# Aravis's GigE Vision sockets: UDP, bound to port 0 (or to a fixed port).
+check bind_unit_udp_0 0
+check bind_unit_udp_40000 0
 read -r pid_killed pid_new <<< "$(value restart_pids)"
 { [ -n "${pid_new:-}" ] && [ "$pid_new" != 0 ] && [ "$pid_new" != "$pid_killed" ]; } ||
   failures+=("restart_pids: '$(value restart_pids)': the main PID did not change")
@@ -304,7 +347,12 @@ check remove_status 0
 check after_remove "token board  inactive"
 check purge_status 0
 check after_purge_etc gone
-check after_purge_unit "gone "
+# (systemctl is-enabled of a unit that is gone: nothing from systemd 252,
+# "not-found" from 257.)
+case "$(value after_purge_unit)" in
+  "gone " | "gone not-found") ;;
+  *) failures+=("after_purge_unit: '$(value after_purge_unit)', expected the unit gone") ;;
+esac
 check after_purge_wants none
 # Remove keeps the scans, purge takes them (board/debian/postrm); the
 # system user stays (Debian keeps system users).

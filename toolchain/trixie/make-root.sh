@@ -4,8 +4,10 @@
 # minimal Debian 13 from debootstrap, then, inside it, this checkout's
 # toolchain/install-deps.sh with the profiles the phase needs (main: the
 # firmware, the virtual scanner and the host tool; device-tests: GoogleTest
-# and what the tests placed 'device' run). Run at install time, as root
-# (install-deps.sh's trixie profile); the phase itself downloads nothing.
+# and what the tests placed 'device' run; cross: the arm64 cross compiler
+# and libraries, for Debian 13's arm64 package, preset trixie-aarch64). Run
+# at install time, as root (install-deps.sh's trixie profile); the phase
+# itself downloads nothing.
 # Idempotent: a complete root is only checked (install-deps.sh installs what
 # a changed package list adds).
 #
@@ -45,6 +47,6 @@ if [ "$force" -eq 1 ] || [ ! -f "$stamp" ]; then
 fi
 echo "make-root: $root: Debian $(cat "$root/etc/debian_version")"
 # The packages, by this checkout's own install script, run inside the root.
-"$here/run.sh" --root "$root" --as-root -- ./toolchain/install-deps.sh main device-tests
+"$here/run.sh" --root "$root" --as-root -- ./toolchain/install-deps.sh main device-tests cross
 # The downloaded packages are installed: their files (about 480 MB) not kept.
 "$here/run.sh" --root "$root" --as-root -- apt-get clean

@@ -1,19 +1,21 @@
 #!/usr/bin/env bash
-# Builds the virtual ARM board's Debian disk: Debian 12 (bookworm) arm64,
-# minbase with systemd, booted by run-booted.sh with the cached kernel, on
-# which tests/vm/run_vm_booted.sh installs the scanner's .deb as a user
-# would. Run at install time (install-deps.sh vm, after fetch-deps.sh); the
-# tests never build or download it.
-#   1. debootstrap --foreign on this machine: downloads the packages (kept
-#      in CACHE/rootfs-debs for the next build) and unpacks them; nothing of
-#      the target runs here, so no binfmt_misc or qemu-user is needed
-#   2. the disk image made from that folder with mkfs.ext4 -d (no mounts,
-#      no loop devices), plus the board's own files (below)
-#   3. debootstrap's second stage inside the virtual board itself: the
-#      image booted with fpp.init=/fpp-stage2.sh as PID 1 (boot-init.sh)
-# The disk holds every runtime dependency of the fpp-scanner package (the
-# Depends of board/CMakeLists.txt, read from it), because the guest reaches
-# no mirror, and:
+# Builds the virtual ARM board's Debian disk: Debian 13 (trixie, the release
+# the board files name; or 12, bookworm, with --suite) arm64, minbase with
+# systemd, booted by run-booted.sh with the cached kernel, on which
+# tests/vm/run_vm_booted.sh installs the scanner's .deb as a user would. Run
+# at install time (install-deps.sh vm, after fetch-deps.sh); the tests never
+# build or download it.
+#   1. debootstrap, both stages, on this machine: the packages downloaded
+#      (kept in CACHE/rootfs-debs for the next build) and unpacked, and their
+#      arm64 maintainer scripts run in the chroot through qemu-user (the
+#      qemu-aarch64 binfmt_misc entry with its F flag, which install-deps.sh
+#      cross registers)
+#   2. the board's own files (below), its units enabled in the chroot
+#   3. the disk image made from that folder with mkfs.ext4 -d (no mounts,
+#      no loop devices), and the boot initramfs
+# The disk holds every runtime dependency of the fpp-scanner package for
+# that release (the Depends of board/CMakeLists.txt, read from it), because
+# the guest reaches no mirror, and:
 #   /usr/local/bin/arv-fake-gv-camera-0.8  Aravis's fake GigE camera, from
 #        fetch-deps.sh's cache (its package would bring GTK and GStreamer)
 #   /etc/systemd/network/10-fpp-vm.network  the wired card: 10.0.2.15/24
@@ -21,25 +23,29 @@
 #   fpp-vm-hook.service  at boot: mounts the host's folders (9p: fppin at
 #        /fpp/in read-only, fppout at /out), runs /fpp/in/guest.sh (output on
 #        the console and in /out/guest.log, "fpp-vm-hook: exit N"), powers off
-# Output: CACHE/rootfs/debian-arm64.img (ext4, 2 GiB sparse), boot-initrd.cpio
-# (busybox, the modules the disk and the board need, boot-init.sh as /init)
-# and stamp, written last: a hash of these scripts, the package list and the
-# kernel release. A run with a matching stamp does nothing.
+# Output: CACHE/rootfs-SUITE/debian-arm64.img (ext4, 2 GiB sparse),
+# boot-initrd.cpio (busybox, the modules the disk and the board need,
+# boot-init.sh as /init) and stamp, written last: a hash of these scripts,
+# the package list and the kernel release. A run with a matching stamp does
+# nothing.
 #
-# Usage: toolchain/vm/make-rootfs.sh [--cache DIR] [--force]
+# Usage: toolchain/vm/make-rootfs.sh [--suite trixie|bookworm] [--cache DIR] [--force]
+#   --suite S    the Debian release (default trixie)
 #   --cache DIR  default: $FPP_VM_CACHE or /var/cache/fpp-vm (fetch-deps.sh's)
 #   --force      build again even when the stamp matches
 # FPP_VM_MIRROR: the Debian mirror (default http://deb.debian.org/debian).
-# Needs root (debootstrap), debootstrap, e2fsprogs, cpio, qemu-system-arm.
+# Needs root (debootstrap, chroot), debootstrap, e2fsprogs, cpio,
+# qemu-user-static registered with binfmt_misc.
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
 source_dir=$(cd "$here/../.." && pwd)
 cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
 mirror="${FPP_VM_MIRROR:-http://deb.debian.org/debian}"
-force=0
+force=0 suite=trixie
 while [ $# -gt 0 ]; do
   case "$1" in
+    --suite) suite="$2"; shift 2 ;;
     --cache) cache="$2"; shift 2 ;;
     --force) force=1; shift ;;
     -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
@@ -57,13 +63,20 @@ release=$(cat "$cache/kernel-release")
 fake_camera="$cache/root/usr/bin/arv-fake-gv-camera-0.8"
 [ -x "$fake_camera" ] || { echo "make-rootfs: no $fake_camera (fetch-deps.sh)" >&2; exit 1; }
 
-# The package's runtime dependencies on Debian 12, the disk's release, as
-# board/CMakeLists.txt declares them (FPP_DEB_DEPENDS_bookworm; the GPIO
-# driver's library there is libgpiod 1.6's, libgpiod2).
-depends=$(awk '/set\(FPP_DEB_DEPENDS_bookworm/ { getline; print; exit }' \
-  "$source_dir/board/CMakeLists.txt" | sed 's/^ *"//; s/"$//; s/\${gpiod_bookworm}/libgpiod2/')
-[[ "$depends" == libc6* ]] ||
-  { echo "make-rootfs: no Debian 12 Depends found in board/CMakeLists.txt" >&2; exit 1; }
+case "$suite" in
+  bookworm) gpiod_package=libgpiod2 ;; # libgpiod 1.6's library
+  trixie) gpiod_package=libgpiod3 ;;   # libgpiod 2.2's
+  *) echo "make-rootfs: --suite bookworm or trixie, not '$suite'" >&2; exit 2 ;;
+esac
+# The package's runtime dependencies on the disk's release, as
+# board/CMakeLists.txt declares them (FPP_DEB_DEPENDS_<suite>; the GPIO
+# driver's library is the variable the driver's libgpiod picks).
+depends=$(awk -v v="set(FPP_DEB_DEPENDS_$suite" 'index($0, v) { getline; print; exit }' \
+  "$source_dir/board/CMakeLists.txt" | sed "s/^ *\"//; s/\"$//; s/\${gpiod_$suite}/$gpiod_package/")
+if [[ "$depends" != libc6* ]] || [[ "$depends" == *"\${"* ]]; then
+  echo "make-rootfs: no Debian $suite Depends found in board/CMakeLists.txt" >&2
+  exit 1
+fi
 packages=(systemd systemd-sysv dbus udev kmod)
 # Names only: the version constraints in parentheses dropped.
 # shellcheck disable=SC2013 # words, not lines
@@ -71,7 +84,7 @@ for d in $(sed 's/([^)]*)//g; s/,/ /g' <<< "$depends"); do packages+=("$d"); don
 mapfile -t packages < <(printf '%s\n' "${packages[@]}" | LC_ALL=C sort -u)
 include=$(IFS=,; echo "${packages[*]}")
 
-out="$cache/rootfs"
+out="$cache/rootfs-$suite"
 key=$( { cat "$here/make-rootfs.sh" "$here/boot-init.sh" "$here/make-initramfs.sh"
   echo "$include $release"; } | sha256sum | cut -d' ' -f1)
 if [ "$force" -eq 0 ] && [ "$(cat "$out/stamp" 2> /dev/null)" = "$key" ] &&
@@ -79,27 +92,33 @@ if [ "$force" -eq 0 ] && [ "$(cat "$out/stamp" 2> /dev/null)" = "$key" ] &&
   echo "make-rootfs: $out/debian-arm64.img up to date"
   exit 0
 fi
-for tool in debootstrap mkfs.ext4 e2fsck qemu-system-aarch64 cpio; do
+for tool in debootstrap mkfs.ext4 cpio chroot; do
   command -v "$tool" > /dev/null ||
     { echo "make-rootfs: $tool not found (toolchain/install-deps.sh vm installs it)" >&2; exit 1; }
 done
 [ "$(id -u)" -eq 0 ] || { echo "make-rootfs: debootstrap needs root" >&2; exit 1; }
+binfmt=/proc/sys/fs/binfmt_misc/qemu-aarch64
+if [ "$(head -n 1 "$binfmt" 2> /dev/null)" != enabled ] || ! grep -q '^flags: .*F' "$binfmt"; then
+  echo "make-rootfs: arm64 programs do not run here: no qemu-aarch64 entry with the F flag in" \
+    "binfmt_misc (toolchain/install-deps.sh cross registers it)" >&2
+  exit 1
+fi
 
-work="$cache/rootfs.new"
+work="$cache/rootfs-$suite.new"
 rm -rf "$work"
 mkdir -p "$work" "$cache/rootfs-debs"
 # $work stays after a failure, for its logs (the next run removes it).
 tree="$work/tree"
 
-# --- 1. First stage here -------------------------------------------------------
-echo "make-rootfs: debootstrap --foreign bookworm arm64 from $mirror, with ${packages[*]}"
-if ! debootstrap --arch=arm64 --variant=minbase --foreign --cache-dir="$cache/rootfs-debs" \
-  --include="$include" bookworm "$tree" "$mirror" > "$work/debootstrap.log" 2>&1; then
+# --- 1. debootstrap, both stages -------------------------------------------------
+echo "make-rootfs: debootstrap $suite arm64 from $mirror, with ${packages[*]}"
+if ! debootstrap --arch=arm64 --variant=minbase --cache-dir="$cache/rootfs-debs" \
+  --include="$include" "$suite" "$tree" "$mirror" > "$work/debootstrap.log" 2>&1; then
   tail -n 30 "$work/debootstrap.log" >&2
-  echo "make-rootfs: debootstrap's first stage failed (log above)" >&2
+  echo "make-rootfs: debootstrap failed (log above; the target's: $tree/debootstrap/debootstrap.log)" >&2
   exit 1
 fi
-echo "make-rootfs: first stage done at $(elapsed) s"
+echo "make-rootfs: debootstrap done at $(elapsed) s"
 
 # --- 2. The board's files --------------------------------------------------------
 echo fpp-vm > "$tree/etc/hostname"
@@ -158,39 +177,11 @@ StandardError=inherit
 [Install]
 WantedBy=multi-user.target
 UNIT
-# dpkg without its per-file syncs during the second stage (removed after).
-mkdir -p "$tree/etc/dpkg/dpkg.cfg.d"
-echo force-unsafe-io > "$tree/etc/dpkg/dpkg.cfg.d/fpp-vm-stage2"
-cat > "$tree/fpp-stage2.sh" << 'STAGE'
-#!/bin/sh
-# PID 1 of the second-stage boot (make-rootfs.sh): debootstrap's second
-# stage, the board's units enabled, then the disk left clean and powered off.
-export PATH=/usr/sbin:/usr/bin:/sbin:/bin
-say() { echo "fpp-stage2: $*"; }
-say "start at $(cut -d' ' -f1 /proc/uptime 2> /dev/null || echo '?') s"
-status=0
-if /debootstrap/debootstrap --second-stage > /root/second-stage.log 2>&1; then
-  systemctl enable systemd-networkd.service fpp-vm-hook.service || status=$?
-  # The base image is read-only for the tests: nothing is left to configure.
-  dpkg --audit || status=$?
-  apt-get clean
-else
-  status=$?
-  tail -n 40 /root/second-stage.log /debootstrap/debootstrap.log 2> /dev/null
-fi
-[ -d /proc/self ] || mount -t proc proc /proc
-rm -f /etc/dpkg/dpkg.cfg.d/fpp-vm-stage2
-say "done at $(cut -d' ' -f1 /proc/uptime) s"
-say "exit $status"
-rm -f /fpp-stage2.sh
-sync
-umount -a -r 2> /dev/null
-mount -o remount,ro / 2> /dev/null
-sync
-echo o > /proc/sysrq-trigger
-sleep 10
-STAGE
-chmod 0755 "$tree/fpp-stage2.sh"
+# The units enabled, nothing left half configured, the package files gone.
+chroot "$tree" systemctl enable systemd-networkd.service fpp-vm-hook.service
+chroot "$tree" dpkg --audit
+chroot "$tree" apt-get clean
+echo "make-rootfs: Debian $(cat "$tree/etc/debian_version"), $(chroot "$tree" systemctl --version | head -n 1)"
 
 image="$work/debian-arm64.img"
 truncate -s 2G "$image"
@@ -201,31 +192,9 @@ echo "make-rootfs: image made at $(elapsed) s"
 "$here/make-initramfs.sh" --cache "$cache" --out "$work/boot-initrd.cpio" --init "$here/boot-init.sh" \
   --module virtio_blk --module crc32c_generic --module ext4 --net > /dev/null
 
-# --- 3. Second stage in the virtual board ---------------------------------------------
-echo "make-rootfs: second stage in the virtual board (log: $work/stage2/console.log)"
-stage2_status=0
-"$here/run-booted.sh" --cache "$cache" --image "$image" --writable --init /fpp-stage2.sh \
-  --out "$work/stage2" --timeout 2400 --quiet || stage2_status=$?
-if [ "$stage2_status" -ne 0 ] || ! grep -qx 'fpp-stage2: exit 0' "$work/stage2/console.log"; then
-  tail -n 60 "$work/stage2/console.log" >&2
-  echo "make-rootfs: the second stage failed (status $stage2_status; console above)" >&2
-  exit 1
-fi
-grep '^fpp-stage2: done at' "$work/stage2/console.log"
-# PID 1 cannot unmount /: the journal is replayed here (status 1: corrected).
-fsck_status=0
-e2fsck -fp "$image" > "$work/e2fsck.log" 2>&1 || fsck_status=$?
-if [ "$fsck_status" -gt 1 ]; then
-  cat "$work/e2fsck.log" >&2
-  echo "make-rootfs: e2fsck found errors on the disk (status $fsck_status)" >&2
-  exit 1
-fi
-echo "make-rootfs: second stage done at $(elapsed) s"
-
 rm -rf "$out"
 mkdir -p "$out"
 mv "$image" "$work/boot-initrd.cpio" "$out/"
-cp "$work/stage2/console.log" "$out/stage2-console.log"
 echo "$key" > "$out/stamp"
 rm -rf "$work"
 echo "make-rootfs: $out ready in $(elapsed) s: disk $(du -h "$out/debian-arm64.img" | cut -f1) used" \

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Boots the virtual ARM board's Debian disk (make-rootfs.sh): the same
 # machine as run-vm.sh (qemu-system-aarch64 -M virt, Cortex-A72, TCG,
-# virtio-gpu, the PL061 GPIO chip), Debian 12's arm64 kernel and the boot
+# virtio-gpu, the PL061 GPIO chip), Debian 12's arm64 kernel (6.1, also
+# under the Debian 13 disk: a board brings its own kernel) and the boot
 # initramfs from the cache, the disk as /dev/vda, systemd as PID 1, until the
 # guest powers off. The disk image is not written: QEMU keeps the guest's
 # writes in a temporary overlay that goes with it (snapshot=on), so that
@@ -20,9 +21,10 @@
 #          [--smp N] [--mem MB] [--cache DIR] [--writable] [--init PATH] [--quiet]
 #   --forward   as run-vm.sh's: "GP HP" lines in OUT/forwards before QEMU starts
 #   --timeout S the whole run (default 600); then QEMU is killed: status 124
-#   --writable  write the disk itself (make-rootfs.sh's second stage)
+#   --writable  write the disk itself
 #   --init PATH the disk's program to run as PID 1 (default /sbin/init)
-#   --image F   the disk (default CACHE/rootfs/debian-arm64.img)
+#   --image F   the disk (default CACHE/rootfs-trixie/debian-arm64.img; its
+#               boot-initrd.cpio beside it)
 # Exit status: 0 when the guest powered off (the hook's own result is what
 # guest.sh wrote to /out), 124 on timeout, 125 when QEMU could not run.
 set -euo pipefail
@@ -59,7 +61,7 @@ command -v qemu-system-aarch64 > /dev/null ||
 [ -s "$cache/kernel-release" ] ||
   { echo "run-booted: kernel cache $cache not filled (toolchain/vm/fetch-deps.sh)" >&2; exit 125; }
 release=$(cat "$cache/kernel-release")
-image="${image:-$cache/rootfs/debian-arm64.img}"
+image="${image:-$cache/rootfs-trixie/debian-arm64.img}"
 initrd="$(dirname "$image")/boot-initrd.cpio"
 for f in "$image" "$initrd"; do
   [ -s "$f" ] || { echo "run-booted: no $f (toolchain/vm/make-rootfs.sh)" >&2; exit 125; }
