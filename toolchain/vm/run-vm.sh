@@ -19,8 +19,10 @@
 #                     and fpp-scanner-sim when there (the same with the virtual
 #                     scanner, for sim boards: a device build's has none)
 #   --bin FILE        another arm64 executable for /fpp/bin (on PATH); repeatable
-#   --lib-dir DIR     searched first for their shared libraries (e.g. the cross
-#                     compiler's /usr/aarch64-linux-gnu/lib for libasan); repeatable
+#   --lib-dir DIR     searched first for their shared libraries (e.g. a folder
+#                     with the cross compiler's libasan: not its whole
+#                     /usr/aarch64-linux-gnu/lib, whose libc beside the guest's
+#                     loader hangs threaded programs); repeatable
 #   --fake-camera     adds Aravis's fake GigE camera, arv-fake-gv-camera-0.8
 #                     (start it in the guest: arv-fake-gv-camera-0.8 -i 127.0.0.1 &)
 #   --files DIR       copied to /fpp/files, the command's working directory
