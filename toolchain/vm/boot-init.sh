@@ -5,8 +5,8 @@
 # virtio-blk, ext4, virtio-gpu, 9p and virtio-net as modules and the disk
 # carries none, so they are loaded here (the list in /lib/modules/load-order,
 # dependencies first) and stay loaded for the booted system. Then the disk
-# (root=, default /dev/vda) is mounted read-write and fpp.init= (default
-# /sbin/init: systemd) runs on it as PID 1. The gpio-keys driver is not
+# (root=, default /dev/vda) is mounted read-write and /sbin/init (systemd)
+# runs on it as PID 1. The gpio-keys driver is not
 # loaded, so that the power button's PL061 line 3 stays free for libgpiod.
 /bin/busybox --install -s /bin
 export PATH=/usr/bin:/bin
@@ -23,7 +23,6 @@ init=/sbin/init
 for arg in $(cat /proc/cmdline); do
   case "$arg" in
     root=*) root=${arg#root=} ;;
-    fpp.init=*) init=${arg#fpp.init=} ;;
   esac
 done
 i=0

@@ -18,11 +18,9 @@
 #              networkd), the host's 127.0.0.1:HP forwarded to guest port GP
 #
 # Usage: run-booted.sh --in DIR --out DIR [--forward [HP:]GP]... [--timeout S]
-#          [--smp N] [--mem MB] [--cache DIR] [--writable] [--init PATH] [--quiet]
+#          [--smp N] [--mem MB] [--cache DIR] [--image F] [--quiet]
 #   --forward   as run-vm.sh's: "GP HP" lines in OUT/forwards before QEMU starts
 #   --timeout S the whole run (default 600); then QEMU is killed: status 124
-#   --writable  write the disk itself
-#   --init PATH the disk's program to run as PID 1 (default /sbin/init)
 #   --image F   the disk (default CACHE/rootfs-trixie/debian-arm64.img; its
 #               boot-initrd.cpio beside it)
 # Exit status: 0 when the guest powered off (the hook's own result is what
@@ -30,7 +28,7 @@
 set -euo pipefail
 
 cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
-in="" out="" timeout_s=600 smp=2 mem=1024 quiet=0 writable=0 init="" image=""
+in="" out="" timeout_s=600 smp=2 mem=1024 quiet=0 image=""
 forwards=()
 usage() { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; }
 while [ $# -gt 0 ]; do
@@ -45,8 +43,6 @@ while [ $# -gt 0 ]; do
     --mem) mem="$2"; shift 2 ;;
     --cache) cache="$2"; shift 2 ;;
     --image) image="$2"; shift 2 ;;
-    --writable) writable=1; shift ;;
-    --init) init="$2"; shift 2 ;;
     --quiet) quiet=1; shift ;;
     -h|--help) usage; exit 0 ;;
     *) echo "run-booted: unknown argument '$1'" >&2; usage >&2; exit 125 ;;
@@ -84,13 +80,9 @@ fi
 forwarded_network run-booted "$out" "${forwards[@]}"
 
 # cache=unsafe: QEMU ignores the guest's flushes (dpkg syncs every file it
-# unpacks, each a sync of the image file here, which made the second stage
-# several times slower). The overlay is thrown away anyway, and a --writable
-# run ends with the guest's own sync and a clean power-off.
-drive="file=$image,format=raw,if=virtio,cache=unsafe"
-[ "$writable" -eq 1 ] || drive+=",snapshot=on"
+# unpacks, each a sync of the overlay here); the overlay is thrown away.
+drive="file=$image,format=raw,if=virtio,cache=unsafe,snapshot=on"
 append="console=ttyAMA0 root=/dev/vda quiet panic=-1"
-[ -z "$init" ] || append+=" fpp.init=$init"
 
 t_start=$EPOCHREALTIME
 console_log="$out/console.log"
