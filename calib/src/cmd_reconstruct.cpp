@@ -396,7 +396,9 @@ Action add_reconstruct_command(CLI::App& app) {
         app, "reconstruct",
         "Decode a capture set and reconstruct a point cloud with a stereo calibration (SV model, "
         "lens distortion compensated) or a hybrid coefficient table: binary PLY of the valid "
-        "points, optional XYZ TIFF",
+        "points, optional XYZ TIFF. Any sequence with a phase, micro phase or code block along "
+        "x: phase families to a fraction of a projector pixel, a code-only sequence (Gray, "
+        "n-ary, binary) at its code step (each pixel at its step's centre)",
         run_reconstruct);
     args->smooth.radius = 0;
     cmd->add_option("capture", args->capture, "capture set folder (holding capture.yaml)")

@@ -14,10 +14,19 @@ namespace fpp::calib {
 
 namespace {
 
+// True when a block of `sequence` gives the decoder a projector coordinate
+// along `axis`: a phase or micro phase block (to a fraction of a pixel), or a
+// code block (a code-only sequence: its code step's centre; with a phase
+// block it only indexes the periods). A centerline is a cue, not a coordinate.
 bool sequence_codes_axis(const Sequence& sequence, Axis axis) {
     return std::any_of(sequence.begin(), sequence.end(), [&](const PatternBlock& b) {
-        const auto* phase = std::get_if<PhaseBlock>(&b);
-        return phase && phase->axis == axis;
+        if (const auto* phase = std::get_if<PhaseBlock>(&b))
+            return phase->axis == axis;
+        if (const auto* micro = std::get_if<MicroPhaseBlock>(&b))
+            return micro->axis == axis;
+        if (const auto* code = std::get_if<GrayBlock>(&b))
+            return code->axis == axis;
+        return false;
     });
 }
 
@@ -29,11 +38,12 @@ void check_capture_axes(const CaptureSet& capture, ReconstructAxes requested) {
     const bool has_y = sequence_codes_axis(capture.manifest.sequence, Axis::y);
     if (!has_x)
         throw InputError(manifest_path, "sequence",
-                         "no phase block along x: reconstruction needs the projector column");
+                         "no phase, micro phase or code block along x: reconstruction needs the "
+                         "projector column");
     if (requested == ReconstructAxes::xy && !has_y)
         throw InputError(manifest_path, "sequence",
-                         "--axes xy needs the projector row, but the capture has no phase block "
-                         "along y (use --axes x)");
+                         "--axes xy needs the projector row, but the capture has no phase, micro "
+                         "phase or code block along y (use --axes x)");
 }
 
 void check_table_fits_capture(const CoefficientTable& table,

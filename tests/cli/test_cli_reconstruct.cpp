@@ -16,7 +16,9 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -58,6 +60,23 @@ protected:
                 run_calib("simulate --rig " + q(rig_file) + " --scene plane --sequence " +
                               sequence + " --out " + q(*dir_ / sequence),
                           dir_->path());
+            ASSERT_EQ(sim.exit_code, 0) << sim.output;
+        }
+        // Code-only: white, black and 10 Gray planes along x (step 1.25
+        // projector columns), as SLStudio's Gray codec.
+        std::ofstream(*dir_ / "gray-only.yaml")
+            << "sequence:\n  - pattern: white\n  - pattern: black\n  - pattern: gray\n"
+               "    axis: x\n    period: 1.25\n    bits: 10\n";
+        // Micro phase shifting alone: 5 periods of 16 to 20.4 px (beats
+        // 1400 / j px, j = 1, 11, 16, 19: tests/integration/test_decode_families.cpp).
+        std::ofstream(*dir_ / "micro.yaml")
+            << "sequence:\n  - pattern: micro_phase\n    axis: x\n"
+               "    periods: [16.0, 16.184971, 18.300654, 19.58042, 20.437956]\n";
+        for (const char* name : {"gray-only", "micro"}) {
+            const auto sim = run_calib(
+                "simulate --rig " + q(rig_file) + " --scene plane --sequence " +
+                    q(*dir_ / (std::string(name) + ".yaml")) + " --out " + q(*dir_ / name),
+                dir_->path());
             ASSERT_EQ(sim.exit_code, 0) << sim.output;
         }
         fpp::calib::save_calibration(*dir_ / "calib.yaml",
@@ -141,6 +160,62 @@ TEST_F(CliReconstruct, XOnlyCaptureUsesTheIterativeSolve) {
     EXPECT_NE(run.output.find("axes: x "), std::string::npos) << run.output;
     EXPECT_NE(run.output.find("x-only solve"), std::string::npos) << run.output;
     EXPECT_GT(fpp::read_ply(ply).size(), 400u * 300u * 99 / 100);
+}
+
+// RMS distance (mm) of a cloud's points from the truth at their pixels.
+double rms_against_truth(const fpp::PlyPoints& cloud, const fpp::Image<float>& truth) {
+    double sum = 0;
+    for (std::size_t k = 0; k < cloud.size(); ++k) {
+        const std::size_t i = cloud.pixel[k];
+        const double dx = double(cloud.x[k] - truth.data()[3 * i]);
+        const double dy = double(cloud.y[k] - truth.data()[3 * i + 1]);
+        const double dz = double(cloud.z[k] - truth.data()[3 * i + 2]);
+        sum += dx * dx + dy * dy + dz * dz;
+    }
+    return std::sqrt(sum / double(std::max<std::size_t>(cloud.size(), 1)));
+}
+
+// A capture with no phase block reconstructs from its code alone, each pixel
+// at its code step's centre: the error is that step's quantisation (about
+// 0.43 projector px RMS here, 0.4 mm), not a refusal.
+// (tests/integration/test_code_only_reconstruct_sim.cpp holds it to the
+// quantisation floor at full resolution.)
+TEST_F(CliReconstruct, CodeOnlyCaptureReconstructsAtItsCodeStep) {
+    TempDir out;
+    const fs::path ply = out / "cloud.ply";
+    const auto run = run_calib("reconstruct " + q(path("gray-only")) + " --calib " +
+                                   q(path("calib.yaml")) + " --out " + q(ply),
+                               out.path());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_NE(run.output.find("axes: x "), std::string::npos) << run.output;
+    const fpp::PlyPoints cloud = fpp::read_ply(ply);
+    EXPECT_GT(cloud.size(), 400u * 300u * 99 / 100);
+    const double rms =
+        rms_against_truth(cloud, fpp::read_tiff_float(path("gray-only") / "truth_xyz.tiff"));
+    std::printf("[ figures  ] code-only reconstruction: %zu points, %.4f mm RMS against the "
+                "truth\n",
+                cloud.size(), rms);
+    EXPECT_LT(rms, 0.6);
+    EXPECT_GT(rms, 0.1); // a step's quantisation, not a phase's precision
+}
+
+// Micro phase shifting (no code, no other phase block) reconstructs to its
+// phase's precision.
+TEST_F(CliReconstruct, MicroPhaseCaptureReconstructs) {
+    TempDir out;
+    const fs::path ply = out / "cloud.ply";
+    const auto run = run_calib("reconstruct " + q(path("micro")) + " --calib " +
+                                   q(path("calib.yaml")) + " --out " + q(ply),
+                               out.path());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    const fpp::PlyPoints cloud = fpp::read_ply(ply);
+    EXPECT_GT(cloud.size(), 400u * 300u * 97 / 100);
+    const double rms =
+        rms_against_truth(cloud, fpp::read_tiff_float(path("micro") / "truth_xyz.tiff"));
+    std::printf("[ figures  ] micro phase reconstruction: %zu points, %.4f mm RMS against the "
+                "truth\n",
+                cloud.size(), rms);
+    EXPECT_LT(rms, 0.05);
 }
 
 // Runs a reconstruction expected to fail with exit code 2 and a message
