@@ -31,16 +31,20 @@ set(CMAKE_IGNORE_PATH
 # build machine's, libraries and packages are told apart by the folder above.
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 
-# pkg-config reads only the arm64 .pc files and the architecture-independent
-# ones (never /usr/lib/x86_64-linux-gnu/pkgconfig nor a user's PKG_CONFIG_PATH).
-# Set here, the toolchain file being read again whenever CMake re-runs.
-set(ENV{PKG_CONFIG_LIBDIR} "/usr/lib/${FPP_CROSS_TRIPLET}/pkgconfig:/usr/share/pkgconfig")
+# yaml-cpp and libarchive: their arm64 -dev packages cannot sit beside the
+# amd64 ones (libyaml-cpp-dev is not multiarch; Debian 13's libarchive-dev
+# depends on libext2fs-dev, which is not), so install-deps.sh unpacks them
+# here instead, their .pc files pointing here.
+set(FPP_CROSS_EXTRA_PREFIX /opt/fpp-cross/${FPP_CROSS_TRIPLET}/usr)
+
+# pkg-config reads only the arm64 .pc files (those unpacked above first) and
+# the architecture-independent ones (never /usr/lib/x86_64-linux-gnu/pkgconfig
+# nor a user's PKG_CONFIG_PATH). Set here, the toolchain file being read
+# again whenever CMake re-runs.
+set(ENV{PKG_CONFIG_LIBDIR} "${FPP_CROSS_EXTRA_PREFIX}/lib/${FPP_CROSS_TRIPLET}/pkgconfig:/usr/lib/${FPP_CROSS_TRIPLET}/pkgconfig:/usr/share/pkgconfig")
 set(ENV{PKG_CONFIG_PATH} "")
 set(ENV{PKG_CONFIG_SYSTEM_LIBRARY_PATH} "/usr/lib/${FPP_CROSS_TRIPLET}:/lib/${FPP_CROSS_TRIPLET}")
 
-# yaml-cpp: libyaml-cpp-dev is not multiarch (its arm64 package would remove
-# the amd64 one), so install-deps.sh unpacks the arm64 package here instead.
-set(FPP_CROSS_EXTRA_PREFIX /opt/fpp-cross/${FPP_CROSS_TRIPLET}/usr)
 set(yaml-cpp_DIR ${FPP_CROSS_EXTRA_PREFIX}/lib/${FPP_CROSS_TRIPLET}/cmake/yaml-cpp
   CACHE PATH "yaml-cpp's arm64 CMake package (toolchain/install-deps.sh)")
 if(NOT EXISTS ${yaml-cpp_DIR}/yaml-cpp-config.cmake)

@@ -51,12 +51,12 @@ done
 # otherwise: there the check is left out, tests/CMakeLists.txt).
 codename="$(. /etc/os-release 2> /dev/null && echo "${VERSION_CODENAME:-}")"
 case "$codename" in
-  bookworm) yaml_cpp_library=libyaml-cpp0.7 format_packages=(clang-format-14) ;;
-  trixie) yaml_cpp_library=libyaml-cpp0.8 format_packages=() ;;
+  bookworm) yaml_cpp_library=libyaml-cpp0.7 format_packages=(clang-format-14) archive_library=libarchive13 ;;
+  trixie) yaml_cpp_library=libyaml-cpp0.8 format_packages=() archive_library=libarchive13t64 ;;
   *)
     echo "install-deps: Debian 12 (bookworm) and 13 (trixie) are known, not" \
          "'${codename:-?}': trying Debian 12's package names" >&2
-    yaml_cpp_library=libyaml-cpp0.7 format_packages=(clang-format-14) ;;
+    yaml_cpp_library=libyaml-cpp0.7 format_packages=(clang-format-14) archive_library=libarchive13 ;;
 esac
 
 main_packages=(
@@ -113,26 +113,38 @@ cross_packages=(
   libpng-dev:arm64 libtiff-dev:arm64 "$yaml_cpp_library:arm64"
   # device drivers (as above)
   libaravis-dev:arm64 libusb-1.0-0-dev:arm64 libdrm-dev:arm64 libgpiod-dev:arm64
-  # HTTP API (nlohmann-json is headers only, the same for every architecture)
-  libmicrohttpd-dev:arm64 libarchive-dev:arm64
+  # HTTP API (nlohmann-json is headers only, the same for every architecture);
+  # libarchive: the library only, see below
+  libmicrohttpd-dev:arm64 "$archive_library:arm64"
   # tests (static libraries and CMake package files)
   libgtest-dev:arm64
 )
-# libyaml-cpp-dev is not multiarch: installing its arm64 package REMOVES the
-# amd64 one that the native build needs. Its arm64 files (CMake package, .pc,
-# libyaml-cpp.a, and the headers, identical on both architectures) are
-# unpacked instead into this folder, which the toolchain file reads.
+# Two -dev packages cannot be installed for arm64 beside their amd64 twins,
+# which the native build needs: libyaml-cpp-dev is not multiarch, and Debian
+# 13's libarchive-dev depends on libext2fs-dev, which is not (apt REMOVES
+# the amd64 package to install the arm64 one). Their arm64 files (headers,
+# .pc, CMake package, static library) are unpacked instead into this
+# folder, which the toolchain file reads; the arm64 libraries themselves
+# are installed as packages (above).
 cross_extra_prefix=/opt/fpp-cross/aarch64-linux-gnu
 
 as_root() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
 }
 
-# Prints, one a line, the given packages that are not installed.
+# Prints, one a line, the given packages that are not installed. A name
+# without an architecture means this machine's (or "all"): a multiarch
+# package installed for arm64 alone (the cross build's) does not count.
 not_installed() {
-  local p
+  local p status native
+  native="$(dpkg --print-architecture)"
   for p in "$@"; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || echo "$p"
+    status="$(dpkg-query -W -f='${Status} ${Architecture}\n' "$p" 2>/dev/null || true)"
+    if [[ "$p" == *:* ]]; then
+      [[ "$status" == *"install ok installed"* ]] || echo "$p"
+    else
+      grep -Eq "^install ok installed ($native|all)\$" <<< "$status" || echo "$p"
+    fi
   done
 }
 
@@ -170,37 +182,42 @@ add_cross_architecture() {
   fi
 }
 
+# unpack_cross_dev DEV LIBRARY SONAME: DEV's arm64 package unpacked into
+# cross_extra_prefix (see there), the version of the installed arm64
+# LIBRARY package; redone when that changes. Its library links point at the
+# system's arm64 SONAME, and its .pc file at the folder it is unpacked in.
+unpack_cross_dev() {
+  local dev=$1 library=$2 soname=$3 version stamp download libdir shared
+  version="$(dpkg-query -W -f='${Version}' "$library:$cross_arch")"
+  stamp="$cross_extra_prefix/$dev.version"
+  if [ "$(cat "$stamp" 2>/dev/null)" = "$version" ]; then
+    echo "install-deps: $dev:$cross_arch $version unpacked in $cross_extra_prefix"
+    return
+  fi
+  echo "install-deps: unpacking $dev:$cross_arch $version into $cross_extra_prefix"
+  [ "$updated" -eq 1 ] || { as_root apt-get update -q; updated=1; }
+  download="$(mktemp -d)"
+  chmod 755 "$download"
+  # apt downloads as its own user _apt when run as root
+  if [ "$(id -u)" -eq 0 ] && id -u _apt > /dev/null 2>&1; then chown _apt "$download"; fi
+  (cd "$download" && apt-get download -q "$dev:$cross_arch=$version")
+  as_root mkdir -p "$cross_extra_prefix"
+  as_root dpkg-deb -x "$download/${dev}_"*"_$cross_arch.deb" "$cross_extra_prefix"
+  rm -rf "$download"
+  libdir="$cross_extra_prefix/usr/lib/aarch64-linux-gnu"
+  shared="$(readlink -f "/usr/lib/aarch64-linux-gnu/$soname")"
+  as_root ln -sf "$shared" "$libdir/$(basename "$shared")"
+  [ "$(basename "$shared")" = "$soname" ] || as_root ln -sf "$(basename "$shared")" "$libdir/$soname"
+  as_root find "$libdir/pkgconfig" -name '*.pc' -exec sed -i "s|^prefix=/usr\$|prefix=$cross_extra_prefix/usr|" {} +
+  echo "$version" | as_root tee "$stamp" > /dev/null
+}
+
 install_cross() {
   add_cross_architecture
   ensure_installed "$cross_arch cross-build packages" "${cross_packages[@]}"
 
-  # libyaml-cpp-dev:arm64 unpacked beside the system (see cross_extra_prefix),
-  # the same version as the installed arm64 library; redone when that changes.
-  yaml_version="$(dpkg-query -W -f='${Version}' "$yaml_cpp_library:arm64")"
-  stamp="$cross_extra_prefix/libyaml-cpp-dev.version"
-  if [ "$(cat "$stamp" 2>/dev/null)" = "$yaml_version" ]; then
-    echo "install-deps: libyaml-cpp-dev:$cross_arch $yaml_version unpacked in $cross_extra_prefix"
-  else
-    echo "install-deps: unpacking libyaml-cpp-dev:$cross_arch $yaml_version into $cross_extra_prefix"
-    [ "$updated" -eq 1 ] || { as_root apt-get update -q; updated=1; }
-    download="$(mktemp -d)"
-    trap 'rm -rf "$download"' EXIT
-    chmod 755 "$download"
-    # apt downloads as its own user _apt when run as root
-    if [ "$(id -u)" -eq 0 ] && id -u _apt > /dev/null 2>&1; then chown _apt "$download"; fi
-    (cd "$download" && apt-get download -q "libyaml-cpp-dev:$cross_arch=$yaml_version")
-    as_root rm -rf "$cross_extra_prefix"
-    as_root mkdir -p "$cross_extra_prefix"
-    as_root dpkg-deb -x "$download"/libyaml-cpp-dev_*_"$cross_arch".deb "$cross_extra_prefix"
-    # The package's CMake file points at the shared library beside it, which
-    # the installed yaml-cpp library (arm64) provides in the system folder.
-    libdir="$cross_extra_prefix/usr/lib/aarch64-linux-gnu"
-    soname="libyaml-cpp.so.${yaml_cpp_library#libyaml-cpp}" # libyaml-cpp.so.0.7 or .0.8
-    shared="$(readlink -f "/usr/lib/aarch64-linux-gnu/$soname")"
-    as_root ln -sf "$shared" "$libdir/$(basename "$shared")"
-    as_root ln -sf "$(basename "$shared")" "$libdir/$soname"
-    echo "$yaml_version" | as_root tee "$stamp" > /dev/null
-  fi
+  unpack_cross_dev libyaml-cpp-dev "$yaml_cpp_library" "libyaml-cpp.so.${yaml_cpp_library#libyaml-cpp}"
+  unpack_cross_dev libarchive-dev "$archive_library" libarchive.so.13
   ensure_qemu_binfmt
 }
 

@@ -239,17 +239,33 @@ TEST(CameraPair, OpenCvStereoSampleFilesAndMerged) {
     }
 }
 
+// SLMaster's binocular caliInfo.yml as the tool writes it
+// (src/calibration/caliPacker.cpp, calibration type 1: OpenCV FileStorage,
+// these keys in this order): M1 D1 S, then M2 D2, stereoRectify's R1 P1 R2
+// P2 Q, stereoCalibrate's R and T as Rlr and Tlr, E, F and the epipolar
+// lines, empty unless exported.
+void write_slmaster_binocular(const fs::path& file, const Truth& t) {
+    const cv::Size size(1280, 1024);
+    cv::Mat R1, R2, P1, P2, Q;
+    cv::stereoRectify(t.K1, t.D1, t.K2, t.D2, size, t.R, t.T, R1, R2, P1, P2, Q);
+    const cv::Mat tx =
+        (cv::Mat_<double>(3, 3) << 0, -t.T.at<double>(2), t.T.at<double>(1), t.T.at<double>(2), 0,
+         -t.T.at<double>(0), -t.T.at<double>(1), t.T.at<double>(0), 0);
+    const cv::Mat E = tx * t.R;
+    const cv::Mat F = t.K2.inv().t() * E * t.K1.inv();
+    cv::FileStorage f(file.string(), cv::FileStorage::WRITE);
+    f << "M1" << t.K1 << "D1" << t.D1 << "S" << (cv::Mat_<double>(2, 1) << 1280, 1024);
+    f << "M2" << t.K2 << "D2" << t.D2 << "R1" << R1 << "P1" << P1 << "R2" << R2 << "P2" << P2 << "Q"
+      << Q << "Rlr" << t.R << "Tlr" << t.T << "E" << E << "F" << F;
+    f << "epilines31" << cv::Mat() << "epilines32" << cv::Mat() << "epilines12" << cv::Mat();
+}
+
 // load_calibration meets camera-camera files: it says what they are and
 // what they allow instead of "M4: missing".
 TEST(CameraPair, LoadCalibrationRecognisesCameraCameraFiles) {
     TempDir dir;
     const Truth t;
-    // SLMaster's binocular caliInfo.yml: M1 D1 M2 D2 R T and the size S, no M4.
-    {
-        cv::FileStorage f((dir / "caliInfo.yml").string(), cv::FileStorage::WRITE);
-        f << "M1" << t.K1 << "D1" << t.D1 << "M2" << t.K2 << "D2" << t.D2 << "S"
-          << (cv::Mat_<double>(2, 1) << 1280, 1024) << "R" << t.R << "T" << t.T;
-    }
+    write_slmaster_binocular(dir / "caliInfo.yml", t);
     std::ofstream(dir / "bouguet.txt") << bouguet_text(t);
     std::ofstream(dir / "matlab.txt") << matlab_text(t);
     for (const char* name : {"caliInfo.yml", "bouguet.txt", "matlab.txt"}) {
@@ -280,6 +296,28 @@ TEST(CameraPair, LoadCalibrationRecognisesCameraCameraFiles) {
         dir / "caliInfo.yml", fpp::calib::CalibrationFormat::opencv_stereo);
     expect_lens(as_projector.projector, t.K2, t.D2, 1e-9);
     EXPECT_FALSE(as_projector.sizes_known());
+}
+
+// The same file as a --pair-calibration: the pair's motion from Rlr and Tlr
+// (it used to be refused with "R: missing").
+TEST(CameraPair, SlMasterBinocularFileAsTheToolWritesIt) {
+    TempDir dir;
+    const Truth t;
+    write_slmaster_binocular(dir / "caliInfo.yml", t);
+    const CameraPairCalibration c = fpp::calib::load_camera_pair(dir / "caliInfo.yml");
+    expect_geometry(c, t);
+    EXPECT_EQ(c.first_size, (fpp::Size{1280, 1024}));
+    // Without its motion it names the key it looked for.
+    {
+        cv::FileStorage f((dir / "no-motion.yml").string(), cv::FileStorage::WRITE);
+        f << "M1" << t.K1 << "D1" << t.D1 << "M2" << t.K2 << "D2" << t.D2 << "Rlr" << t.R;
+    }
+    try {
+        fpp::calib::load_camera_pair(dir / "no-motion.yml");
+        FAIL() << "read a pair without Tlr";
+    } catch (const fpp::InputError& e) {
+        EXPECT_EQ(e.field(), "Tlr") << e.what();
+    }
 }
 
 TEST(CameraPair, RealSlMasterMonocularFileIsStillCameraProjector) {

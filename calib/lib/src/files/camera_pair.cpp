@@ -94,9 +94,18 @@ void read_opencv_intrinsics(const Reader& in, CameraPairCalibration& c) {
     c.first_size = c.second_size = optional_size(in);
 }
 
+// OpenCV's stereoCalibrate names the pair's motion R and T; SLMaster's
+// binocular caliInfo.yml holds the same output of it as Rlr and Tlr (left
+// camera to right, X_2 = R X_1 + T), beside its rectification (R1 P1 R2 P2
+// Q), E, F and epipolar lines, which are not needed here.
+bool has_slmaster_motion(const Reader& in) {
+    return !in.has("R") && in.has("Rlr");
+}
+
 void read_opencv_extrinsics(const Reader& in, CameraPairCalibration& c) {
-    c.R = in.rotation("R");
-    c.T = in.vector3("T");
+    const bool slmaster = has_slmaster_motion(in);
+    c.R = in.rotation(slmaster ? "Rlr" : "R");
+    c.T = in.vector3(slmaster ? "Tlr" : "T");
     if (in.has("rms"))
         c.rms = in.number("rms");
 }
@@ -274,8 +283,10 @@ bool looks_like_camera_pair(const std::string& text) {
         try {
             const cv::FileStorage storage = detail::open_file_storage(text, "");
             const cv::FileNode root = storage.root();
-            return root.isMap() && !root["M1"].empty() && !root["M2"].empty() &&
-                   !root["R"].empty() && !root["T"].empty() && root["M4"].empty();
+            const bool motion = (!root["R"].empty() && !root["T"].empty()) ||
+                                (!root["Rlr"].empty() && !root["Tlr"].empty());
+            return root.isMap() && !root["M1"].empty() && !root["M2"].empty() && motion &&
+                   root["M4"].empty();
         } catch (const cv::Exception&) {
             return false;
         } catch (const InputError&) {
