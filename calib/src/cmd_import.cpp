@@ -79,6 +79,12 @@ Action add_import_command(CLI::App& app) {
     cmd->add_option("--nstep-phases", args->options.slstudio_nstep_phases,
                     "slstudio nstep: fringes across the projector (nPhases)")
         ->capture_default_str();
+    cmd->add_option("--modulated-phases", args->options.slstudio_modulated_phases_x,
+                    "slstudio modulated: fringes across the projector's width (nPhaseX)")
+        ->capture_default_str();
+    cmd->add_option("--modulated-carrier-phases", args->options.slstudio_modulated_phases_y,
+                    "slstudio modulated: carrier periods across its height (nPhaseY)")
+        ->capture_default_str();
     cmd->add_option("--gray-bits-x", args->options.slstudio_gray_bits_x,
                     "slstudio graycode: column planes (Nhorz)")
         ->capture_default_str();

@@ -142,7 +142,10 @@ Frames slstudio_graycode(int w, int h) { // white, black, 10 planes of the colum
     return f;
 }
 
-Frames slstudio_modulated(int w, int h) { // 3 x 3 products, then the cue
+// CodecPhaseShiftModulated.cpp: nPhaseX = 24 fringes across the width (the
+// preset once assumed 8, which decoded to nonsense with exit 0), nPhaseY =
+// 16 carrier periods across the height.
+Frames slstudio_modulated(int w, int h, double fringes) { // 3 x 3 products, then the cue
     Frames f;
     for (int sx = 0; sx < 3; ++sx)
         for (int sy = 0; sy < 3; ++sy) {
@@ -150,7 +153,7 @@ Frames slstudio_modulated(int w, int h) { // 3 x 3 products, then the cue
             for (int r = 0; r < h; ++r)
                 for (int c = 0; c < w; ++c) {
                     const double lx =
-                        0.5 + 0.5 * std::cos(2 * kPi * c / (w / 8.0) - 2 * kPi / 3 * sx);
+                        0.5 + 0.5 * std::cos(2 * kPi * c / (w / fringes) - 2 * kPi / 3 * sx);
                     const double my =
                         0.5 + 0.5 * std::cos(2 * kPi * r / (h / 16.0) - 2 * kPi / 3 * sy);
                     m.at<std::uint8_t>(r, c) = cv::saturate_cast<std::uint8_t>(255 * lx * my);
@@ -262,7 +265,11 @@ std::vector<RenderedCase> rendered_cases() {
         {"slstudio_graycode", "slstudio --codec graycode", "frameSeq_%02d.bmp", 1024, 32,
          slstudio_graycode, 0, 0.5, false},
         {"slstudio_modulated", "slstudio --codec modulated", "frameSeq_%02d.bmp", 320, 96,
-         slstudio_modulated, 1, 0.5, false},
+         [](int w, int h) { return slstudio_modulated(w, h, 24); }, 1, 0.5, false},
+        // A build with other constants: its frames and the override agree.
+        {"slstudio_modulated_8", "slstudio --codec modulated --modulated-phases 8",
+         "frameSeq_%02d.bmp", 320, 96, [](int w, int h) { return slstudio_modulated(w, h, 8); }, 1,
+         0.5, false},
         // 75 px fringes: one 8-bit level (1/127.5 rad) is 0.09 px.
         {"slstudio_micro", "slstudio --codec micro", "frameSeq_%02d.bmp", 320, 96, slstudio_micro,
          1, 0.2, false},

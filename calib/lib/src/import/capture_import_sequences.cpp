@@ -117,14 +117,19 @@ Sequence slstudio_sequence(const ImportOptions& o, const fs::path& origin) {
         s.push_back(b);
     } else if (c == "modulated") {
         // 3 x 3 frames, fringe shift outer, carrier shift inner; fringe
-        // period width / 8, carrier period height / 16 along y; then a 3-step
-        // one-period cue. SLStudio shifts its carrier by -2 pi k / 3, ours by
-        // +2 pi k / 3: import_capture lists carrier frames 1 and 2 of each
-        // triple swapped (import_frame_order), which makes them exact.
+        // period width / nPhaseX (24), carrier period height / nPhaseY (16)
+        // along y; then a 3-step one-period cue. SLStudio shifts its carrier
+        // by -2 pi k / 3, ours by +2 pi k / 3: import_capture lists carrier
+        // frames 1 and 2 of each triple swapped (import_frame_order), which
+        // makes them exact.
         axes_of(o, origin, false);
-        PhaseBlock b = slstudio_phase(Axis::x, o.projector.width / 8.0, 3);
+        const int fringes =
+            positive_option(o.slstudio_modulated_phases_x, "modulated-phases", origin);
+        const int carriers =
+            positive_option(o.slstudio_modulated_phases_y, "modulated-carrier-phases", origin);
+        PhaseBlock b = slstudio_phase(Axis::x, o.projector.width / double(fringes), 3);
         b.shifting = PhaseShifting::modulated;
-        b.carrier_period = o.projector.height / 16.0;
+        b.carrier_period = o.projector.height / double(carriers);
         b.carrier_steps = 3;
         s.push_back(b);
         s.push_back(slstudio_phase(Axis::x, o.projector.width, 3));

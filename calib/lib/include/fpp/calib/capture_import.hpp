@@ -27,11 +27,13 @@ struct ImportOptions {
     std::string direction = "x"; // x (columns coded: SLStudio "horizontal", SLMaster
                                  // horizontal = false), y, or both (x then y)
     // SLStudio's compiled-in constants (change them if your build differs).
-    int slstudio_2x3_phases = 16;  // CodecPhaseShift2x3 nPhases
-    int slstudio_nstep_steps = 9;  // CodecPhaseShiftNStep nSteps
-    int slstudio_nstep_phases = 8; // CodecPhaseShiftNStep nPhases
-    int slstudio_gray_bits_x = 10; // CodecGrayCode Nhorz
-    int slstudio_gray_bits_y = 6;  // CodecGrayCode Nvert
+    int slstudio_2x3_phases = 16;         // CodecPhaseShift2x3 nPhases
+    int slstudio_nstep_steps = 9;         // CodecPhaseShiftNStep nSteps
+    int slstudio_nstep_phases = 8;        // CodecPhaseShiftNStep nPhases
+    int slstudio_modulated_phases_x = 24; // CodecPhaseShiftModulated nPhaseX (fringes)
+    int slstudio_modulated_phases_y = 16; // CodecPhaseShiftModulated nPhaseY (carrier)
+    int slstudio_gray_bits_x = 10;        // CodecGrayCode Nhorz
+    int slstudio_gray_bits_y = 6;         // CodecGrayCode Nvert
     // SLMaster's Params.
     int steps = 4;     // shiftTime (SLMaster's default 4)
     int fringes = 0;   // nbrOfPeriods across the coded axis (a power of 2)
