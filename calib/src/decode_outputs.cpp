@@ -115,6 +115,10 @@ std::string decode_statistics_text(const DecodeStatistics& s) {
     };
     std::ostringstream md;
     md << "## Pixels\n\n";
+    md << "A pixel is lit when its fringe modulation (the swing the patterns make in it, "
+          "DN) is above the lit floor: it sees the projector. Dark pixels (shadow, "
+          "background, a surface too dim for the exposure) are not counted against the "
+          "coverage; decoded pixels are always lit.\n\n";
     md << "- lit: " << s.lit << " of " << s.pixels << " (" << share(s.lit, s.pixels) << "); "
        << s.floor_rule() << "\n";
     md << "- decoded: " << s.decoded << " of " << s.lit << " lit pixels (coverage of lit "

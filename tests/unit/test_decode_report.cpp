@@ -287,6 +287,24 @@ TEST(DecodeDiagnosis, TwelveBitFramesInSixteenBitsWithoutBitDepth) {
         << o.diagnosis.message;
 }
 
+// A 16-bit capture that is simply too dark (5 of its 16 bits in use, the
+// modulation about the noise): scaled to full depth it decodes no better,
+// so the advice is to expose longer, not to declare a lower bit_depth.
+TEST(DecodeDiagnosis, SixteenBitFramesTooDarkForTheirNoiseAreNotABitDepthMistake) {
+    const Sequence declared = fpp::standard_sequence("heterodyne-x", kProjector);
+    Model dark;
+    dark.bit_depth = 16;
+    dark.gain = 3.0;
+    dark.noise = 2.0;
+    const Outcome o = decode_and_diagnose(capture_of(declared, camera_frames(declared, dark)));
+    std::printf("too dark: %s\n", o.diagnosis.message.c_str());
+    EXPECT_TRUE(o.diagnosis.failed);
+    EXPECT_LE(o.diagnosis.bits_in_use, 6);
+    EXPECT_EQ(o.diagnosis.message.find("Declare `bit_depth"), std::string::npos)
+        << o.diagnosis.message;
+    EXPECT_NE(o.diagnosis.message.find("underexposed"), std::string::npos) << o.diagnosis.message;
+}
+
 TEST(DecodeDiagnosis, NothingLitSaysSo) {
     const Sequence declared = fpp::standard_sequence("heterodyne-x", kProjector);
     auto frames = camera_frames(declared, {});

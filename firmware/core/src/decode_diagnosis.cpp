@@ -297,11 +297,16 @@ DecodeDiagnosis diagnose_decode(const CaptureSet& capture, const DecodeResult& r
         m += "The frames use " + std::to_string(d.bits_in_use) + " of their " +
              std::to_string(d.bits_declared) + " bits (largest sample at most " +
              std::to_string(largest) + " of " + std::to_string(full_scale) + "): ";
-        if (capture.frames.front().bit_depth == 16)
+        // Declaring the depth helps only where the samples, scaled to it,
+        // decode: a set too dark for its noise stays too dark at any depth.
+        if (capture.frames.front().bit_depth == 16 && bits_fix)
             m += "a " + std::to_string(std::max(d.bits_in_use, 9)) +
                  "-bit camera stored in 16 bits? Declare `bit_depth: " +
                  std::to_string(std::max(d.bits_in_use, 9)) +
                  "` in capture.yaml (or the camera's own depth, if higher)";
+        else if (capture.frames.front().bit_depth == 16)
+            m += "the frames are underexposed (scaled to full depth they decode no better, so "
+                 "declaring a lower bit_depth would not help: expose longer or open the lens)";
         else
             m += "the frames are underexposed";
         if (bits_fix)

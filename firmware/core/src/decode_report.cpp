@@ -92,8 +92,8 @@ std::string DecodeStatistics::floor_rule() const {
                       lit_floor, dark_sigma);
     else
         std::snprintf(text, sizeof text,
-                      "lit floor %.3g DN (no dark pixels to measure the noise: 1 %% of full "
-                      "scale %.0f DN)",
+                      "lit floor %.3g DN (1 %% of full scale %.0f DN: the modulation of the "
+                      "pixels below it shows no noise peak to set the floor from)",
                       lit_floor, full_scale);
     return text;
 }
