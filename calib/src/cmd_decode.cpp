@@ -2,8 +2,10 @@
 //
 // Exit status: 0 decoded; 2 bad input (named file and field); 3 the decode
 // failed (nearly nothing decoded, or the capture's description is evidently
-// wrong: fpp/decode_diagnosis.hpp); the outputs and decode.md are written
-// all the same, so the user can look; 1 other errors.
+// wrong: fpp/decode_diagnosis.hpp); 5 the decoded field is inconsistent with
+// itself (a wrong description that still decodes: fpp/decode_consistency.hpp;
+// --accept-inconsistent makes it a warning); the outputs and decode.md are
+// written all the same, so the user can look; 1 other errors.
 
 #include "cli_util.hpp"
 #include "commands.hpp"
@@ -11,6 +13,7 @@
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"
+#include "fpp/decode_consistency.hpp"
 #include "fpp/decode_diagnosis.hpp"
 #include "fpp/decode_report.hpp"
 #include "fpp/decoder.hpp"
@@ -27,6 +30,7 @@ struct DecodeArgs {
     std::string capture;
     std::string out;
     DecodeOptions options;
+    bool accept_inconsistent = false;
 };
 
 int run_decode(const DecodeArgs& args) {
@@ -42,7 +46,10 @@ int run_decode(const DecodeArgs& args) {
     const DecodeDiagnosis diagnosis = diagnose_decode(capture, result, stats, args.options);
     const std::filesystem::path out = args.out;
     write_decode_images(out, result, capture.manifest);
-    const std::string summary = decode_summary(result, capture, stats, diagnosis, seconds);
+    const DecodeConsistency consistency =
+        check_decode_consistency(result, capture.manifest.sequence);
+    const std::string summary =
+        decode_summary(result, capture, stats, diagnosis, seconds) + consistency_text(consistency);
     write_file_atomically(out / "decode.md", summary);
     std::cout << summary << "\noutputs in " << out.string() << "\n";
     if (diagnosis.failed) {
@@ -52,6 +59,16 @@ int run_decode(const DecodeArgs& args) {
     }
     if (!diagnosis.message.empty())
         std::cerr << "fpp-calib: warning: " << diagnosis.message << "\n";
+    if (consistency.inconsistent) {
+        std::cerr << "fpp-calib: " << (args.accept_inconsistent ? "warning: " : "error: ")
+                  << capture.folder.string()
+                  << ": the decode is inconsistent: " << consistency.message << "\n";
+        if (!args.accept_inconsistent) {
+            std::cerr << "(the outputs and decode.md are written for inspection; "
+                         "--accept-inconsistent to take them as they are)\n";
+            return kExitInconsistent;
+        }
+    }
     return 0;
 }
 } // namespace
@@ -62,9 +79,11 @@ Action add_decode_command(CLI::App& app) {
         "Decode a capture set (ours, simulated or third-party) into projector "
         "coordinate maps: proj_x.tiff, proj_y.tiff, modulation.tiff, mask.png, "
         "flags.png, false-colour PNGs and decode.md (coverage of the lit pixels, "
-        "counts per reason a pixel was dropped). Exits 3, after writing them, when "
-        "nearly nothing decoded or the capture's description is evidently wrong, "
-        "with the likely cause",
+        "counts per reason a pixel was dropped, the field's consistency). Exits 3, after "
+        "writing them, when nearly nothing decoded or the capture's description is evidently "
+        "wrong, with the likely cause; 5 when nearly everything decoded but the field is "
+        "inconsistent with itself (a reversed shift, a phase or code offset off), naming the "
+        "field to check",
         run_decode);
     cmd->add_option("capture", args->capture, "capture set folder (holding capture.yaml)")
         ->required()
@@ -72,6 +91,8 @@ Action add_decode_command(CLI::App& app) {
     cmd->add_option("--out", args->out, "output folder (created if needed)")->required();
     add_min_modulation_option(*cmd, args->options.min_modulation);
     add_threads_option(*cmd, args->options.threads);
+    cmd->add_flag("--accept-inconsistent", args->accept_inconsistent,
+                  "exit 0 (with a warning) when the decoded field is inconsistent with itself");
     cmd->add_flag("--correct-phase-error", args->options.correct_phase_error,
                   "remove, from the capture alone, the periodic phase error a non-linear "
                   "projector response leaves (for captures whose response was never measured; "

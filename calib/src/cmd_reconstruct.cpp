@@ -61,6 +61,7 @@ struct ReconstructArgs {
     DecodeOptions decode;
     CoordinateFilterOptions smooth;               // radius set to 0 (off) unless --smooth
     std::string second_capture, pair_calibration; // two cameras: cmd_reconstruct_pair.cpp
+    bool accept_inconsistent = false;
 };
 
 // The key a calibration format stores a size under, for error messages.
@@ -375,7 +376,8 @@ int run_reconstruct(const ReconstructArgs& args) {
     const ReconstructModel model = load_reconstruct_model(args, request, capture);
     check_capture_axes(capture, request.requested);
 
-    const std::optional<DecodedScan> scan = decode_and_smooth(capture, args.decode, request.smooth);
+    const std::optional<DecodedScan> scan =
+        decode_and_smooth(capture, args.decode, request.smooth, args.accept_inconsistent);
     if (!scan)
         return kExitDecodeFailed;
     const ModelledCloud made = apply_model(model, request.use_table, scan->decoded,
@@ -445,6 +447,10 @@ Action add_reconstruct_command(CLI::App& app) {
         ->check(CLI::Range(0.0, 10000.0))
         ->capture_default_str();
     add_threads_option(*cmd, args->decode.threads);
+    cmd->add_flag("--accept-inconsistent", args->accept_inconsistent,
+                  "write the cloud (with a warning) even when the decoded field is "
+                  "inconsistent with itself, which otherwise exits 5 naming the capture's field "
+                  "to check");
     cmd->add_flag("--correct-phase-error", args->decode.correct_phase_error,
                   "remove, from the capture alone, the periodic phase error a non-linear "
                   "projector response leaves, before reconstructing (for captures whose "

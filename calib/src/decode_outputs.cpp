@@ -206,6 +206,34 @@ std::string decode_summary(const DecodeResult& result, const CaptureSet& capture
     return md.str();
 }
 
+std::string consistency_text(const DecodeConsistency& consistency) {
+    std::ostringstream md;
+    md << "\n## Consistency\n\n";
+    md << "Along each checked axis (a phase joined to a cue), on the pixels whose row (x) or "
+          "column (y) steps smoothly: the share stepping against the coordinate's own trend "
+          "(a reversed shift) and the jumps of half or a whole period between smooth sides, "
+          "per period travelled (a wrong phase or code offset); a correct description leaves "
+          "about none of either (fpp/decode_consistency.hpp).\n\n";
+    md << "| axis | smooth pixels | against the trend | jumps per period |\n|---|---|---|---|\n";
+    bool any = false;
+    for (int axis = 0; axis < 2; ++axis) {
+        const AxisConsistency& a = consistency.axis[axis];
+        if (!a.checked)
+            continue;
+        any = true;
+        md << "| " << (axis == 0 ? "x" : "y") << " | " << a.smooth << " | "
+           << fixed(100.0 * a.against_fraction(), 3) << " % | " << fixed(a.jumps_per_period(), 3)
+           << " |\n";
+    }
+    if (!any)
+        md << "| - | (no axis joins a phase to a cue: nothing to check) | | |\n";
+    md << "\n"
+       << (consistency.inconsistent ? "Inconsistent: " + consistency.message
+                                    : std::string("Consistent."))
+       << "\n";
+    return md.str();
+}
+
 std::string decode_summary(const DecodeResult& result, const CaptureSet& capture,
                            double decode_seconds) {
     const DecodeStatistics stats = decode_statistics(result, frames_full_scale(capture));

@@ -8,15 +8,18 @@
 //   decode.md                 summary: lit pixels and the floor, coverage of the lit
 //                             pixels, counts per reason a pixel was dropped
 //                             (fpp/decode_report.hpp), the diagnosis of a suspect
-//                             decode (fpp/decode_diagnosis.hpp); with ground truth,
-//                             the error against it
+//                             decode (fpp/decode_diagnosis.hpp), the consistency
+//                             check (fpp/decode_consistency.hpp); with ground
+//                             truth, the error against it
 
 #include "fpp/capture_set.hpp"
+#include "fpp/decode_consistency.hpp"
 #include "fpp/decode_diagnosis.hpp"
 #include "fpp/decode_report.hpp"
 #include "fpp/decoder.hpp"
 
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
 namespace fpp::calib {
@@ -25,6 +28,26 @@ namespace fpp::calib {
 // (DecodeDiagnosis::failed): the capture was read, but nearly nothing decoded
 // or its description is evidently wrong. (2: bad input, 1: other errors.)
 inline constexpr int kExitDecodeFailed = 3;
+// Exit status when the decode is inconsistent with itself
+// (fpp/decode_consistency.hpp): nearly every pixel "decoded", but the field
+// shows a wrong description (the field to check is named). Overridden by
+// --accept-inconsistent.
+inline constexpr int kExitInconsistent = 5;
+
+// A decode refused by a check, with the exit status to end with and the
+// reason (main prints it).
+class DecodeRefused : public std::runtime_error {
+public:
+    DecodeRefused(int exit_code, const std::string& why)
+        : std::runtime_error(why), exit_code_(exit_code) {}
+    int exit_code() const { return exit_code_; }
+
+private:
+    int exit_code_;
+};
+
+// The consistency check's figures for decode.md ("## Consistency").
+std::string consistency_text(const DecodeConsistency& consistency);
 
 // DecodeOptions::validate(), its refusal as InputError("command line",
 // "--option", what was expected) naming the command's option.

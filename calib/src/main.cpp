@@ -9,6 +9,7 @@
 // API). Their use: README.md (and --help); file formats: firmware/core/formats/.
 
 #include "commands.hpp"
+#include "decode_outputs.hpp"
 
 #include "fpp/error.hpp"
 
@@ -74,6 +75,9 @@ int main(int argc, char** argv) {
     } catch (const fpp::InputError& e) {
         std::cerr << "fpp-calib: error: " << e.what() << "\n";
         return 2;
+    } catch (const fpp::calib::DecodeRefused& e) {
+        std::cerr << "fpp-calib: error: " << e.what() << "\n";
+        return e.exit_code();
     } catch (const std::exception& e) {
         std::cerr << "fpp-calib: error: " << e.what() << "\n";
         return 1;

@@ -1,7 +1,9 @@
 #include "table_reconstruction.hpp"
 
 #include "cli_util.hpp"
+#include "decode_outputs.hpp"
 
+#include "fpp/decode_consistency.hpp"
 #include "fpp/decode_diagnosis.hpp"
 #include "fpp/error.hpp"
 #include "fpp/parallel.hpp"
@@ -72,7 +74,8 @@ CoefficientTable load_table_for_capture(const std::filesystem::path& table_path,
 
 std::optional<DecodedScan> decode_and_smooth(const CaptureSet& capture,
                                              const DecodeOptions& decode_options,
-                                             const CoordinateFilterOptions& smooth) {
+                                             const CoordinateFilterOptions& smooth,
+                                             bool accept_inconsistent) {
     Stopwatch decode_watch;
     DecodeResult decoded = decode(capture, decode_options); // InputError naming the field
     const double decode_seconds = decode_watch.seconds();
@@ -87,6 +90,17 @@ std::optional<DecodedScan> decode_and_smooth(const CaptureSet& capture,
     }
     if (!diagnosis.message.empty())
         std::cerr << "fpp-calib: warning: " << diagnosis.message << "\n";
+    const DecodeConsistency consistency =
+        check_decode_consistency(decoded, capture.manifest.sequence);
+    if (consistency.inconsistent) {
+        const std::string why =
+            capture.folder.string() + ": the decode is inconsistent: " + consistency.message;
+        if (!accept_inconsistent)
+            throw DecodeRefused(kExitInconsistent,
+                                why + "\nno point cloud written (--accept-inconsistent to "
+                                      "write it all the same)");
+        std::cerr << "fpp-calib: warning: " << why << "\n";
+    }
     Stopwatch smooth_watch;
     Image<float> scratch;
     const CoordinateFilterReport smoothing = smooth_coordinates(decoded, smooth, scratch);

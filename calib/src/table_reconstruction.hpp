@@ -41,9 +41,13 @@ struct DecodedScan {
 };
 
 // Nothing when the decode failed (fpp/decode_diagnosis.hpp): the likely cause
-// is then said on stderr, naming the capture's folder.
+// is then said on stderr, naming the capture's folder. A decode inconsistent
+// with itself (fpp/decode_consistency.hpp) throws DecodeRefused
+// (kExitInconsistent, naming the field to check), unless `accept_inconsistent`
+// (then a warning).
 std::optional<DecodedScan> decode_and_smooth(const CaptureSet& capture, const DecodeOptions& decode,
-                                             const CoordinateFilterOptions& smooth);
+                                             const CoordinateFilterOptions& smooth,
+                                             bool accept_inconsistent = false);
 
 // The table applied to the decoded projector column (tiles over `threads`
 // workers, 0 = all cores); the cloud's quality and intensity are the

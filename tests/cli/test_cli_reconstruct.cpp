@@ -11,6 +11,7 @@
 #include "fpp/image_io.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/sim/rig.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include <gtest/gtest.h>
 
@@ -55,7 +56,7 @@ protected:
         dir_ = new TempDir;
         const fs::path rig_file = *dir_ / "rig.yaml";
         std::ofstream(rig_file) << fpp::sim::rig_to_yaml(small_rig());
-        for (const char* sequence : {"gray-xy", "gray-x"}) {
+        for (const char* sequence : {"gray-xy", "gray-x", "plain-gray-x"}) {
             const auto sim =
                 run_calib("simulate --rig " + q(rig_file) + " --scene plane --sequence " +
                               sequence + " --out " + q(*dir_ / sequence),
@@ -353,6 +354,43 @@ TEST_F(CliReconstruct, MisdescribedCaptureWritesNoCloud) {
     EXPECT_NE(run.output.find("shift_sign 1 in sequence[2]"), std::string::npos) << run.output;
     EXPECT_NE(run.output.find("no point cloud written"), std::string::npos) << run.output;
     EXPECT_FALSE(fs::exists(ply));
+}
+
+// A plain (not complementary) Gray code with the phase's shift reversed:
+// 95 % of the lit pixels still "decode", so the diagnosis is silent, but the
+// field steps against its own trend: decode and reconstruct exit 5 naming
+// shift_sign (decode writes its outputs for inspection, reconstruct no
+// cloud); --accept-inconsistent takes the field as it is.
+TEST_F(CliReconstruct, InconsistentDecodeExitsFiveNamingTheField) {
+    TempDir out;
+    const fs::path capture = misdescribed_copy(path("plain-gray-x"), out / "capture");
+    const fs::path ply = out / "cloud.ply";
+    const std::string reconstruct =
+        "reconstruct " + q(capture) + " --calib " + q(path("calib.yaml")) + " --out " + q(ply);
+    const auto run = run_calib(reconstruct, out.path());
+    EXPECT_EQ(run.exit_code, 5) << run.output;
+    EXPECT_NE(run.output.find("check shift_sign of sequence[2]"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("no point cloud written"), std::string::npos) << run.output;
+    EXPECT_FALSE(fs::exists(ply));
+
+    const auto decoded =
+        run_calib("decode " + q(capture) + " --out " + q(out / "decoded"), out.path());
+    EXPECT_EQ(decoded.exit_code, 5) << decoded.output;
+    EXPECT_TRUE(fs::exists(out / "decoded" / "proj_x.tiff"));
+    const std::string md = fpp::yaml_fields::read_text_file(out / "decoded" / "decode.md");
+    EXPECT_NE(md.find("## Consistency"), std::string::npos);
+    EXPECT_NE(md.find("Inconsistent: along x"), std::string::npos) << md;
+
+    const auto accepted = run_calib(reconstruct + " --accept-inconsistent", out.path());
+    EXPECT_EQ(accepted.exit_code, 0) << accepted.output;
+    EXPECT_NE(accepted.output.find("warning: "), std::string::npos) << accepted.output;
+    EXPECT_TRUE(fs::exists(ply));
+    // The same capture described right is consistent.
+    const auto right =
+        run_calib("decode " + q(path("plain-gray-x")) + " --out " + q(out / "right"), out.path());
+    EXPECT_EQ(right.exit_code, 0) << right.output;
+    EXPECT_NE(fpp::yaml_fields::read_text_file(out / "right" / "decode.md").find("Consistent."),
+              std::string::npos);
 }
 
 // Decoded pixels but no point (a calibration that puts every ray pair

@@ -1,6 +1,9 @@
 // Decoding the real captures in ../shared/datasets (SLMaster, SLStudio).
 
 #include "fpp/capture_set.hpp"
+#include "fpp/decode_consistency.hpp"
+#include "fpp/decode_diagnosis.hpp"
+#include "fpp/decode_report.hpp"
 #include "fpp/decoder.hpp"
 #include "test_support.hpp"
 
@@ -8,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -57,10 +61,23 @@ TEST(DecodeDatasets, EveryCaptureDecodes) {
         if (entry.path().filename() != "capture.yaml")
             continue;
         SCOPED_TRACE(entry.path().string());
+        const fpp::CaptureSet set = fpp::read_capture_set(entry.path().parent_path());
         fpp::DecodeResult r;
-        ASSERT_NO_THROW(r = decode_folder(entry.path().parent_path()));
+        ASSERT_NO_THROW(r = fpp::decode(set));
         EXPECT_FALSE(r.method_x.empty() && r.method_y.empty());
         EXPECT_GT(valid_fraction(r), 0.05);
+        // Correctly described real captures raise no consistency alarm
+        // (fpp/decode_consistency.hpp; its simulated wrong descriptions:
+        // DecodeConsistencySim.*).
+        const fpp::DecodeConsistency c = fpp::check_decode_consistency(r, set.manifest.sequence);
+        for (int axis = 0; axis < 2; ++axis)
+            if (c.axis[axis].checked)
+                std::printf("[ figures  ] %s %s: smooth %zu, against %.3f %%, jumps %.3f per "
+                            "period\n",
+                            entry.path().parent_path().filename().c_str(), axis ? "y" : "x",
+                            c.axis[axis].smooth, 100.0 * c.axis[axis].against_fraction(),
+                            c.axis[axis].jumps_per_period());
+        EXPECT_FALSE(c.inconsistent) << c.message;
         ++decoded;
     }
     EXPECT_GE(decoded, 9);
@@ -124,6 +141,51 @@ TEST(DecodeDatasets, SLMasterReliefIsSmoothAndComplete) {
 // cue, along x and then y. The 3-step one-period cue is noisy (about 10-20 px
 // RMS on the board), so a few per cent of the lit pixels fail the coarse/fine
 // consistency check and are masked.
+// The mistakes a user makes describing these captures, on the real frames:
+// the shift direction reversed, SLMaster's phase offset left at 0 instead
+// of -pi. Each is caught: by the decode's own diagnosis (coverage and its
+// trials) or by the consistency check (fpp/decode_consistency.hpp). On
+// SLStudio's two-period sets the shift of one block (the fine one) is
+// reversed: both reversed at once decode to a consistent field, the one a
+// mirrored projector gives, which no check of the capture alone can tell
+// (95 % decode, no alarm: measured, not asserted).
+TEST(DecodeDatasets, WrongDescriptionsOfRealCapturesAreCaught) {
+    FPP_REQUIRE_DATASET(fpp::test::dataset("slmaster/monocular"));
+    struct Case {
+        const char* folder;
+        const char* what;
+        void (*change)(fpp::PhaseBlock&);
+    };
+    const Case cases[] = {
+        {"slmaster/monocular", "shift_sign flipped",
+         [](fpp::PhaseBlock& p) { p.shift_sign *= -1; }},
+        {"slmaster/monocular", "phase_offset 0", [](fpp::PhaseBlock& p) { p.phase_offset = 0; }},
+        {"slstudio/skull_2x3", "fine shift_sign flipped",
+         [](fpp::PhaseBlock& p) { p.shift_sign *= p.period < 1000 ? -1 : 1; }},
+        {"slstudio/calibration/calseq1", "fine shift_sign flipped",
+         [](fpp::PhaseBlock& p) { p.shift_sign *= p.period < 1000 ? -1 : 1; }},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(std::string(c.folder) + ", " + c.what);
+        fpp::CaptureSet set = fpp::read_capture_set(fpp::test::dataset(c.folder));
+        for (auto& block : set.manifest.sequence)
+            if (auto* p = std::get_if<fpp::PhaseBlock>(&block))
+                c.change(*p);
+        const fpp::DecodeResult r = fpp::decode(set);
+        const fpp::DecodeStatistics stats = fpp::decode_statistics(r, fpp::frames_full_scale(set));
+        const bool diagnosed = fpp::diagnose_decode(set, r, stats, {}).failed;
+        const fpp::DecodeConsistency consistency =
+            fpp::check_decode_consistency(r, set.manifest.sequence);
+        std::printf("[ figures  ] %s, %s: coverage %.2f %%, diagnosis %s, against %.2f %%, jumps "
+                    "%.2f per period%s\n",
+                    c.folder, c.what, 100.0 * stats.coverage_of_lit(),
+                    diagnosed ? "failed" : "passed", 100.0 * consistency.axis[0].against_fraction(),
+                    consistency.axis[0].jumps_per_period(),
+                    consistency.inconsistent ? ": INCONSISTENT" : "");
+        EXPECT_TRUE(diagnosed || consistency.inconsistent);
+    }
+}
+
 TEST(DecodeDatasets, SLStudioCalibrationPosesDecodeInXAndY) {
     const auto calibration = fpp::test::dataset("slstudio/calibration");
     FPP_REQUIRE_DATASET(calibration);
