@@ -9,6 +9,7 @@
 #include "fpp/calib/camera_pair.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/error.hpp"
+#include "fpp/yaml_fields.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
@@ -230,6 +231,15 @@ TEST(CameraPair, OpenCvStereoSampleFilesAndMerged) {
     merged.release();
     const CameraPairCalibration c = fpp::calib::load_camera_pair(dir / "stereo.yml");
     expect_geometry(c, t);
+    // cv::stereoCalibrate's own argument names, with its E and F beside.
+    cv::FileStorage named((dir / "arguments.yml").string(), cv::FileStorage::WRITE);
+    named << "cameraMatrix1" << t.K1 << "distCoeffs1" << t.D1 << "cameraMatrix2" << t.K2
+          << "distCoeffs2" << t.D2 << "R" << t.R << "T" << t.T << "E" << cv::Mat::eye(3, 3, CV_64F)
+          << "F" << cv::Mat::eye(3, 3, CV_64F);
+    named.release();
+    expect_geometry(fpp::calib::load_camera_pair(dir / "arguments.yml"), t);
+    EXPECT_TRUE(fpp::calib::looks_like_camera_pair(
+        fpp::yaml_fields::read_text_file(dir / "arguments.yml")));
     // The intrinsics file alone is not a pair: named error.
     try {
         fpp::calib::load_camera_pair(dir / "intrinsics.yml");

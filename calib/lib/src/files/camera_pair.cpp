@@ -88,9 +88,17 @@ Size optional_size(const Reader& in) {
     return {0, 0};
 }
 
+// M1 D1 M2 D2 (OpenCV's stereo_calib sample, SLMaster), or the names of
+// cv::stereoCalibrate's own arguments, as a program saving its outputs
+// names them: cameraMatrix1 distCoeffs1 cameraMatrix2 distCoeffs2.
+bool named_by_arguments(const Reader& in) {
+    return !in.has("M1") && in.has("cameraMatrix1");
+}
+
 void read_opencv_intrinsics(const Reader& in, CameraPairCalibration& c) {
-    c.first = in.lens("M1", "D1");
-    c.second = in.lens("M2", "D2");
+    const bool arguments = named_by_arguments(in);
+    c.first = arguments ? in.lens("cameraMatrix1", "distCoeffs1") : in.lens("M1", "D1");
+    c.second = arguments ? in.lens("cameraMatrix2", "distCoeffs2") : in.lens("M2", "D2");
     c.first_size = c.second_size = optional_size(in);
 }
 
@@ -285,8 +293,9 @@ bool looks_like_camera_pair(const std::string& text) {
             const cv::FileNode root = storage.root();
             const bool motion = (!root["R"].empty() && !root["T"].empty()) ||
                                 (!root["Rlr"].empty() && !root["Tlr"].empty());
-            return root.isMap() && !root["M1"].empty() && !root["M2"].empty() && motion &&
-                   root["M4"].empty();
+            const bool cameras = (!root["M1"].empty() && !root["M2"].empty()) ||
+                                 (!root["cameraMatrix1"].empty() && !root["cameraMatrix2"].empty());
+            return root.isMap() && cameras && motion && root["M4"].empty();
         } catch (const cv::Exception&) {
             return false;
         } catch (const InputError&) {
