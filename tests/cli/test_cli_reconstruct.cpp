@@ -110,6 +110,27 @@ bool folder_is_empty(const fs::path& folder) {
     return fs::is_empty(folder);
 }
 
+// fpp-calib reconstruct of one of the shared captures into `ply`, with the
+// rig's calibration beside it (calib.yaml in the suite's folder).
+ToolRun reconstruct_into(const fs::path& capture, const fs::path& ply, const fs::path& dir) {
+    return run_calib("reconstruct " + q(capture) + " --calib " +
+                         q(capture.parent_path() / "calib.yaml") + " --out " + q(ply),
+                     dir);
+}
+
+// RMS distance (mm) of a cloud's points from the truth at their pixels.
+double rms_against_truth(const fpp::PlyPoints& cloud, const fpp::Image<float>& truth) {
+    double sum = 0;
+    for (std::size_t k = 0; k < cloud.size(); ++k) {
+        const std::size_t i = cloud.pixel[k];
+        const double dx = double(cloud.x[k] - truth.data()[3 * i]);
+        const double dy = double(cloud.y[k] - truth.data()[3 * i + 1]);
+        const double dz = double(cloud.z[k] - truth.data()[3 * i + 2]);
+        sum += dx * dx + dy * dy + dz * dz;
+    }
+    return std::sqrt(sum / double(std::max<std::size_t>(cloud.size(), 1)));
+}
+
 TEST_F(CliReconstruct, SimulatedPlaneEndToEnd) {
     TempDir out;
     const fs::path ply = out / "cloud.ply";
@@ -154,26 +175,11 @@ TEST_F(CliReconstruct, SimulatedPlaneEndToEnd) {
 TEST_F(CliReconstruct, XOnlyCaptureUsesTheIterativeSolve) {
     TempDir out;
     const fs::path ply = out / "cloud.ply";
-    const auto run = run_calib("reconstruct " + q(path("gray-x")) + " --calib " +
-                                   q(path("calib.yaml")) + " --out " + q(ply),
-                               out.path());
+    const auto run = reconstruct_into(path("gray-x"), ply, out.path());
     ASSERT_EQ(run.exit_code, 0) << run.output;
     EXPECT_NE(run.output.find("axes: x "), std::string::npos) << run.output;
     EXPECT_NE(run.output.find("x-only solve"), std::string::npos) << run.output;
     EXPECT_GT(fpp::read_ply(ply).size(), 400u * 300u * 99 / 100);
-}
-
-// RMS distance (mm) of a cloud's points from the truth at their pixels.
-double rms_against_truth(const fpp::PlyPoints& cloud, const fpp::Image<float>& truth) {
-    double sum = 0;
-    for (std::size_t k = 0; k < cloud.size(); ++k) {
-        const std::size_t i = cloud.pixel[k];
-        const double dx = double(cloud.x[k] - truth.data()[3 * i]);
-        const double dy = double(cloud.y[k] - truth.data()[3 * i + 1]);
-        const double dz = double(cloud.z[k] - truth.data()[3 * i + 2]);
-        sum += dx * dx + dy * dy + dz * dz;
-    }
-    return std::sqrt(sum / double(std::max<std::size_t>(cloud.size(), 1)));
 }
 
 // A capture with no phase block reconstructs from its code alone, each pixel
@@ -184,9 +190,7 @@ double rms_against_truth(const fpp::PlyPoints& cloud, const fpp::Image<float>& t
 TEST_F(CliReconstruct, CodeOnlyCaptureReconstructsAtItsCodeStep) {
     TempDir out;
     const fs::path ply = out / "cloud.ply";
-    const auto run = run_calib("reconstruct " + q(path("gray-only")) + " --calib " +
-                                   q(path("calib.yaml")) + " --out " + q(ply),
-                               out.path());
+    const auto run = reconstruct_into(path("gray-only"), ply, out.path());
     ASSERT_EQ(run.exit_code, 0) << run.output;
     EXPECT_NE(run.output.find("axes: x "), std::string::npos) << run.output;
     const fpp::PlyPoints cloud = fpp::read_ply(ply);
@@ -205,9 +209,7 @@ TEST_F(CliReconstruct, CodeOnlyCaptureReconstructsAtItsCodeStep) {
 TEST_F(CliReconstruct, MicroPhaseCaptureReconstructs) {
     TempDir out;
     const fs::path ply = out / "cloud.ply";
-    const auto run = run_calib("reconstruct " + q(path("micro")) + " --calib " +
-                                   q(path("calib.yaml")) + " --out " + q(ply),
-                               out.path());
+    const auto run = reconstruct_into(path("micro"), ply, out.path());
     ASSERT_EQ(run.exit_code, 0) << run.output;
     const fpp::PlyPoints cloud = fpp::read_ply(ply);
     EXPECT_GT(cloud.size(), 400u * 300u * 97 / 100);

@@ -18,6 +18,8 @@
 #include "fpp/sim/rig.hpp"
 #include "fpp/sim/scene.hpp"
 
+#include "pattern_blocks.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -116,17 +118,9 @@ fpp::Sequence with_phase(fpp::Sequence s, int sign, double offset) {
 // The shifted-Gray family: 4 steps of period 20 and a Gray code whose edges
 // sit half a period from the phase's wraps (offset 10), inverse frames.
 fpp::Sequence shifted_gray() {
-    fpp::PhaseBlock p;
-    p.axis = fpp::Axis::x;
-    p.period = 20;
-    p.steps = 4;
-    fpp::GrayBlock g;
-    g.axis = fpp::Axis::x;
-    g.period = 20;
-    g.bits = 7;
+    fpp::GrayBlock g = fpp::test::gray(fpp::Axis::x, 20, 7, false, true);
     g.offset = 10;
-    g.inverse = true;
-    return {p, g};
+    return {fpp::test::phase(fpp::Axis::x, 20, 4), g};
 }
 
 std::vector<std::pair<std::string, fpp::Sequence>> families() {
