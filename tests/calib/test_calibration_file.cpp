@@ -485,72 +485,102 @@ TEST(CalibrationFile, XmlEndingInsideATagIsRefusedBeforeOpenCvParsesIt) {
     }
 }
 
-// Found by tests/fuzz/run-long.sh (fuzz_camera_pair, 10 minutes): OpenCV
-// 4.6's YAML parser never returns from a line of four dashes and text right
-// after the `%YAML` line (35 bytes were enough). The reader refuses any line
-// that starts with `---` and goes on with text, naming the file and line,
-// for every format it opens through FileStorage. Found again by the test
-// command's fuzz run: text after spaces after the marker hangs it too.
-TEST(CalibrationFile, YamlLineOfDashesAndTextIsRefusedBeforeOpenCvHangsOnIt) {
-    const std::string hanging = "%YAML:1.\n-----x\nC\nS";
-    for (const std::string& text : {hanging, std::string("%YAML:1.0\n---\nM1: 1\n---x 2\n"),
-                                    std::string("%YAML:1.0\n---   cc_right = 1.0\nM1: 1\n")}) {
-        try {
-            (void)fpp::calib::parse_camera_pair(text, "pair.yml",
-                                                fpp::calib::CameraPairFormat::opencv_stereo);
-            ADD_FAILURE() << "accepted: " << text;
-        } catch (const fpp::InputError& e) {
-            EXPECT_EQ(e.file(), fs::path("pair.yml")) << e.what();
-            EXPECT_NE(std::string(e.what()).find("'---' followed by text"), std::string::npos)
-                << e.what();
+// OpenCV 4.6's YAML parser never returns from some malformed text; the
+// fuzzers found three kinds (run-long.sh: a line of dashes and text after the
+// `%YAML` line; the test command's fuzz runs: text after `---   `, an indented
+// first key under a shallower line with ", -", several `%YAML` documents with
+// XML among them), and yaml-cpp's LoadAll hangs on a first line that starts
+// with ','. YAML is parsed by yaml-cpp and written again in OpenCV's
+// own grammar before OpenCV reads it, so each is refused, naming the file and
+// the reason, by every reader that opens FileStorage text.
+TEST(CalibrationFile, YamlThatHangsOpenCvIsRefusedBeforeOpenCvReadsIt) {
+    const std::string with_nul("%YAML:1.0\n   us: 3\n 72e-0, -1.\n--\x01\0\0\0: x\n", 37);
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"%YAML:1.\n-----x\nC\nS", "its top level is a single value"},
+        {"%YAML:1.0\n---\nM1: 1\n---x 2\n", "line 4: a second YAML document begins"},
+        {"%YAML:1.0\n---   cc_right = 1.0\nM1: 1\n", "line 3: not YAML, XML or JSON"},
+        {"%YAML:1.0\n  us: 3\n 7, -1\nM: 3\n", "line 4: not YAML, XML or JSON"},
+        {with_nul, "M"}, // a map {us: "3 72e-0, -1. --"} to yaml-cpp: no known keys
+        {"%YAML:1.0\n---\nM1: 1\n%YAML:1.0\n---\n<opencv_storage>\n",
+         "line 4: a second YAML document begins"},
+        // yaml-cpp's LoadAll never returns from these (its Load does).
+        {",", "no document where it starts"},
+        {",YAML:1.0\n---\nM1: 1\n", "line 2: a second YAML document begins"},
+    };
+    for (const auto& [text, reason] : cases) {
+        for (const bool pair : {false, true}) {
+            try {
+                if (pair)
+                    (void)fpp::calib::parse_camera_pair(
+                        text, "pair.yml", fpp::calib::CameraPairFormat::opencv_stereo);
+                else
+                    (void)fpp::calib::parse_calibration(text, "pair.yml");
+                ADD_FAILURE() << "accepted: " << text;
+            } catch (const fpp::InputError& e) {
+                EXPECT_EQ(e.file(), fs::path("pair.yml")) << e.what();
+                EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
+                    << e.what() << " (for: " << text << ")";
+            }
         }
-        EXPECT_THROW((void)fpp::calib::parse_calibration(text, "calibration.yml"), fpp::InputError);
         EXPECT_FALSE(fpp::calib::looks_like_camera_pair(text));
     }
-    // A document marker alone or with a space is YAML as OpenCV writes it:
-    // refused for its missing keys, not for the marker.
-    for (const std::string text : {"%YAML:1.0\n---\nx: 1\n", "%YAML:1.0\n--- \nx: 1\n"}) {
+}
+
+// The rewrite's own limits: what OpenCV never writes is refused with its
+// reason, and a few bytes of aliases cannot make megabytes.
+TEST(CalibrationFile, YamlRewriteRefusesWhatOpenCvNeverWrites) {
+    std::string deep = "M1: ";
+    for (int i = 0; i < 20; ++i)
+        deep += "[ ";
+    deep += "1";
+    for (int i = 0; i < 20; ++i)
+        deep += " ]";
+    std::string bomb = "a0: &a0 [ 1, 2, 3, 4, 5, 6, 7, 8, 9, 10 ]\n";
+    for (int level = 1; level < 8; ++level) {
+        const std::string below = "*a" + std::to_string(level - 1);
+        bomb += "a" + std::to_string(level) + ": &a" + std::to_string(level) + " [ ";
+        for (int i = 0; i < 10; ++i)
+            bomb += below + (i < 9 ? ", " : " ]\n");
+    }
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {deep + "\n", "nested more than 16 levels deep"},
+        {bomb, "its aliases repeat too much"},
+        {"%YAML:1.0\n---\nM1: 1\ncam era: 2\n", "line 4: key 'cam era' is not a name"},
+        {"%YAML:1.0\n---\nM1: \"a\\tb\"\n", "line 3: a control character in a string"},
+        {"%YAML:1.0\n---\n", "the file is empty"},
+        {"- 1\n- 2\n", "its top level is a list"},
+    };
+    for (const auto& [text, reason] : cases) {
         try {
             (void)fpp::calib::parse_calibration(text, "c.yml");
-            ADD_FAILURE() << "accepted: " << text;
+            ADD_FAILURE() << "accepted: " << text.substr(0, 80);
         } catch (const fpp::InputError& e) {
-            EXPECT_EQ(std::string(e.what()).find("'---'"), std::string::npos) << e.what();
+            EXPECT_EQ(e.file(), fs::path("c.yml")) << e.what();
+            EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << e.what();
         }
     }
 }
 
-// Found by the fuzz preset's 30 s runs of fuzz_calibration: OpenCV 4.6's YAML
-// parser never returns from an indented first key followed by a shallower
-// line holding ", -" (the fuzzer's inputs are in the harness's corpus; one has
-// a NUL byte, where OpenCV stops reading). No line may be indented less than
-// the first key; the refusal names the file and line.
-TEST(CalibrationFile, LineShallowerThanTheFirstKeyIsRefusedBeforeOpenCvHangsOnIt) {
-    const std::string with_nul("%YAML:1.0\n   us: 3\n 72e-0, -1.\n--\x01\0\0\0: x\n", 37);
-    for (const std::string& text : {std::string("%YAML:1.0\n  us: 3\n 7, -1\nM: 3\n"), with_nul}) {
-        try {
-            (void)fpp::calib::parse_calibration(text, "calibration.yml");
-            ADD_FAILURE() << "accepted";
-        } catch (const fpp::InputError& e) {
-            EXPECT_EQ(e.file(), fs::path("calibration.yml")) << e.what();
-            EXPECT_EQ(e.field(), "line 3") << e.what();
-            EXPECT_NE(std::string(e.what()).find("indented less than the first key"),
-                      std::string::npos)
-                << e.what();
-        }
-        EXPECT_FALSE(fpp::calib::looks_like_camera_pair(text));
-        EXPECT_THROW((void)fpp::calib::parse_camera_pair(
-                         text, "pair.yml", fpp::calib::CameraPairFormat::opencv_stereo),
-                     fpp::InputError);
+// JSON reaches OpenCV through the rewrite too: SLMaster's real caliInfo.yml,
+// written again as JSON by OpenCV itself, reads to the same calibration.
+TEST(CalibrationFile, JsonThatOpenCvWroteReadsAsItsYaml) {
+    const fs::path path = fpp::test::dataset("slmaster/monocular/caliInfo.yml");
+    FPP_REQUIRE_DATASET(path);
+    const StereoCalibration yaml = fpp::calib::load_calibration(path);
+    cv::FileStorage in(path.string(), cv::FileStorage::READ);
+    cv::FileStorage out(".json", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
+    for (const char* key : {"M1", "D1", "S", "M4", "D4", "Rlp", "Tlp"}) {
+        cv::Mat m;
+        in[key] >> m;
+        out << key << m;
     }
-    // Nested keys and continued lists deeper than the first key are YAML as
-    // OpenCV writes it: refused for their missing keys, not their indentation.
-    try {
-        (void)fpp::calib::parse_calibration(
-            "%YAML:1.0\n---\nM: !!opencv-matrix\n   rows: 1\n   cols: 2\n   dt: d\n"
-            "   data: [ 1.,\n       2. ]\n",
-            "c.yml");
-        ADD_FAILURE() << "accepted";
-    } catch (const fpp::InputError& e) {
-        EXPECT_EQ(std::string(e.what()).find("indented"), std::string::npos) << e.what();
-    }
+    const std::string json = out.releaseAndGetString();
+    ASSERT_EQ(json.front(), '{');
+    const StereoCalibration back = fpp::calib::parse_calibration(json, "caliInfo.json");
+    EXPECT_EQ(back.format, CalibrationFormat::slmaster);
+    EXPECT_EQ(back.camera_size, yaml.camera_size);
+    expect_lens_eq(back.camera, yaml.camera);
+    expect_lens_eq(back.projector, yaml.projector);
+    EXPECT_EQ(back.R, yaml.R);
+    EXPECT_EQ(back.T, yaml.T);
 }

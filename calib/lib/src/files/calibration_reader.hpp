@@ -3,6 +3,7 @@
 // throws InputError naming the file and the key. Shared by the stereo
 // (camera-projector) and camera-pair loaders.
 
+#include "file_storage_yaml.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/error.hpp"
 
@@ -29,77 +30,40 @@ struct KeySet {
     const char* T;
 };
 
-// Text that OpenCV 4.6's FileStorage mishandles, refused before it sees it
-// (each found by tests/fuzz): its XML parser dereferences a null pointer on
-// a tag still open where its text ends (`<Kc type_id=`; it reads up to the
-// first NUL), and its YAML parser never returns from a line of four or more
-// dashes followed by text right after the `%YAML` line (`----x`), nor from an
-// indented first key followed by a shallower line holding ", -". A YAML
-// document marker is `---` alone or followed by a space, so a line that
-// starts with `---` and goes on otherwise is refused wherever it is; and no
-// line may be indented less than the first key (OpenCV writes its top-level
-// keys in column 0, so nothing it writes is refused for this).
-inline void refuse_text_opencv_mishandles(std::string_view seen, const fs::path& origin) {
-    const std::size_t first = seen.find_first_not_of(" \t\r\n");
-    if (first != std::string_view::npos && seen[first] == '<') {
-        bool in_tag = false;
-        char quote = 0;
-        for (const char ch : seen) {
-            if (!in_tag)
-                in_tag = ch == '<';
-            else if (quote != 0)
-                quote = ch == quote ? 0 : quote;
-            else if (ch == '"' || ch == '\'')
-                quote = ch;
-            else if (ch == '>')
-                in_tag = false;
-        }
-        if (in_tag)
-            throw InputError(origin, "", "not an OpenCV FileStorage file: XML ends inside a tag");
-        return;
+// OpenCV 4.6's XML parser dereferences a null pointer on a tag still open
+// where its text ends (`<Kc type_id=`; found by tests/fuzz): such XML is
+// refused before it sees it. (YAML and JSON never reach OpenCV as they were
+// written: see file_storage_yaml.hpp.)
+inline void refuse_xml_ending_inside_a_tag(std::string_view xml, const fs::path& origin) {
+    bool in_tag = false;
+    char quote = 0;
+    for (const char ch : xml) {
+        if (!in_tag)
+            in_tag = ch == '<';
+        else if (quote != 0)
+            quote = ch == quote ? 0 : quote;
+        else if (ch == '"' || ch == '\'')
+            quote = ch;
+        else if (ch == '>')
+            in_tag = false;
     }
-    std::size_t line_start = 0;
-    std::size_t first_key_indent = std::string_view::npos;
-    for (int line = 1; line_start < seen.size(); ++line) {
-        const std::string_view rest = seen.substr(line_start);
-        const std::size_t end = seen.find('\n', line_start);
-        // Text after '---' on its line, even after spaces, hangs OpenCV's
-        // parser (found by tests/fuzz); its own files never have any.
-        if (rest.starts_with("---")) {
-            const std::string_view marker_line = rest.substr(
-                3, end == std::string_view::npos ? std::string_view::npos : end - line_start - 3);
-            if (marker_line.find_first_not_of(" \t\r") != std::string_view::npos)
-                throw InputError(origin, "line " + std::to_string(line),
-                                 "'---' followed by text: a YAML document marker stands alone "
-                                 "on its line");
-        }
-        const std::string_view text =
-            rest.substr(0, end == std::string_view::npos ? rest.size() : end - line_start);
-        const std::size_t indent = text.find_first_not_of(' ');
-        const bool content = indent != std::string_view::npos && text[indent] != '\r' &&
-                             text[indent] != '#' && text[indent] != '%' &&
-                             !text.starts_with("---") && !text.starts_with("...");
-        if (content && first_key_indent == std::string_view::npos)
-            first_key_indent = indent;
-        else if (content && indent < first_key_indent)
-            throw InputError(origin, "line " + std::to_string(line),
-                             "indented less than the first key (line indentation " +
-                                 std::to_string(indent) + ", first key " +
-                                 std::to_string(first_key_indent) + ")");
-        if (end == std::string_view::npos)
-            break;
-        line_start = end + 1;
-    }
+    if (in_tag)
+        throw InputError(origin, "", "not an OpenCV FileStorage file: XML ends inside a tag");
 }
 
 // Opens FileStorage text, every failure an InputError naming `origin`. Some
 // malformed text makes OpenCV throw std::length_error rather than
 // cv::Exception (found by tests/fuzz).
 inline cv::FileStorage open_file_storage(const std::string& text, const fs::path& origin) {
-    refuse_text_opencv_mishandles(std::string_view(text.c_str()), origin); // what OpenCV reads
+    const std::string_view seen(text.c_str()); // what OpenCV reads: up to a NUL
+    const std::size_t first = seen.find_first_not_of(" \t\r\n");
+    const bool xml = first != std::string_view::npos && seen[first] == '<';
+    if (xml)
+        refuse_xml_ending_inside_a_tag(seen, origin);
+    const std::string opencv_text = xml ? text : rewrite_yaml_for_opencv(text, origin);
     cv::FileStorage storage;
     try {
-        storage.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+        storage.open(opencv_text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     } catch (const cv::Exception& e) {
         throw InputError(origin, "",
                          "not an OpenCV FileStorage file (YAML, XML or JSON): " + e.msg);
