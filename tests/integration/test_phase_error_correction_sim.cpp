@@ -7,14 +7,18 @@
 // with N = 3, 4, 8. Errors are decoded minus true projector column over the
 // pixels valid in every decode (without unwrapping errors).
 //
-// Targets (issue 15): with 3 and 4 steps the corrected RMS within 1.3 x the
-// linear projector's; with 8 steps no worse than uncorrected (1.02 x); a
-// linear projector left as it is. Measured (figures printed):
-//   composite:      3 steps 7.28x -> 1.11x, 4 steps 0.95x -> 0.91x, 8 steps 1.00x
-//   inclined plane: 3 steps 10.15x -> 1.02x, 4 steps 0.96x -> 0.87x, 8 steps 1.00x
-//   fronto-parallel plane: 3 steps 9.63x -> 1.03x, 4 steps 0.96x -> 0.87x;
+// Targets (issue 15, tightened by issue 32): with 3 steps the corrected RMS
+// within 1.08x the linear projector's, with 4 steps no worse than the linear
+// projector; with 8 steps no worse than uncorrected (1.02x); a linear
+// projector left as it is. Measured (figures printed), correction taken at
+// each pixel's 3 x 3 stand-in (before: at the decoded fold):
+//   composite:      3 steps 7.28x -> 1.02x (1.11x), 4 steps 0.95x -> 0.91x, 8 steps 0.91x
+//   inclined plane: 3 steps 10.15x -> 0.93x (1.02x), 4 steps 0.96x -> 0.87x, 8 steps 0.87x
+//   fronto-parallel plane: 3 steps 9.63x -> 0.94x (1.03x), 4 steps 0.96x -> 0.87x;
 //   8 steps refused (the pixel grid aliases the fringes at harmonic 1: a
 //   0.006 px sampling bias cannot be told from an error), so unchanged.
+// Below 1x: the stand-in takes the correction at the true fold with a third
+// of the pixel's noise, and the gamma's steeper flanks carry less noise.
 // The 4-step error under gamma 2.2 is below the noise here (0.02 px RMS;
 // blur and noise make the gamma rig's 4-step decode no worse than the
 // linear one's); 8 steps leave none to correct.
@@ -134,8 +138,9 @@ TEST_P(PhaseErrorCorrectionSim, MeetsTheTargetsOfIssue15) {
         if (steps < 8) {
             EXPECT_TRUE(corrected.phase_correction_x.applied)
                 << corrected.phase_correction_x.reason;
-            EXPECT_LE(corrected_ratio, 1.3);
+            EXPECT_LE(corrected_ratio, steps == 3 ? 1.08 : 1.0);
             EXPECT_LE(rms[1], rms[0] * 1.02);
+            EXPECT_GT(corrected.phase_correction_x.at_stand_in, 0.9);
         } else {
             EXPECT_LE(rms[1], rms[0] * 1.02);
         }
@@ -155,6 +160,39 @@ INSTANTIATE_TEST_SUITE_P(Scenes, PhaseErrorCorrectionSim,
                                      c = '_';
                              return n;
                          });
+
+// Rigs the correction was never tuned on (a thin-prism projector lens, a
+// decentred projector lens, a camera with a lens defect; each with the
+// effects rig's gamma 2.2, blur and noise), 3 steps on the composite scene:
+// within 1.08x the same rig with a linear projector. Measured 1.00x, 1.03x,
+// 1.04x (at the decoded fold: 1.08x, 1.11x, 1.12x binned 2).
+TEST(PhaseErrorCorrectionSimHeldOut, ThreeStepsWithinAFewPercentOfALinearProjector) {
+    const fpp::sim::Scene scene = fpp::sim::named_scene("composite");
+    for (const char* name :
+         {"rig-prism-projector.yaml", "rig-decentred-projector.yaml", "rig-camera-defect.yaml"}) {
+        SCOPED_TRACE(name);
+        fpp::sim::Rig rig =
+            fpp::sim::load_rig(fpp::sim::effects_rig_path().parent_path() / name).binned_camera(4);
+        ASSERT_EQ(rig.projector_optics.gamma, 2.2);
+        fpp::sim::Rig linear_rig = rig;
+        linear_rig.projector_optics.gamma = 1.0;
+        const fpp::Sequence sequence = gray_x(3, rig.projector_size);
+        const auto gamma_sim = fpp::sim::simulate(rig, scene, sequence, kSeed);
+        const auto linear_sim = fpp::sim::simulate(linear_rig, scene, sequence, kSeed);
+        const fpp::DecodeResult corrected = decode_sim(gamma_sim, true);
+        const fpp::DecodeResult linear = decode_sim(linear_sim, false);
+        std::size_t pixels = 0;
+        const auto rms =
+            rms_over_common<2>({&corrected, &linear}, gamma_sim.truth_projector, pixels);
+        std::printf("[ figures  ] %s: linear projector %.4f px, gamma 2.2 corrected %.4f px "
+                    "(%.2fx); %s\n",
+                    name, rms[1], rms[0], rms[0] / rms[1],
+                    fpp::describe(corrected.phase_correction_x).c_str());
+        ASSERT_GT(pixels, 50000u);
+        ASSERT_TRUE(corrected.phase_correction_x.applied) << corrected.phase_correction_x.reason;
+        EXPECT_LE(rms[0], 1.08 * rms[1]);
+    }
+}
 
 // The streaming decoder with the correction gives the batch result bit for
 // bit (the correction is a pass over the finished result in both).

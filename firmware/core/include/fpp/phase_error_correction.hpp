@@ -36,6 +36,10 @@
 // that harmonic stays hidden; its likely size (the cosine part, always
 // seen) is reported, and the correction refused when it is not small.
 //
+// The correction is applied at each pixel's stand-in fold where it has one
+// (apply_phase_error_correction): c at the decoded fold would scale the
+// pixel's noise by the slope 1 + c'(u).
+//
 // Frames and units: p and every *_px figure in projector pixels; u and the
 // coefficients in sub-periods (period / N projector pixels).
 
@@ -112,6 +116,9 @@ struct PhaseErrorSummary {
     double aliasing_px = 0;
     std::vector<double> leakage;
     double min_slope = 1; // min over u of 1 + c'(u)
+    // After correct_phase_error: the fraction of the corrected coordinates
+    // that took the correction at their stand-in's fold (0 when not applied).
+    double at_stand_in = 0;
 };
 
 // Estimates c from the pixels that are kDecodeValid in `mask` with a finite
@@ -125,10 +132,16 @@ PhaseErrorSummary estimate_phase_error(const Image<float>& proj, const Image<std
                                        const PhaseErrorOptions& options = {},
                                        ThreadPool* pool = nullptr);
 
-// Adds (period / N) c(u) to every finite coordinate of `proj` if
-// `summary.applied`; otherwise leaves it unchanged. NaN stays NaN.
-void apply_phase_error_correction(Image<float>& proj, const PhaseBlock& finest,
-                                  const PhaseErrorSummary& summary, ThreadPool* pool = nullptr);
+// Corrects every finite coordinate of `proj` if `summary.applied`;
+// otherwise leaves it unchanged. NaN stays NaN. A pixel whose stand-in (the
+// plane through its 3 x 3 box's corrected coordinates) agrees with it gets
+// the correction at the stand-in's fold, the true fold with a third of the
+// noise (c(u) taken at the decoded fold would scale the pixel's noise by
+// 1 + c'(u), up to 1.8x with 3 steps under gamma 2.2); the others get
+// (period / N) c(u) at their decoded fold u. Returns the fraction of finite
+// coordinates corrected at their stand-in.
+double apply_phase_error_correction(Image<float>& proj, const PhaseBlock& finest,
+                                    const PhaseErrorSummary& summary, ThreadPool* pool = nullptr);
 
 // Both: estimate, then apply when the checks pass.
 PhaseErrorSummary correct_phase_error(Image<float>& proj, const Image<std::uint8_t>& mask,
