@@ -282,6 +282,26 @@ TEST(DecodeFamilies, QuaternaryGrayCodeOnly) {
                        "gray-code-4-level", kCodeUnit);
 }
 
+// SLMaster's interzone code: a 3-step block and a reflected 4-level Gray
+// code of its period (levels 0, 85, 170, 255), no white or black frame: the
+// digits are scaled by the phase block's A - B and A + B. A wrong digit is a
+// whole period (20 px) off, counted as gross (> 5 px): none may be. The
+// baseline: the same block with a binary Gray code read against its inverse.
+TEST(DecodeFamilies, QuaternaryGrayScaledByThePhaseBlock) {
+    fpp::GrayBlock quaternary = gray(20, 3); // 4^3 = 64 periods of 20 px: 1280 px
+    quaternary.levels = 4;
+    fpp::GrayBlock plain = gray(20, 7);
+    plain.inverse = true;
+    const fpp::DecodeResult r = decode_both(render({phase(20, 3), quaternary}, 23));
+    const fpp::DecodeResult b = fpp::decode(render({phase(20, 3), plain}, 23));
+    const Figures f = figures(r, 5.0);
+    const Figures fb = figures(b, 5.0);
+    report("4-level gray + 3-step", r.method_x, f, fb.rms, "same rig, binary gray + 3-step");
+    EXPECT_GE(f.coverage(), 0.99);
+    EXPECT_EQ(f.gross, 0u);
+    EXPECT_LE(f.rms, 1.05 * fb.rms);
+}
+
 // Phase families against a standard block of the same period on the same
 // renders (same seed), unwrapped the same way.
 struct PhaseCase {

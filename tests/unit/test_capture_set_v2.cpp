@@ -247,6 +247,12 @@ TEST(CaptureSetV2, BrokenManifestsNameTheirField) {
         {manifest("  - {pattern: gray, axis: x, period: 8.0, bits: 2, levels: 3, inverse: true}\n",
                   4),
          "sequence[0].levels", "white and a black block"},
+        // ... nor a phase block of its period to scale it (SLMaster's interzone
+        // code has one: tests/integration/test_decode_families.cpp).
+        {manifest("  - {pattern: phase, axis: x, period: 16.0, steps: 3}\n"
+                  "  - {pattern: gray, axis: x, period: 8.0, bits: 2, levels: 4}\n",
+                  5),
+         "sequence[1].levels", "or a phase block of its period on its axis"},
         {manifest(kWhiteBlack + "  - {pattern: gray, axis: x, period: 8.0, bits: 3, code: binary,"
                                 " complementary: true}\n",
                   6),

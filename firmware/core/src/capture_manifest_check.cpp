@@ -138,11 +138,12 @@ void check_gray(const Sequence& sequence, const GrayBlock& g, std::size_t i, con
         white = white || std::holds_alternative<WhiteBlock>(other);
         black = black || std::holds_alternative<BlackBlock>(other);
     }
-    if (g.levels > 2 && !(white && black)) {
+    if (g.levels > 2 && !(white && black) && !gray_indexes_phase(sequence, g)) {
         check.fail(block_field(i, "levels"),
                    "a code of " + std::to_string(g.levels) +
-                       " levels needs a white and a black block in the sequence to scale its "
-                       "levels (inverse frames cannot)");
+                       " levels needs a white and a black block in the sequence, or a phase "
+                       "block of its period on its axis, to scale its levels (inverse frames "
+                       "cannot)");
     }
     if (g.wrap && (g.complementary || g.levels != 2)) {
         check.fail(block_field(i, "wrap"),

@@ -125,6 +125,15 @@ FPP_VECTOR_CLONES void DecodeEngine::run_family_step(const Step& s, std::size_t 
         break;
     case StepKind::gray_digit: {
         const GrayInfo& g = plan_.grays[static_cast<std::size_t>(s.index)];
+        if (g.threshold == GrayThreshold::phase_levels) {
+            const PhaseState& ps = phase_state_[static_cast<std::size_t>(g.phase)];
+            gray_digit_from_phase_row<T>(
+                frame_at<T>(s.frame, offset), at(ps.mean, offset, local),
+                at(ps.modulation, offset, local), n, static_cast<float>(g.block.levels - 1),
+                g.weight[static_cast<std::size_t>(s.k)], s.first,
+                at(code_[static_cast<std::size_t>(s.index)], offset, local));
+            break;
+        }
         gray_digit_row<T>(frame_at<T>(s.frame, offset), threshold_at<T>(white_, offset, local),
                           threshold_at<T>(black_, offset, local), n,
                           static_cast<float>(g.block.levels - 1),

@@ -193,6 +193,27 @@ FPP_KERNEL void gray_digit_row(const T* __restrict in, const T* __restrict white
     }
 }
 
+// n-ary code plane scaled by the phase block it indexes: its fringes span
+// the projector's 0 .. 1 as the code's levels do, so black is A - B and
+// white A + B: digit = round((I - A + B) / (2 B) (L - 1)), clamped.
+template <class T>
+FPP_KERNEL void gray_digit_from_phase_row(const T* __restrict in, const float* __restrict mean,
+                                          const float* __restrict modulation, int n,
+                                          float top_digit, std::uint16_t weight, bool first,
+                                          std::uint16_t* __restrict code) {
+    const float w = static_cast<float>(weight);
+    for (int x = 0; x < n; ++x) {
+        float range = 2.0f * modulation[x];
+        range = range > 1.0f ? range : 1.0f;
+        float d =
+            round_nearest((static_cast<float>(in[x]) - mean[x] + 0.5f * range) * top_digit / range);
+        d = d < 0.0f ? 0.0f : d;
+        d = d > top_digit ? top_digit : d;
+        const float before = first ? 0.0f : static_cast<float>(code[x]);
+        code[x] = static_cast<std::uint16_t>(static_cast<std::int32_t>(before + d * w));
+    }
+}
+
 // Copy of a white or black frame (level planes, sample type).
 template <class T> FPP_KERNEL void copy_row(const T* __restrict in, int n, T* __restrict out) {
     for (int x = 0; x < n; ++x)

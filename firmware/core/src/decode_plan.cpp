@@ -241,11 +241,16 @@ void choose_gray_thresholds(Plan& plan) {
             if (g.block.inverse)
                 refuse(sequence_field(g.sequence_index, "inverse"),
                        "inverse frames are not defined for more than 2 levels");
-            if (!have_white_black)
+            if (have_white_black) {
+                g.threshold = GrayThreshold::white_black;
+                plan.uses_levels = true;
+            } else if (g.phase >= 0) {
+                g.threshold = GrayThreshold::phase_levels; // SLMaster's interzone code
+            } else {
                 refuse(sequence_field(g.sequence_index, "levels"),
-                       "multi-level digits need white and black frames in the sequence");
-            g.threshold = GrayThreshold::white_black;
-            plan.uses_levels = true;
+                       "multi-level digits need white and black frames in the sequence, or a "
+                       "phase block of their period on their axis to scale them");
+            }
         } else if (g.block.inverse) {
             g.threshold = GrayThreshold::inverse;
         } else if (have_white_black) {
@@ -337,7 +342,10 @@ void add_gray_steps(const Plan& plan, std::vector<Step>& steps) {
             if (g.block.levels > 2) {
                 s.kind = StepKind::gray_digit;
                 s.frame = g.first_frame + j;
-                s.trigger = std::max(s.frame, white_black_ready);
+                const int ready = g.threshold == GrayThreshold::phase_levels
+                                      ? plan.phases[static_cast<std::size_t>(g.phase)].last_frame()
+                                      : white_black_ready;
+                s.trigger = std::max(s.frame, ready);
             } else if (g.threshold == GrayThreshold::inverse) {
                 s.kind = StepKind::gray_inverse;
                 s.frame = g.first_frame + 2 * j;
@@ -399,7 +407,8 @@ void order_steps(std::vector<Step>& steps) {
 
 // A phase block is spread over the frames after its last one, up to the
 // first step that reads its result while frames still arrive (a gray or
-// centerline block thresholded against its mean); a block whose result
+// centerline block thresholded against its mean, n-ary digits scaled by its
+// mean and modulation); a block whose result
 // only the final unwrapping reads is spread up to the sequence's last
 // frame. kMaxPhaseParts slices bring the block's frame down to about a
 // quarter of its work; more would hold its frames longer for little gain.
@@ -410,11 +419,14 @@ void spread_phase_blocks(const Plan& plan, std::vector<Step>& steps) {
             continue;
         int deadline = plan.frame_count;
         for (const auto& reader : steps) {
+            const GrayInfo* gray =
+                reader.kind == StepKind::gray_threshold || reader.kind == StepKind::gray_digit
+                    ? &plan.grays[static_cast<std::size_t>(reader.index)]
+                    : nullptr;
             const bool reads_mean =
-                (reader.kind == StepKind::gray_threshold &&
-                 plan.grays[static_cast<std::size_t>(reader.index)].threshold ==
-                     GrayThreshold::phase_mean &&
-                 plan.grays[static_cast<std::size_t>(reader.index)].phase == s.index) ||
+                (gray != nullptr && gray->phase == s.index &&
+                 (gray->threshold == GrayThreshold::phase_mean ||
+                  gray->threshold == GrayThreshold::phase_levels)) ||
                 (reader.kind == StepKind::centerline_bit &&
                  plan.centerlines[static_cast<std::size_t>(reader.index)].phase == s.index);
             if (reads_mean)

@@ -54,7 +54,11 @@ struct PhaseInfo {
     int last_frame() const { return first_frame + frames - 1; }
 };
 
-enum class GrayThreshold { white_black, inverse, phase_mean };
+// How a code plane is read: against (white + black) / 2 (n-ary: scaled by
+// white and black), its inverse frame, the mean A of the phase block it
+// indexes, or (n-ary without white and black) scaled by that block's A - B
+// and A + B.
+enum class GrayThreshold { white_black, inverse, phase_mean, phase_levels };
 
 struct GrayInfo {
     GrayBlock block;
@@ -151,7 +155,8 @@ enum class StepKind {
     gray_inverse,      // compare a gray plane with its inverse frame
     centerline_bit,    // threshold the centerline frame against the phase mean
     level_frame,       // copy the white (index 1) or black (index 0) frame
-    gray_digit,        // n-ary plane: digit = round((I - black) / (white - black) (L - 1))
+    gray_digit,        // n-ary plane: digit = round((I - black) / (white - black) (L - 1)),
+                       // black and white the frames or the phase block's A - B and A + B
     code_levels,       // code-only block with white/black: modulation and mean
 };
 
