@@ -61,7 +61,7 @@ Action add_import_command(CLI::App& app) {
         ->required();
     cmd->add_option("--codec", args->options.codec,
                     "slstudio: 2x3, 3, nstep, 2p1, modulated, graycode, micro; slmaster: "
-                    "complementary, shift-gray; "
+                    "complementary, shift-gray, three-frequency, interzone; "
                     "opencv: graycode, sinusoidal")
         ->required();
     args->direction_option =
@@ -91,10 +91,12 @@ Action add_import_command(CLI::App& app) {
     cmd->add_option("--gray-bits-y", args->options.slstudio_gray_bits_y,
                     "slstudio graycode: row planes (Nvert)")
         ->capture_default_str();
-    cmd->add_option("--steps", args->options.steps, "slmaster: phase steps (shiftTime)")
-        ->capture_default_str();
+    cmd->add_option("--steps", args->options.steps,
+                    "slmaster: phase steps (shiftTime; default SLMaster's: 4, interzone 3)");
     cmd->add_option("--fringes", args->options.fringes,
-                    "slmaster: fringes across the coded axis (nbrOfPeriods, a power of 2)");
+                    "slmaster: fringes across the coded axis (nbrOfPeriods): a power of 2 "
+                    "(complementary, shift-gray), the highest of the three (three-frequency, "
+                    "default 32), a power of 4 (interzone, default 16)");
     cmd->add_option("--period", args->options.period,
                     "slmaster: or the fringe period in projector pixels (extent / fringes)");
     cmd->add_option("--shadow-images", args->options.shadow_images,

@@ -202,6 +202,46 @@ Frames slmaster(int w, int h, int steps, int fringes, bool shifted) {
     return f;
 }
 
+// SLMaster's interzone code: SLMaster's phase frames, then log4(fringes)
+// frames of blocks of width / 4^(i+1) coloured 0, 85, 170, 255, each frame's
+// sequence the previous one, reversed, again and reversed again.
+Frames slmaster_interzone(int w, int h, int steps, int fringes) {
+    Frames f;
+    const int P = w / fringes;
+    for (int i = 0; i < steps; ++i)
+        f.push_back(profile_image(w, h, true, [=](int k) {
+            return 127.5 +
+                   127.5 * std::cos((k % P) / double(P) * 2 * kPi - kPi + 2 * kPi / steps * i);
+        }));
+    std::vector<int> sequential{0, 85, 170, 255};
+    for (int blocks = 4; blocks <= fringes; blocks *= 4) {
+        const std::vector<int> seq = sequential;
+        const int block = w / blocks;
+        f.push_back(
+            profile_image(w, h, true, [=](int k) { return double(seq[std::size_t(k / block)]); }));
+        const std::vector<int> reversed(seq.rbegin(), seq.rend());
+        sequential.clear();
+        for (const auto* part : {&seq, &reversed, &seq, &reversed})
+            sequential.insert(sequential.end(), part->begin(), part->end());
+    }
+    return f;
+}
+
+// SLMaster's three-frequency code: F, F - 6 and F - 11 fringes of period
+// width / count (not rounded), `steps` frames each, the levels truncated.
+Frames slmaster_three_frequency(int w, int h, int steps, int highest) {
+    Frames f;
+    for (const int count : {highest, highest - 6, highest - 11})
+        for (int i = 0; i < steps; ++i)
+            f.push_back(profile_image(w, h, true, [=](int k) {
+                const double P = double(w) / count;
+                const double t = k / P - std::floor(k / P);
+                return std::floor(127.5 +
+                                  127.5 * std::cos((2 * t - 1) * kPi + 2 * kPi / steps * i));
+            }));
+    return f;
+}
+
 // OpenCV GrayCodePattern (checked against libopencv_structured_light 4.6):
 // ceil(log2) planes, columns then rows, MSB first, Gray bit 1 = white, each
 // followed by its inverse; then white and black (getImagesForShadowMasks).
@@ -279,6 +319,12 @@ std::vector<RenderedCase> rendered_cases() {
         // The last half period repeats step 0's code: a wrapping gray block.
         {"slmaster_shift_gray", "slmaster --codec shift-gray --steps 4 --fringes 8", "%02d.bmp",
          320, 96, [](int w, int h) { return slmaster(w, h, 4, 8, true); }, 1, 0.05, false},
+        // SLMaster's defaults: 3 steps, 16 fringes of 20 px, two four-level frames.
+        {"slmaster_interzone", "slmaster --codec interzone", "%02d.bmp", 320, 96,
+         [](int w, int h) { return slmaster_interzone(w, h, 3, 16); }, 1, 0.05, false},
+        // SLMaster's defaults: 4 steps of 32, 26 and 21 fringes (10, 12.3, 15.2 px).
+        {"slmaster_three_frequency", "slmaster --codec three-frequency", "%02d.bmp", 320, 96,
+         [](int w, int h) { return slmaster_three_frequency(w, h, 4, 32); }, 1, 0.05, false},
         {"opencv_graycode", "opencv --codec graycode --direction both", "pattern_%02d.png", 320, 96,
          opencv_graycode, 0, 0.5, true},
         // 20 px fringes: one 8-bit level (1/127.5 rad) is 0.025 px.
@@ -404,6 +450,30 @@ TEST(CliImport, RefusesWithNamedErrors) {
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find("fringes: SLMaster needs a fringe count"), std::string::npos)
         << r.output;
+
+    // SLMaster's other presets: parameters its generators cannot have used,
+    // and six frames where its interzone code has five (three phase frames,
+    // two four-level frames).
+    const std::string slmaster = "import slmaster --projector 320x96 " + quote(frames) + " --out ";
+    const std::vector<std::pair<std::string, std::string>> slmaster_cases = {
+        {"--codec interzone --fringes 8",
+         "fringes: SLMaster's interzone code needs a fringe count (nbrOfPeriods) that is a "
+         "power of 4"},
+        {"--codec interzone --fringes 256",
+         "fringes: the projector's 320 pixels are not a multiple of 256"},
+        {"--codec interzone --steps 4", "steps: SLMaster's interzone code needs an odd shiftTime"},
+        {"--codec three-frequency --fringes 11",
+         "fringes: SLMaster's three-frequency code shows nbrOfPeriods"},
+        {"--codec interzone",
+         "frames: found 6 image files (PNG, TIFF, BMP), but slmaster's interzone (direction x) "
+         "has 5 frames: phase (3), gray (2)"},
+    };
+    for (const auto& [options, message] : slmaster_cases) {
+        r = run_calib(slmaster + quote(dir / "s") + " " + options, dir);
+        EXPECT_EQ(r.exit_code, 2) << options << ": " << r.output;
+        EXPECT_NE(r.output.find(message), std::string::npos) << options << ": " << r.output;
+        EXPECT_FALSE(fs::exists(dir / "s"));
+    }
 
     const std::string sinusoidal =
         "import opencv --projector 320x96 --codec sinusoidal " + quote(frames) + " --out ";

@@ -177,19 +177,91 @@ Sequence slstudio_sequence(const ImportOptions& o, const fs::path& origin) {
     return s;
 }
 
+// SLMaster's fringes: 127.5 + 127.5 cos(2 pi frac(p / P) - pi + 2 pi k / N).
+PhaseBlock slmaster_phase(Axis axis, double period, int steps) {
+    PhaseBlock b;
+    b.axis = axis;
+    b.period = period;
+    b.steps = steps;
+    b.shift_sign = 1;
+    b.phase_offset = -kPi;
+    return b;
+}
+
+// Three fringe counts F, F - 6, F - 11 of `steps` frames each, F first;
+// periods extent / count, not rounded (threeFrequencyHeterodynePattern).
+Sequence slmaster_three_frequency(const ImportOptions& o, Axis axis, int steps,
+                                  const fs::path& origin) {
+    const int e = extent(o, axis);
+    const int highest = o.fringes != 0 ? o.fringes : 32; // SLMaster's default nbrOfPeriods
+    if (highest - 11 < 1 || e / double(highest) < 3)
+        throw InputError(origin, "fringes",
+                         "SLMaster's three-frequency code shows nbrOfPeriods, nbrOfPeriods - 6 "
+                         "and nbrOfPeriods - 11 fringes: nbrOfPeriods must be 12 .. " +
+                             std::to_string(e / 3) + " (periods of at least 3 px), got " +
+                             std::to_string(highest));
+    Sequence s;
+    for (const int count : {highest, highest - 6, highest - 11})
+        s.push_back(slmaster_phase(axis, double(e) / count, steps));
+    return s;
+}
+
+// 3 (or any odd count of) phase frames, then log4(count) frames of a
+// reflected 4-level Gray code (levels 0, 85, 170, 255), most significant
+// first, in blocks of extent / 4^(i+1): no white or black frame, the digits
+// scaled by the phase frames (interzoneSinusFourGrayscalePattern).
+Sequence slmaster_interzone(const ImportOptions& o, Axis axis, int steps, const fs::path& origin) {
+    const int e = extent(o, axis);
+    const int fringes = o.fringes != 0 ? o.fringes : 16; // SLMaster's default nbrOfPeriods
+    int digits = 0;
+    for (int c = fringes; c > 1 && c % 4 == 0; c /= 4)
+        ++digits;
+    if (fringes < 4 || std::lround(std::pow(4.0, digits)) != fringes)
+        throw InputError(origin, "fringes",
+                         "SLMaster's interzone code needs a fringe count (nbrOfPeriods) that is "
+                         "a power of 4 (it shows log4(count) four-level frames); got " +
+                             std::to_string(fringes));
+    if (e % fringes != 0)
+        throw InputError(origin, "fringes",
+                         "the projector's " + std::to_string(e) + " pixels are not a multiple of " +
+                             std::to_string(fringes) +
+                             ": SLMaster's four-level blocks (extent / 4^k each) then do not "
+                             "follow its fringes");
+    if (steps % 2 == 0)
+        throw InputError(origin, "steps",
+                         "SLMaster's interzone code needs an odd shiftTime, got " +
+                             std::to_string(steps));
+    GrayBlock gray;
+    gray.axis = axis;
+    gray.period = e / fringes;
+    gray.bits = digits;
+    gray.levels = 4;
+    return {slmaster_phase(axis, e / fringes, steps), gray};
+}
+
 Sequence slmaster_sequence(const ImportOptions& o, const fs::path& origin) {
-    if (o.codec != "complementary" && o.codec != "shift-gray")
+    const bool three = o.codec == "three-frequency", interzone = o.codec == "interzone";
+    if (o.codec != "complementary" && o.codec != "shift-gray" && !three && !interzone)
         throw InputError(origin, "codec",
-                         "unknown SLMaster codec '" + o.codec + "' (complementary, shift-gray)");
+                         "unknown SLMaster codec '" + o.codec +
+                             "' (complementary, shift-gray, three-frequency, interzone)");
     const Axes axes = axes_of(o, origin, true);
     if (axes.x && axes.y)
         throw InputError(origin, "direction",
                          "SLMaster codes one axis per capture (its `horizontal` flag): x or y");
     const Axis axis = axes.x ? Axis::x : Axis::y;
     const int e = extent(o, axis);
-    if (o.steps < 3)
+    const int steps = o.steps != 0 ? o.steps : interzone ? 3 : 4; // SLMaster's shiftTime defaults
+    if (steps < 3)
         throw InputError(origin, "steps",
-                         "SLMaster's shiftTime must be 3 or more, got " + std::to_string(o.steps));
+                         "SLMaster's shiftTime must be 3 or more, got " + std::to_string(steps));
+    if (three || interzone) {
+        if (o.period > 0)
+            throw InputError(origin, "period",
+                             "give --fringes (nbrOfPeriods) for SLMaster's " + o.codec + " code");
+        return three ? slmaster_three_frequency(o, axis, steps, origin)
+                     : slmaster_interzone(o, axis, steps, origin);
+    }
     int fringes = o.fringes;
     if (fringes == 0 && o.period > 0) {
         const double f = e / o.period;
@@ -217,13 +289,7 @@ Sequence slmaster_sequence(const ImportOptions& o, const fs::path& origin) {
                              "its fringes (extent / count, rounded down)");
     const int period = e / fringes; // SLMaster: width / nbrOfPeriods, integer division
     const int bits = static_cast<int>(std::lround(std::log2(double(fringes))));
-    // I = 127.5 + 127.5 cos(2 pi (p mod P) / P - pi + 2 pi k / N).
-    PhaseBlock phase;
-    phase.axis = axis;
-    phase.period = period;
-    phase.steps = o.steps;
-    phase.shift_sign = 1;
-    phase.phase_offset = -kPi;
+    const PhaseBlock phase = slmaster_phase(axis, period, steps);
     GrayBlock gray;
     gray.axis = axis;
     gray.period = period;

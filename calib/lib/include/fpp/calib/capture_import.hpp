@@ -20,7 +20,8 @@ enum class ImportTool { slstudio, slmaster, opencv };
 struct ImportOptions {
     ImportTool tool = ImportTool::slstudio;
     // slstudio: 2x3, 3, nstep, 2p1, modulated, graycode, micro;
-    //   slmaster: complementary, shift-gray (a wrapping code: imports.md);
+    //   slmaster: complementary, shift-gray (a wrapping code: imports.md),
+    //   three-frequency, interzone (four-level code, no white or black frame);
     // opencv: graycode, sinusoidal (SinusoidalPattern).
     std::string codec;
     Size projector;              // the projector's resolution, pixels
@@ -35,8 +36,10 @@ struct ImportOptions {
     int slstudio_gray_bits_x = 10;        // CodecGrayCode Nhorz
     int slstudio_gray_bits_y = 6;         // CodecGrayCode Nvert
     // SLMaster's Params.
-    int steps = 4;     // shiftTime (SLMaster's default 4)
-    int fringes = 0;   // nbrOfPeriods across the coded axis (a power of 2)
+    int steps = 0;     // shiftTime; 0: SLMaster's default (4; interzone 3)
+    int fringes = 0;   // nbrOfPeriods across the coded axis: a power of 2 (complementary,
+                       // shift-gray: required), the highest of three (three-frequency;
+                       // 0: 32), a power of 4 (interzone; 0: 16)
     double period = 0; // or the period in projector pixels (fringes = extent / period)
     // OpenCV's GrayCodePattern: where the white and black images of
     // getImagesForShadowMasks were captured: "last" (white, black after the
