@@ -16,6 +16,7 @@
 #include "cmd_reconstruct_pair.hpp"
 #include "commands.hpp"
 #include "decode_outputs.hpp"
+#include "field_orientation.hpp"
 #include "table_reconstruction.hpp"
 
 #include "fpp/atomic_file.hpp"
@@ -109,33 +110,6 @@ void settle_sizes(StereoCalibration& calibration, const fs::path& calib_path,
                          "the calibration is for a " + size_text(calibration.projector_size) +
                              " projector, but the capture was projected at " +
                              size_text(manifest.projector));
-}
-
-struct CloudSummary {
-    double z_min = 0, z_max = 0, z_p01 = 0, z_p99 = 0;
-};
-
-CloudSummary summarise(const PointCloud& cloud) {
-    std::vector<float> z;
-    z.reserve(cloud.xyz.pixel_count());
-    const float* p = cloud.xyz.data();
-    for (std::size_t i = 0; i < cloud.xyz.pixel_count(); ++i, p += 3)
-        if (std::isfinite(p[2]))
-            z.push_back(p[2]);
-    CloudSummary s;
-    if (z.empty())
-        return s;
-    auto at = [&](double q) {
-        const std::size_t k =
-            std::min(z.size() - 1, static_cast<std::size_t>(q * double(z.size())));
-        std::nth_element(z.begin(), z.begin() + std::ptrdiff_t(k), z.end());
-        return double(z[k]);
-    };
-    s.z_min = at(0.0);
-    s.z_max = at(1.0);
-    s.z_p01 = at(0.01);
-    s.z_p99 = at(0.99);
-    return s;
 }
 
 // run_reconstruct's stages, in order.
@@ -386,6 +360,18 @@ int run_reconstruct(const ReconstructArgs& args) {
         report_no_points(capture, *scan, request, made);
         return kExitDecodeFailed;
     }
+    if (!request.use_table) {
+        if (const auto why =
+                mirrored_field(model.calibration, scan->decoded, made.stats.axes,
+                               field_fit(made.stats, made.cloud), args.decode.threads)) {
+            if (!args.accept_inconsistent)
+                throw DecodeRefused(kExitInconsistent,
+                                    capture.folder.string() + ": " + *why +
+                                        "\nno point cloud written (--accept-inconsistent to "
+                                        "write it as described)");
+            std::cerr << "fpp-calib: warning: " << capture.folder.string() << ": " << *why << "\n";
+        }
+    }
     const double write_seconds = write_reconstruction(args, request, model, made);
     std::cout << reconstruct_report(request, capture, *scan, made, write_seconds);
     return 0;
@@ -449,8 +435,9 @@ Action add_reconstruct_command(CLI::App& app) {
     add_threads_option(*cmd, args->decode.threads);
     cmd->add_flag("--accept-inconsistent", args->accept_inconsistent,
                   "write the cloud (with a warning) even when the decoded field is "
-                  "inconsistent with itself, which otherwise exits 5 naming the capture's field "
-                  "to check");
+                  "inconsistent with itself, or fits the calibration only mirrored along x "
+                  "(every shift reversed, a projector in rear or ceiling mode), which otherwise "
+                  "exits 5 naming the capture's field to check");
     cmd->add_flag("--correct-phase-error", args->decode.correct_phase_error,
                   "remove, from the capture alone, the periodic phase error a non-linear "
                   "projector response leaves, before reconstructing (for captures whose "
