@@ -284,6 +284,32 @@ class Scans(DaemonCase):
         self.assertEqual((r.status, r.body), (200, b""))
         self.assertTrue(r.header("content-type").startswith("text/html"))
 
+    def test_page_files_revalidate_and_three_js_is_cached(self):
+        # The page is revalidated on every load (no-cache + ETag: 304 while
+        # unchanged); three.js is kept a week. A reload transfers headers only.
+        d = self.daemon
+        paths = ["/", "/app.js", "/viewer.js", "/style.css"]
+        three = "/usr/share/javascript/three/build/three.module.js"
+        if os.path.exists(three):
+            paths.append("/three/build/three.module.js")
+        for path in paths:
+            with self.subTest(path=path):
+                first = d.request("GET", path, token=None)
+                etag = first.header("etag")
+                self.assertEqual(first.status, 200)
+                self.assertRegex(etag or "", r'^"[0-9a-f]+-[0-9a-f]+"$')
+                self.assertEqual(first.header("cache-control"),
+                                 "public, max-age=604800" if path.startswith("/three/")
+                                 else "no-cache")
+                again = d.request("GET", path, None, {"If-None-Match": etag}, token=None)
+                self.assertEqual((again.status, again.body), (304, b""))
+                self.assertEqual(again.header("etag"), etag)
+                other = d.request("GET", path, None, {"If-None-Match": '"0-0"'}, token=None)
+                self.assertEqual(other.status, 200)
+                self.assertEqual(other.body, first.body)
+        # The API is never cached.
+        self.assertEqual(d.request("GET", "/api/v1/status").header("cache-control"), "no-store")
+
 
 class Settings(DaemonCase):
     @classmethod

@@ -3,6 +3,8 @@
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"
 
+#include <algorithm>
+
 namespace fpp::scanner {
 
 std::string read_token_file(const std::filesystem::path& path) {
@@ -19,9 +21,12 @@ std::string read_token_file(const std::filesystem::path& path) {
 }
 
 bool authorized(std::string_view authorization, std::string_view token) {
-    constexpr std::string_view scheme = "Bearer ";
+    // The scheme's name is case-insensitive (RFC 7235, 2.1): "bearer" too.
+    constexpr std::string_view scheme = "bearer ";
+    const auto lower = [](char c) { return c >= 'A' && c <= 'Z' ? char(c - 'A' + 'a') : c; };
     if (authorization.size() != scheme.size() + token.size() ||
-        authorization.substr(0, scheme.size()) != scheme)
+        !std::equal(scheme.begin(), scheme.end(), authorization.begin(),
+                    [&](char s, char a) { return s == lower(a); }))
         return false; // the length is not a secret: every token has its own
     const std::string_view given = authorization.substr(scheme.size());
     unsigned char differ = 0;

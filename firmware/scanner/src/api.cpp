@@ -14,7 +14,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <string_view>
+
+#include <sys/stat.h>
 
 namespace fpp::scanner {
 
@@ -259,7 +262,7 @@ HttpResponse Api::handle(HttpRequest& request) {
             // from the GET response).
             if (request.method != "GET" && request.method != "HEAD")
                 return method_not_allowed("GET, HEAD");
-            return static_file(request.path);
+            return static_file(request);
         }
         const auto parts = split_path(request.path);
         if (parts.size() < 2 || parts[1] != "v1")
@@ -524,12 +527,18 @@ HttpResponse Api::table(HttpRequest& request) {
     return file_response(t["path"].get<std::string>(), "application/octet-stream", "table.fpt");
 }
 
-HttpResponse Api::static_file(const std::string& path) {
+// Page files are revalidated on every load, three.js (from its Debian
+// package, changed only by an upgrade) is kept a week; both carry an ETag
+// from the file's size and modification time, and a matching If-None-Match
+// gets 304 without the body.
+HttpResponse Api::static_file(const HttpRequest& request) {
+    const std::string& path = request.path;
     const auto parts = split_path(path == "/" ? "/index.html" : path);
     if (parts.empty() || !std::all_of(parts.begin(), parts.end(), is_plain_segment))
         return HttpResponse::error(404, "no such file");
     fs::path file;
-    if (parts[0] == "three" && parts.size() > 1) {
+    const bool three = parts[0] == "three" && parts.size() > 1;
+    if (three) {
         file = options_.three_root;
         for (std::size_t i = 1; i < parts.size(); ++i)
             file /= parts[i];
@@ -541,7 +550,22 @@ HttpResponse Api::static_file(const std::string& path) {
     const std::string type = content_type_of(file);
     if (type.empty())
         return HttpResponse::error(404, "no such file");
-    HttpResponse r = file_response(file, type);
+    struct stat st {};
+    if (::stat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+        return HttpResponse::error(404, "no such file");
+    char etag[64];
+    std::snprintf(etag, sizeof etag, "\"%llx-%llx\"", static_cast<unsigned long long>(st.st_size),
+                  static_cast<unsigned long long>(st.st_mtim.tv_sec) * 1000000000ull +
+                      static_cast<unsigned long long>(st.st_mtim.tv_nsec));
+    const bool unchanged =
+        request.if_none_match == "*" || request.if_none_match.find(etag) != std::string::npos;
+    HttpResponse r = unchanged ? HttpResponse{} : file_response(file, type);
+    if (unchanged) {
+        r.status = 304;
+        r.content_type = type;
+    }
+    r.headers.emplace_back("ETag", etag);
+    r.headers.emplace_back("Cache-Control", three ? "public, max-age=604800" : "no-cache");
     r.headers.emplace_back("Content-Security-Policy",
                            "default-src 'self'; img-src 'self' blob: data:; "
                            "connect-src 'self'; style-src 'self'; frame-ancestors 'none'");

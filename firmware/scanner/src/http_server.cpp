@@ -46,6 +46,7 @@ HttpResponse HttpResponse::error(int status, const std::string& message) {
 struct HttpServer::Context {
     HttpHandler& handler;
     const Logger& log;
+    HttpServerOptions options;
 };
 
 namespace {
@@ -57,6 +58,11 @@ struct RequestContext {
     HttpRequest request;
     BodyPolicy policy;
     int spool_fd = -1;
+    // A 413 or 507 decided mid-body, sent when the body ends: libmicrohttpd
+    // (0.9.75) queues no response while a body is still arriving, so the
+    // rest is read and dropped, at most `kMaxDiscard` bytes of it.
+    std::optional<HttpResponse> refusal;
+    std::uint64_t discarded = 0;
     ~RequestContext() {
         if (spool_fd >= 0)
             ::close(spool_fd);
@@ -66,6 +72,10 @@ struct RequestContext {
 };
 
 using ServerContext = HttpServer::Context;
+
+// The most of a refused body read and dropped before its answer; a body that
+// goes on longer loses its connection instead.
+constexpr std::uint64_t kMaxDiscard = 8u << 20;
 
 std::string header(MHD_Connection* c, const char* name) {
     const char* v = MHD_lookup_connection_value(c, MHD_HEADER_KIND, name);
@@ -122,25 +132,51 @@ MHD_Result queue(MHD_Connection* connection, HttpResponse r) {
     return result;
 }
 
-// Appends a piece of the body; false when the policy is exceeded.
-bool take_body(RequestContext& ctx, const char* data, std::size_t size) {
+MHD_Result add_field_bytes(void* cls, MHD_ValueKind, const char* key, const char* value) {
+    *static_cast<std::size_t*>(cls) += std::strlen(key) + (value ? std::strlen(value) : 0) + 4;
+    return MHD_YES;
+}
+
+// A request target or header block longer than the options allow, answered
+// as JSON (longer than the connection's memory, libmicrohttpd answers itself).
+std::optional<HttpResponse> too_long(MHD_Connection* connection, const char* url,
+                                     const HttpServerOptions& options) {
+    const std::size_t target = std::strlen(url);
+    if (target > options.max_target)
+        return HttpResponse::error(414, "the request target is " + std::to_string(target) +
+                                            " bytes, at most " +
+                                            std::to_string(options.max_target) + " are taken");
+    std::size_t fields = 0;
+    MHD_get_connection_values(connection, MHD_HEADER_KIND, &add_field_bytes, &fields);
+    if (fields > options.max_headers)
+        return HttpResponse::error(431, "the header fields are " + std::to_string(fields) +
+                                            " bytes, at most " +
+                                            std::to_string(options.max_headers) + " are taken");
+    return std::nullopt;
+}
+
+// Appends a piece of the body; otherwise the answer to give at once (413
+// over the policy's limit, 507 when the spool file cannot take it).
+std::optional<HttpResponse> take_body(RequestContext& ctx, const char* data, std::size_t size) {
     if (ctx.request.body_bytes + size > ctx.policy.max_bytes)
-        return false;
+        return HttpResponse::error(413, "the body passed " + std::to_string(ctx.policy.max_bytes) +
+                                            " bytes, at most that many are taken here");
     ctx.request.body_bytes += size;
     if (ctx.spool_fd < 0) {
         ctx.request.body.append(data, size);
-        return true;
+        return std::nullopt;
     }
     while (size > 0) {
         const ssize_t n = ::write(ctx.spool_fd, data, size);
         if (n < 0 && errno == EINTR)
             continue;
         if (n <= 0)
-            return false; // a full disk drops the upload
+            return HttpResponse::error(
+                507, describe_errno("cannot store the upload", n < 0 ? errno : ENOSPC));
         data += n;
         size -= static_cast<std::size_t>(n);
     }
-    return true;
+    return std::nullopt;
 }
 
 bool open_spool(RequestContext& ctx) {
@@ -163,7 +199,10 @@ MHD_Result on_request(void* cls, MHD_Connection* connection, const char* url, co
             ctx->request.path = url;
             ctx->request.authorization = header(connection, MHD_HTTP_HEADER_AUTHORIZATION);
             ctx->request.content_type = header(connection, MHD_HTTP_HEADER_CONTENT_TYPE);
-            std::optional<HttpResponse> early = server.handler.begin(ctx->request, ctx->policy);
+            ctx->request.if_none_match = header(connection, MHD_HTTP_HEADER_IF_NONE_MATCH);
+            std::optional<HttpResponse> early = too_long(connection, url, server.options);
+            if (!early)
+                early = server.handler.begin(ctx->request, ctx->policy);
             if (!early) {
                 const std::string length = header(connection, MHD_HTTP_HEADER_CONTENT_LENGTH);
                 if (!length.empty() &&
@@ -185,15 +224,27 @@ MHD_Result on_request(void* cls, MHD_Connection* connection, const char* url, co
         }
         auto& ctx = *static_cast<RequestContext*>(*con_cls);
         if (*upload_data_size > 0) {
-            if (!take_body(ctx, upload_data, *upload_data_size)) {
+            const std::size_t size = *upload_data_size;
+            *upload_data_size = 0;
+            if (ctx.refusal) {
+                ctx.discarded += size;
+                if (ctx.discarded <= kMaxDiscard)
+                    return MHD_YES;
                 server.log.warning("http: " + ctx.request.method + " " + ctx.request.path +
-                                   ": body over " + std::to_string(ctx.policy.max_bytes) +
-                                   " bytes or not storable: connection dropped");
+                                   ": body goes on " + std::to_string(kMaxDiscard) +
+                                   " bytes past its refusal: connection dropped");
                 return MHD_NO;
             }
-            *upload_data_size = 0;
+            ctx.refusal = take_body(ctx, upload_data, size);
+            if (ctx.refusal)
+                server.log.warning("http: " + ctx.request.method + " " + ctx.request.path + ": " +
+                                   std::to_string(ctx.refusal->status) + " after " +
+                                   std::to_string(ctx.request.body_bytes) +
+                                   " bytes; the rest of the body is dropped");
             return MHD_YES;
         }
+        if (ctx.refusal)
+            return queue(connection, std::move(*ctx.refusal));
         if (ctx.spool_fd >= 0) {
             const bool synced = ::fsync(ctx.spool_fd) == 0;
             ::close(ctx.spool_fd);
@@ -282,7 +333,7 @@ void HttpServer::DaemonStop::operator()(MHD_Daemon* d) const {
 }
 
 HttpServer::HttpServer(const HttpServerOptions& options, HttpHandler& handler, const Logger& log)
-    : options_(options), context_(new Context{handler, log}) {
+    : options_(options), context_(new Context{handler, log, options}) {
     bool ipv6 = false;
     const int fd = listen_on(options.host, options.port, port_, ipv6);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_THREAD_PER_CONNECTION |

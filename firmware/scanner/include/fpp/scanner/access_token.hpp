@@ -11,8 +11,9 @@ namespace fpp::scanner {
 // file otherwise, IoError when it cannot be read.
 std::string read_token_file(const std::filesystem::path& path);
 
-// Whether the Authorization header is "Bearer <token>", compared in time
-// that does not depend on where they differ.
+// Whether the Authorization header is "Bearer <token>" (the scheme in any
+// case, one space), the token compared in time that does not depend on
+// where they differ.
 bool authorized(std::string_view authorization, std::string_view token);
 
 } // namespace fpp::scanner

@@ -37,7 +37,7 @@ private:
     HttpResponse preview();
     HttpResponse settings(HttpRequest& request);
     HttpResponse table(HttpRequest& request);
-    HttpResponse static_file(const std::string& path);
+    HttpResponse static_file(const HttpRequest& request);
 
     ScannerService& service_;
     EventHub& events_;

@@ -24,6 +24,7 @@ struct HttpRequest {
     std::string method;        // "GET", "PUT", ...
     std::string path;          // percent-decoded, without the query
     std::string authorization; // the Authorization header, "" when absent
+    std::string if_none_match; // the If-None-Match header, "" when absent
     std::string content_type;
     std::string body;                // when the body is kept in memory
     std::filesystem::path body_file; // when it was spooled to a file
@@ -74,7 +75,12 @@ struct HttpServerOptions {
     int port = 0;                   // 0: any free port (see HttpServer::port)
     int max_connections = 64;
     std::chrono::seconds timeout{30};
-    std::size_t connection_memory = 32 * 1024; // headers and buffers of one connection
+    // Headers and buffers of one connection: a request line or header block
+    // beyond it gets libmicrohttpd's own (HTML) answer; within it, longer
+    // than the limits below, a JSON 414 or 431.
+    std::size_t connection_memory = 64 * 1024;
+    std::size_t max_target = 8 * 1024;   // bytes of the request target (414)
+    std::size_t max_headers = 16 * 1024; // bytes of the header fields (431)
 };
 
 class HttpServer {
