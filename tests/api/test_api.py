@@ -350,6 +350,41 @@ class Settings(DaemonCase):
         r = d.request("PUT", "/api/v1/settings", {"exposure_us": 8000})
         self.assertEqual((r.status, r.json()), (200, {"exposure_us": 8000}))
 
+    def test_scans_are_judged_and_poor_ones_say_what_to_do(self):
+        # Every scan is written; scan.json, the `written` event, the last
+        # scan in the status and the scan list say whether it is good, and a
+        # poor one why and what to do, in plain words.
+        d = self.daemon
+
+        def scan_at(exposure_us):
+            self.assertEqual(d.request("PUT", "/api/v1/settings",
+                                       {"exposure_us": exposure_us}).status, 200)
+            _, events = d.scan()
+            written = [e for e in events if e.name == "written"]
+            self.assertEqual(len(written), 1, events)
+            quality = written[0].data["quality"]
+            with open(os.path.join(d.folder_of(written[0].data["id"]), "scan.json")) as f:
+                self.assertEqual(json.load(f)["quality"], quality)
+            self.assertEqual(d.status()["last_scan"]["quality"], quality)
+            listed = {e["id"]: e for e in d.get_json("/api/v1/scans")["scans"]}
+            self.assertEqual(listed[written[0].data["id"]]["quality"], quality)
+            return written[0].data, quality
+
+        good, quality = scan_at(8000)
+        self.assertTrue(quality["good"], quality)
+        self.assertGreater(quality["coverage"], 0.3)
+        self.assertEqual((quality["reasons"], quality["advice"]), ([], ""))
+        dark, quality = scan_at(100)
+        self.assertFalse(quality["good"], quality)
+        self.assertIn("Raise the exposure (now 100 us)", quality["advice"])
+        self.assertTrue(any("last good scan (" + good["id"] + ")" in r
+                            for r in quality["reasons"]), quality)
+        bright, quality = scan_at(200000)
+        self.assertFalse(quality["good"], quality)
+        self.assertIn("of the lit pixels are saturated", quality["reasons"][0])
+        self.assertIn("Lower the exposure (now 200 ms)", quality["advice"])
+        d.request("PUT", "/api/v1/settings", {"exposure_us": 8000})
+
     def test_settings_bad_values_are_400_and_change_nothing(self):
         d = self.daemon
         now = d.get_json("/api/v1/settings")

@@ -166,6 +166,7 @@ json scan_summary(const fs::path& folder) {
         entry["mode"] = meta.value("mode", "");
         entry["started_utc"] = meta.value("started_utc", "");
         entry["points"] = meta.value("points", 0);
+        entry["quality"] = meta.value("quality", json(nullptr));
     } catch (const std::exception&) {
         entry["mode"] = nullptr; // written by an older scanner, or damaged
     }

@@ -51,6 +51,11 @@ std::optional<std::string> file_written_utc(const std::filesystem::path& path) {
                         .count());
 }
 
+nlohmann::json quality_json(const ScanVerdict& v) {
+    return {
+        {"good", v.good}, {"coverage", v.coverage}, {"reasons", v.reasons}, {"advice", v.advice}};
+}
+
 std::string scan_json(const ScanMetadata& m) {
     const auto& s = m.board.camera.settings;
     const ScanTimings& t = m.outcome.timings;
@@ -113,6 +118,7 @@ std::string scan_json(const ScanMetadata& m) {
                        {"undecoded", f.undecoded}};
     }
     j["points"] = m.outcome.points;
+    j["quality"] = quality_json(m.outcome.verdict);
     j["sigma_z"] = m.outcome.has_sigma;
     if (m.board.points.max_sigma_z_mm)
         j["dropped_by_sigma"] = {{"max_sigma_z_mm", *m.board.points.max_sigma_z_mm},

@@ -51,6 +51,10 @@ struct ScanMetadata {
 
 std::string scan_json(const ScanMetadata& m);
 
+// scan.json's `quality` (and the API's): good, coverage (decoded pixels over
+// camera pixels), reasons, advice.
+nlohmann::json quality_json(const ScanVerdict& verdict);
+
 // "2026-11-26T14:31:25Z" of seconds since 1970 (how scan.json and the API
 // write times).
 std::string utc_text(std::int64_t unix_s);

@@ -343,16 +343,19 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop, const
     if (observer_)
         observer_->decoded();
 
+    const bool in_store = folder.parent_path() == board_.store.directory;
+    const std::optional<GoodScan> last_good =
+        in_store ? newest_good_scan(board_.store.directory, folder) : std::nullopt;
     double t = wall_ms();
     write_folder_atomically(folder, [&](const fs::path& temp) {
-        write_outputs(temp, mode, captured, decoded, outcome);
+        write_outputs(temp, mode, captured, decoded, outcome, last_good);
     });
     const double written = wall_ms();
     outcome.timings.write_ms = written - t - outcome.timings.apply_ms;
     outcome.timings.last_frame_to_written_ms = written - last_frame;
     outcome.folder = folder;
 
-    if (folder.parent_path() == board_.store.directory) {
+    if (in_store) {
         const auto removed = prune_store(board_.store.directory, board_.store.max_bytes, folder);
         for (const auto& r : removed)
             log_.info("store full: removed " + r.filename().string());
@@ -483,7 +486,8 @@ DecodeResult& Scanner::combine_passes(ScanOutcome& outcome) {
 }
 
 void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captured,
-                            DecodeResult& decoded, ScanOutcome& outcome) {
+                            DecodeResult& decoded, ScanOutcome& outcome,
+                            const std::optional<GoodScan>& last_good) {
     const Size camera = dev_.camera.size();
     const Size projector = dev_.display.size();
     if (!table_.empty()) {
@@ -555,6 +559,12 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
     const DecodeStatistics statistics =
         fused ? fused_decode_statistics(decoded, pass_results, full_scale)
               : decode_statistics(decoded, full_scale);
+    outcome.verdict = judge_scan(
+        {statistics, outcome.points, mode == ScanMode::scan,
+         *std::max_element(outcome.exposures_us.begin(), outcome.exposures_us.end()), last_good});
+    if (!outcome.verdict.good)
+        log_.warning("poor scan: " + outcome.verdict.reasons.front() + ". " +
+                     outcome.verdict.advice);
     const ScanMetadata metadata{board_,
                                 mode,
                                 captured.started_utc,

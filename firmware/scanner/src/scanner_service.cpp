@@ -320,9 +320,13 @@ void ScannerService::written(const ScanOutcome& outcome) {
     bool state_changed = false;
     {
         const std::lock_guard lock(mutex_);
-        last_scan_ = {{"id", current_id_}, {"mode", mode},
-                      {"ok", true},        {"points", outcome.points},
-                      {"error", nullptr},  {"session", text_or_null(current_session_)}};
+        last_scan_ = {{"id", current_id_},
+                      {"mode", mode},
+                      {"ok", true},
+                      {"points", outcome.points},
+                      {"quality", quality_json(outcome.verdict)},
+                      {"error", nullptr},
+                      {"session", text_or_null(current_session_)}};
         ++scans_completed_;
         busy_ = false;
         store_bytes_at_ = {}; // measure again
@@ -333,6 +337,7 @@ void ScannerService::written(const ScanOutcome& outcome) {
     events_.publish("written", json{{"id", current_id_},
                                     {"mode", mode},
                                     {"points", outcome.points},
+                                    {"quality", quality_json(outcome.verdict)},
                                     {"session", text_or_null(current_session_)}}
                                    .dump());
     if (state_changed)

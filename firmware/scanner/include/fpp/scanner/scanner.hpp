@@ -27,6 +27,7 @@
 #include <fpp/projector_response.hpp>
 #include <fpp/scanner/board_config.hpp>
 #include <fpp/scanner/log.hpp>
+#include <fpp/scanner/scan_verdict.hpp>
 
 namespace fpp::scanner {
 
@@ -73,6 +74,7 @@ struct ScanOutcome {
     std::optional<FusionStats> fusion; // HDR scans
     bool has_sigma = false;            // points carry sigma_z (the board gives camera.noise)
     std::size_t dropped_by_sigma = 0;  // points over points.max_sigma_z_mm
+    ScanVerdict verdict;               // good, or poor with its reasons (scan_verdict.hpp)
     ScanTimings timings;
 };
 
@@ -188,8 +190,10 @@ private:
     };
     static std::optional<FileStamp> stamp_of(const std::filesystem::path& path);
     void reload_table_if_changed();
+    // `last_good`: the store's newest good scan, to judge this one against.
     void write_outputs(const std::filesystem::path& temp, ScanMode mode, Captured& captured,
-                       DecodeResult& decoded, ScanOutcome& outcome);
+                       DecodeResult& decoded, ScanOutcome& outcome,
+                       const std::optional<GoodScan>& last_good);
 
     const BoardConfig& board_;
     Devices dev_;
