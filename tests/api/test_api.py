@@ -78,7 +78,8 @@ class Scans(DaemonCase):
             self.assertIsNone(st["last_scan"])
         else:
             last = st["last_scan"]
-            self.assertEqual(set(last), {"id", "mode", "ok", "points", "error", "session"})
+            self.assertEqual(set(last),
+                             {"id", "mode", "ok", "points", "quality", "error", "session"})
             self.assertRegex(last["id"], s.SCAN_ID)
             self.assertIn(last["mode"], ("scan", "capture"))
             self.assertIsInstance(last["ok"], bool)
@@ -119,7 +120,8 @@ class Scans(DaemonCase):
         self.assertEqual([e.data["frame"] for e in mine[1:1 + frames]], list(range(1, frames + 1)))
         self.assertTrue(all(e.data["frames"] == frames for e in mine[1:1 + frames]))
         written = mine[-1].data
-        self.assertEqual(set(written), {"id", "mode", "points", "session"})
+        self.assertEqual(set(written), {"id", "mode", "points", "quality", "session"})
+        self.assertEqual(set(written["quality"]), {"good", "coverage", "reasons", "advice"})
         self.assertEqual((written["mode"], written["session"]), (expect_mode, None))
         states = [e.data for e in seen if e.name == "state"]
         self.assertEqual(states, [{"state": "scanning", "error": None},
@@ -136,8 +138,8 @@ class Scans(DaemonCase):
         self.assertEqual(ids, sorted(ids, reverse=True))
         self.assertEqual(sorted(ids), self.store_scans(d))
         entry = listing[0]
-        self.assertEqual(set(entry), {"id", "mode", "started_utc", "points", "bytes", "cloud",
-                                      "capture"})
+        self.assertEqual(set(entry), {"id", "mode", "started_utc", "points", "quality", "bytes",
+                                      "cloud", "capture"})
         self.assertEqual(entry["mode"], mode)
         self.assertRegex(entry["started_utc"], ISO_UTC)
         self.assertEqual(entry["points"], points)
@@ -169,8 +171,12 @@ class Scans(DaemonCase):
 
     def check_deleted(self, scan_id):
         d = self.daemon
-        r = d.request("DELETE", "/api/v1/scans/" + scan_id)
-        self.assertEqual(r.status, 204, r)
+        with d.follow() as events:
+            r = d.request("DELETE", "/api/v1/scans/" + scan_id)
+            self.assertEqual(r.status, 204, r)
+            # Every client hears of it (the page drops the scan and its cloud).
+            events.wait_for(lambda e: e.name == "deleted"
+                            and e.data == {"id": scan_id, "session": None}, 10)
         self.assertEqual(r.body, b"")
         self.assertFalse(os.path.exists(d.folder_of(scan_id)))
         for path in ("", "/cloud.ply", "/capture.tar", "/texture.png"):
@@ -191,8 +197,10 @@ class Scans(DaemonCase):
         self.assertEqual(st["state"], "idle")
         self.assertEqual(st["scans_completed"], before["scans_completed"] + 1)
         self.assertEqual(st["last_scan"], {"id": scan_id, "mode": "scan", "ok": True,
-                                           "points": written["points"], "error": None,
+                                           "points": written["points"],
+                                           "quality": written["quality"], "error": None,
                                            "session": None})
+        self.assertTrue(written["quality"]["good"], written["quality"])
         self.check_cloud(scan_id)
         # A scan-mode scan has no capture set, so no texture either.
         self.assert_error(d.request("GET", f"/api/v1/scans/{scan_id}/capture.tar"), 404,
@@ -609,8 +617,11 @@ class Sessions(DaemonCase):
         self.assertEqual(d.request("GET", f"/api/v1/sessions/{name}/poses/{ids[0]}/cloud.ply")
                          .status, 404)
 
-        r = d.request("DELETE", f"/api/v1/sessions/{name}/poses/{ids[1]}")
-        self.assertEqual(r.status, 204, r)
+        with d.follow() as events:
+            r = d.request("DELETE", f"/api/v1/sessions/{name}/poses/{ids[1]}")
+            self.assertEqual(r.status, 204, r)
+            events.wait_for(lambda e: e.name == "deleted"
+                            and e.data == {"id": ids[1], "session": name}, 10)
         self.assertFalse(os.path.exists(os.path.join(self.session_dir(name), ids[1])))
         self.assertEqual(d.request("DELETE", f"/api/v1/sessions/{name}/poses/{ids[1]}").status,
                          404)
@@ -635,8 +646,11 @@ class Sessions(DaemonCase):
         for m, data in members.items():
             self.assertEqual(data, on_disk[m], m)
 
-        r = d.request("DELETE", f"/api/v1/sessions/{name}")
-        self.assertEqual(r.status, 204, r)
+        with d.follow() as events:
+            r = d.request("DELETE", f"/api/v1/sessions/{name}")
+            self.assertEqual(r.status, 204, r)
+            events.wait_for(lambda e: e.name == "deleted"
+                            and e.data == {"id": None, "session": name}, 10)
         self.assertFalse(os.path.exists(self.session_dir(name)))
         self.assertEqual(d.request("GET", f"/api/v1/sessions/{name}").status, 404)
         self.assertEqual(d.request("DELETE", f"/api/v1/sessions/{name}").status, 404)

@@ -340,6 +340,7 @@ HttpResponse Api::scans(HttpRequest& request, const std::vector<std::string>& pa
         if (m == "DELETE") {
             remove_folder(folder);
             log_.info("http: scan " + parts[3] + " deleted");
+            events_.publish("deleted", json{{"id", parts[3]}, {"session", nullptr}}.dump());
             return HttpResponse::no_content();
         }
         return m == "GET" ? file_response(folder / "scan.json", "application/json")
@@ -424,6 +425,7 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
         if (m == "DELETE") {
             remove_folder(folder);
             log_.info("http: session " + name + " deleted");
+            events_.publish("deleted", json{{"id", nullptr}, {"session", name}}.dump());
             return HttpResponse::no_content();
         }
         if (m != "GET")
@@ -469,6 +471,7 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
     if (parts.size() == 6) {
         if (m == "DELETE") {
             remove_folder(pose);
+            events_.publish("deleted", json{{"id", parts[5]}, {"session", name}}.dump());
             return HttpResponse::no_content();
         }
         return m == "GET" ? file_response(pose / "scan.json", "application/json")
