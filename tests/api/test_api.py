@@ -48,7 +48,8 @@ class Scans(DaemonCase):
         self.assertEqual(st["api"], 1)
         self.assertEqual(st["state"], "idle")
         self.assertIsNone(st["error"])
-        self.assertEqual(st["board"], {"name": "sim", "simulated": True})
+        # sim.yaml has no session board of its own (sim-checkerboard-session.yaml has).
+        self.assertEqual(st["board"], {"name": "sim", "simulated": True, "session_board": False})
         self.assertEqual(st["camera"], {"width": 800, "height": 600, "bit_depth": 8,
                                         "pixel_format": "Mono8", "exposure_us": 8000})
         self.assertEqual(st["display"], {"width": 1280, "height": 800})

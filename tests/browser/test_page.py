@@ -195,9 +195,9 @@ class Daemon:
         state = f"exited with {self.process.returncode}" if self.process.poll() is not None else "still silent"
         raise Failure(f"the scanner did not log 'info: http: listening on ...' ({state}); its log ends:\n{tail}")
 
-    def stop(self):
+    def stop(self, kill=False):
         if self.process.poll() is None:
-            self.process.send_signal(signal.SIGTERM)
+            self.process.send_signal(signal.SIGKILL if kill else signal.SIGTERM)
             try:
                 self.process.wait(20)
             except subprocess.TimeoutExpired:
@@ -355,7 +355,12 @@ def scan(driver):
     check(values == sorted(values), f"the progress went backwards: {seen}")
     log(f"scan written in {time.monotonic() - began:.1f} s: {status!r}; progress seen "
         + ", ".join(f"{v:g}/{m:g}" for v, m in seen))
-    return match.group(1)
+    scan_id = match.group(1)
+    wait_for(driver, f"the viewer to draw {scan_id}", lambda d: d.execute_script(
+        "const v = window.fppViewer; return v && v.points > 0 && v.scanId === arguments[0]", scan_id),
+        timeout=60, poll=0.02)
+    log(f"click to shaded cloud on screen: {time.monotonic() - began:.2f} s")
+    return scan_id
 
 
 def count_drawn_pixels(driver):
@@ -394,8 +399,19 @@ def check_viewer(driver, scan_id, artifacts):
                       lambda d: d.execute_script(
                           "const v = window.fppViewer; return v && v.points > 0 && v.scanId === arguments[0] ? v : null",
                           scan_id), timeout=60)
-    log(f"viewer: {viewer['points']} of {viewer['total']} points drawn, coloured by {viewer['colourBy']} "
-        f"over {viewer['range'][0]:.1f}..{viewer['range'][1]:.1f}")
+    log(f"viewer: {viewer['points']} of {viewer['total']} points drawn, coloured by {viewer['colourBy']}, "
+        f"normals {viewer['normals']}")
+    check(viewer["colourBy"] == "shaded" and viewer["normals"],
+          f"the first view is not the shaded surface: {viewer['colourBy']}, normals {viewer['normals']}")
+    grey_levels = driver.execute_script("""
+        const c = document.querySelector('#viewer canvas'), t = document.createElement('canvas');
+        t.width = c.width; t.height = c.height;
+        const g = t.getContext('2d'); g.drawImage(c, 0, 0);
+        const d = g.getImageData(0, 0, t.width, t.height).data, seen = new Set();
+        for (let i = 0; i < d.length; i += 4) if (d[i] > 40) seen.add(d[i] >> 3);
+        return seen.size;""")
+    log(f"shaded view: {grey_levels} of 32 grey bands in use")
+    check(grey_levels >= 12, f"the shaded view uses {grey_levels} grey bands: no shading to see the shape by")
     pixels = count_drawn_pixels(driver)
     share = pixels["differing"] / (pixels["width"] * pixels["height"])
     log(f"canvas {pixels['width']} x {pixels['height']}: {pixels['differing']} pixels "
@@ -405,10 +421,14 @@ def check_viewer(driver, scan_id, artifacts):
     # The whole viewer in the window, or its screenshot is cut.
     driver.execute_script("document.getElementById('viewer').scrollIntoView({block: 'center'})")
     driver.find_element(By.ID, "viewer").screenshot(str(artifacts / "viewer.png"))
-    # Colour by quality: the same points, other colours.
-    driver.execute_script("const s = document.getElementById('colour-by'); s.value = 'quality';"
-                          "s.dispatchEvent(new Event('change'));")
-    wait_for(driver, "the quality colours", lambda d: d.execute_script("return window.fppViewer.colourBy") == "quality")
+    # Colour by depth: a legend in mm; by quality: in DN.
+    for mode, unit in (("depth", "mm"), ("quality", "DN")):
+        driver.execute_script("const s = document.getElementById('colour-by'); s.value = arguments[0];"
+                              "s.dispatchEvent(new Event('change'));", mode)
+        wait_for(driver, f"the {mode} colours", lambda d: d.execute_script("return window.fppViewer.colourBy") == mode)
+        legend = driver.find_element(By.ID, "viewer-legend")
+        check(legend.is_displayed() and unit in legend.text, f"the {mode} legend shows {legend.text!r}")
+        log(f"{mode} legend: {legend.text!r}")
     driver.find_element(By.ID, "viewer").screenshot(str(artifacts / "viewer-quality.png"))
     log(f"screenshots: {artifacts / 'page-after-scan.png'}, {artifacts / 'viewer.png'}, "
         f"{artifacts / 'viewer-quality.png'}")
@@ -421,6 +441,13 @@ def check_viewer(driver, scan_id, artifacts):
              lambda d: d.execute_script("return arguments[0].toDataURL('image/png')", canvas) != before, timeout=10)
     driver.find_element(By.ID, "viewer").screenshot(str(artifacts / "viewer-turned.png"))
     log(f"a mouse drag turned the view: {artifacts / 'viewer-turned.png'}")
+    lod = driver.execute_script("return window.fppViewer.lod")
+    log(f"level of detail: a full frame of {lod['fullPoints']} points took {lod['frameMs']:.0f} ms here; "
+        f"while turning, {lod['movingPoints']} points a frame (budget 50 ms)")
+    check(0 < lod["movingPoints"] <= lod["fullPoints"], f"no level of detail measured: {lod}")
+    driver.find_element(By.ID, "view-reset").click()
+    driver.execute_script("const s = document.getElementById('colour-by'); s.value = 'shaded';"
+                          "s.dispatchEvent(new Event('change'));")
     return viewer
 
 
@@ -437,8 +464,119 @@ def check_phone_layout(driver, artifacts):
             return lefts.every(x => x === lefts[0]) && !wide ? lefts : null;"""), timeout=10)
         driver.save_screenshot(str(artifacts / "page-phone.png"))
         log(f"phone layout: one column (sections at x = {lefts[0]} px), no sideways scrolling")
+        small = driver.execute_script("""
+            const out = [];
+            for (const e of document.querySelectorAll('main button, main a, main select, main input')) {
+              const r = e.getBoundingClientRect();
+              if (r.width === 0 || r.height === 0 || e.closest('[hidden], details:not([open])')) continue;
+              const target = e.type === 'checkbox' ? e.closest('label') || e : e;
+              const t = target.getBoundingClientRect();
+              if (t.height < 44) out.push((e.id || e.className || e.tagName) + ' ' + Math.round(t.height) + ' px');
+            }
+            return out;""")
+        check(not small, f"tap targets under 44 px on a phone: {small}")
+        log("phone layout: every visible control at least 44 px tall")
     finally:
         driver.set_window_size(size["width"], size["height"])
+
+
+def api_send(base, token, method, path, body=None):
+    data = json.dumps(body).encode() if body is not None else None
+    request = urllib.request.Request(base + path, data=data, method=method)
+    request.add_header("Authorization", "Bearer " + token)
+    if data is not None:
+        request.add_header("Content-Type", "application/json")
+    with urllib.request.urlopen(request, timeout=30) as response:
+        return response.status
+
+
+def check_accessibility(driver):
+    """Labels, live regions, headings without controls, the canvas's text."""
+    problems = driver.execute_script("""
+        const out = [];
+        for (const e of document.querySelectorAll('input, select, textarea, progress')) {
+          if (e.type === 'hidden') continue;
+          const named = (e.labels && e.labels.length) || e.getAttribute('aria-label');
+          if (!named) out.push('no label: ' + (e.id || e.tagName));
+        }
+        for (const id of ['scan-status', 'scan-error', 'scan-quality', 'viewer-message', 'connection-banner'])
+          if (!document.getElementById(id).matches('[aria-live], [role="alert"]'))
+            out.push('not a live region: ' + id);
+        if (!document.getElementById('state').closest('[aria-live]')) out.push('the state is not live');
+        for (const h of document.querySelectorAll('h1, h2, h3'))
+          if (h.querySelector('button, a, input, select')) out.push('a control inside heading ' + h.textContent);
+        const canvas = document.querySelector('#viewer canvas');
+        if (!canvas.getAttribute('aria-label')) out.push('the canvas has no text');
+        return out;""")
+    check(not problems, f"accessibility: {problems}")
+    text = driver.execute_script("return document.querySelector('#viewer canvas').getAttribute('aria-label')")
+    log(f"accessibility: every control labelled, live regions for state and messages, canvas: {text!r}")
+
+
+def check_poor_scan(driver, base, token):
+    """A scan at 100 us is written, flagged on the page with what to do, and
+    started from the keyboard."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    check(api_send(base, token, "PUT", "/api/v1/settings", {"exposure_us": 100}) == 200, "exposure 100 us")
+    button = driver.find_element(By.ID, "scan-button")
+    driver.execute_script("arguments[0].focus()", button)
+    check(driver.switch_to.active_element == button, "the Scan button takes the keyboard focus")
+    button.send_keys(Keys.ENTER)
+    quality = wait_for(driver, "the poor scan's warning",
+                       lambda d: text_of(d, "scan-quality") if shown(d, "scan-quality") else None, timeout=60)
+    check("Raise the exposure (now 100 us)" in quality, f"the warning says {quality!r}")
+    log(f"poor scan (started with Enter): {quality!r}")
+    scan_id = wait_for(driver, "the poor scan's row", lambda d: d.execute_script(
+        "const r = document.querySelector('#scan-list tr.poor'); return r && r.dataset.scanId"), timeout=20)
+    check(api_send(base, token, "PUT", "/api/v1/settings", {"exposure_us": 8000}) == 200, "exposure back")
+    return scan_id
+
+
+def check_deleted_elsewhere(driver, base, token, scan_id):
+    """The scan on screen deleted through the API: its row and its cloud go."""
+    driver.execute_script("loadCloud(arguments[0])", scan_id)
+    wait_for(driver, f"{scan_id} on screen", lambda d: d.execute_script(
+        "return window.fppViewer && window.fppViewer.scanId === arguments[0]", scan_id), timeout=30)
+    check(api_send(base, token, "DELETE", f"/api/v1/scans/{scan_id}") == 204, "DELETE through the API")
+    wait_for(driver, "the deleted scan to leave the page", lambda d: d.execute_script("""
+        return !document.querySelector('#scan-list tr[data-scan-id="' + arguments[0] + '"]') &&
+               !window.fppViewer && document.getElementById('viewer-title').textContent === '' &&
+               document.getElementById('viewer-message').textContent.includes('was deleted')""", scan_id),
+             timeout=10)
+    log(f"{scan_id} deleted through the API: its row and its cloud left the page")
+
+
+def check_scanner_gone(driver, restart):
+    """The scanner killed mid-scan (no `failed` event: a crash, a power cut)
+    and stopped while idle, then back: the page says so at once, greys its
+    actions, and ends right."""
+    from selenium.webdriver.common.by import By
+
+    driver.find_element(By.ID, "scan-button").click()
+    wait_for(driver, "a scan under way", lambda d: d.execute_script(
+        "return document.getElementById('progress').value >= 2"), timeout=30)
+    began = time.monotonic()
+    restart(lambda: wait_for(driver, "the banner", lambda d: shown(d, "connection-banner"), timeout=30),
+            kill=True)
+    log(f"scanner killed mid-scan: banner after {time.monotonic() - began:.1f} s: "
+        f"{text_of(driver, 'connection-banner')!r}")
+    wait_for(driver, "the page back", lambda d: not shown(d, "connection-banner")
+             and text_of(d, "state") == "idle" and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
+    status = text_of(driver, "scan-status")
+    check("did not finish" in status and driver.execute_script(
+        "return document.getElementById('progress').value") == 0,
+        f"after the restart the scan's line says {status!r}")
+    check(not shown(driver, "scan-error"), f"a stale error stays: {text_of(driver, 'scan-error')!r}")
+    log(f"scanner back: {status!r}, progress reset, no stale error")
+    # While idle: the same, and Scan is off while it is away.
+    restart(lambda: (wait_for(driver, "the banner", lambda d: shown(d, "connection-banner"), timeout=30),
+                     check(not driver.find_element(By.ID, "scan-button").is_enabled(),
+                           "Scan is enabled while the scanner is away")))
+    wait_for(driver, "the page back", lambda d: not shown(d, "connection-banner")
+             and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
+    log("scanner stopped while idle and back: banner, Scan off while away, back on after")
 
 
 def check_download(driver, scan_id, downloads, expected):
@@ -470,7 +608,7 @@ def check_console(driver):
     check(not errors, f"JavaScript errors on the page: {[e['message'] for e in errors]}")
 
 
-def browser_test(args, base, token, store, work, artifacts):
+def browser_test(args, base, token, store, work, artifacts, restart=None):
     downloads = work / "downloads"
     downloads.mkdir()
     log(f"chromium {args.chromium}, chromedriver {args.chromedriver}")
@@ -490,6 +628,11 @@ def browser_test(args, base, token, store, work, artifacts):
             expected = api_get(base, f"/api/v1/scans/{scan_id}/cloud.ply", token)[2]
             log("expected bytes from GET /api/v1/scans/{id}/cloud.ply (no --store given)")
         check_download(driver, scan_id, downloads, expected)
+        check_accessibility(driver)
+        poor = check_poor_scan(driver, base, token)
+        check_deleted_elsewhere(driver, base, token, poor)
+        if restart:
+            check_scanner_gone(driver, restart)
         check_phone_layout(driver, artifacts)
         check_console(driver)
         return scan_id
@@ -528,18 +671,32 @@ def main():
             token_file = work / "token"
             token = write_token(token_file)
             store = work / "store"
-            daemon = Daemon([args.scanner, "--board", board_file("sim.yaml", args.binning, work),
-                             "--http", "127.0.0.1:0", "--token-file", token_file, "--store", store,
-                             "--table", table, "--settings", work / "settings.yaml",
-                             "--web-root", args.web_root], artifacts / "daemon.log")
+            board = board_file("sim.yaml", args.binning, work)
+
+            def command(port):
+                return [args.scanner, "--board", board, "--http", f"127.0.0.1:{port}",
+                        "--token-file", token_file, "--store", store, "--table", table,
+                        "--settings", work / "settings.yaml", "--web-root", args.web_root]
+
+            daemon = Daemon(command(0), artifacts / "daemon.log")
             port = daemon.wait_listening()
             base = f"http://127.0.0.1:{port}"
             log(f"scanner listening at {base}")
+            runs = [daemon]
+
+            def restart(while_away, kill=False):
+                """Stops (or kills) the scanner, runs `while_away`, starts it on the same port."""
+                runs[-1].stop(kill)
+                while_away()
+                runs.append(Daemon(command(port), artifacts / f"daemon-{len(runs)}.log"))
+                runs[-1].wait_listening()
+        if args.url:
+            restart = None
         status = check_server_basics(base, token)
         log(f"status: state {status['state']}, board {status['board']['name']}, "
             f"camera {status['camera']['width']} x {status['camera']['height']}, "
             f"table {'loaded' if status['table'] else 'none'}")
-        scan_id = browser_test(args, base, token, store, work, artifacts)
+        scan_id = browser_test(args, base, token, store, work, artifacts, restart)
         log(f"{TEST_NAME}: PASSED ({scan_id}, {time.monotonic() - START:.1f} s)")
         return 0
     except Failure as e:
@@ -552,6 +709,7 @@ def main():
         return 1
     finally:
         if daemon:
+            daemon = runs[-1]
             code = daemon.stop()
             log(f"scanner stopped (exit code {code}); its log: {artifacts / 'daemon.log'}")
             if failed:

@@ -12,6 +12,10 @@ const EVENTS_SILENCE_MS = 25000;
 
 const page = {
   token: '',
+  tokenWorks: false,       // the scanner took page.token at least once
+  reachable: true,         // the last request reached the scanner
+  lastContact: 0,          // Date.now() of the last answer
+  bannerTimer: null,
   state: 'unknown',
   viewer: null,
   eventsGeneration: 0,
@@ -47,7 +51,15 @@ async function api(path, options = {}) {
   }
   const headers = new Headers(options.headers || {});
   headers.set('Authorization', 'Bearer ' + token);
-  const response = await fetch('/api/v1' + path, Object.assign({}, options, { headers, cache: 'no-store' }));
+  let response;
+  try {
+    response = await fetch('/api/v1' + path, Object.assign({}, options, { headers, cache: 'no-store' }));
+  } catch (e) {
+    if (e.name === 'AbortError') throw e;
+    markUnreachable();
+    throw new ApiError(-1, 'the scanner does not answer');
+  }
+  markContact();
   if (token !== page.token) throw new ApiError(0, 'the token changed'); // a stale answer
   if (response.status === 401) {
     showAuthProblem('The scanner refused the token (401 Unauthorized). Enter the API token: ' +
@@ -55,8 +67,47 @@ async function api(path, options = {}) {
     throw new ApiError(401, 'the scanner refused the token');
   }
   $('auth-message').hidden = true;
+  page.tokenWorks = true;
   if (!response.ok) throw new ApiError(response.status, await errorText(response));
   return response;
+}
+
+// ---- reaching the scanner ----------------------------------------------------
+
+// Every answer is a contact; a request that gets none marks the scanner
+// unreachable: the whole page says so (banner, actions greyed) until the
+// next answer, which clears what went stale and reads everything again.
+function markContact() {
+  page.lastContact = Date.now();
+  if (page.reachable) return;
+  page.reachable = true;
+  clearInterval(page.bannerTimer);
+  $('connection-banner').hidden = true;
+  document.body.classList.remove('offline');
+  setMessage($('scan-error'), '');
+  setMessage($('scans-message'), '');
+  $('state-error').textContent = '';
+  refreshAll();
+}
+
+function markUnreachable() {
+  if (!page.reachable) return;
+  page.reachable = false;
+  document.body.classList.add('offline');
+  setEventsBadge(false);
+  const banner = $('connection-banner');
+  const show = () => {
+    const since = page.lastContact ? Math.round((Date.now() - page.lastContact) / 1000) : null;
+    banner.textContent = 'The scanner does not answer' +
+      (since === null ? '' : ' (last contact ' + new Date(page.lastContact).toLocaleTimeString() +
+                             ', ' + since + ' s ago)') +
+      '. The page tries again every few seconds; what it shows may be out of date.';
+  };
+  show();
+  banner.hidden = false;
+  clearInterval(page.bannerTimer);
+  page.bannerTimer = setInterval(show, 1000);
+  $('scan-button').disabled = true;
 }
 
 async function errorText(response) {
@@ -78,8 +129,20 @@ function jsonBody(method, value) {
   return { method, headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(value) };
 }
 
+// Plain words for what a person can act on; the status and the server's
+// reason otherwise.
 function errorMessage(e) {
-  return e instanceof ApiError && e.status ? e.status + ': ' + e.message : e.message;
+  if (!(e instanceof ApiError)) return e.message;
+  if (e.status === -1) return 'The scanner does not answer.';
+  if (e.status === 409 && /table/.test(e.message))
+    return 'No calibration table is installed. Install one below.';
+  return e.status ? e.status + ': ' + e.message : e.message;
+}
+
+// An error worth a message: not a stale answer, a refused token (the token
+// box says so) or an unreachable scanner (the banner says so).
+function reportable(e) {
+  return !(e instanceof ApiError) || e.status > 0 && e.status !== 401;
 }
 
 // Downloads go through fetch (the token is a header, which a plain link
@@ -138,7 +201,24 @@ function showAuthProblem(text) {
   setEventsBadge(false);
 }
 
+// A new token while one works is tried first: a mistyped one must not
+// replace the working one.
+async function tryToken(token) {
+  if (page.token && page.tokenWorks && token !== page.token) {
+    let answer = null;
+    try {
+      answer = await fetch('/api/v1/status', { headers: { Authorization: 'Bearer ' + token }, cache: 'no-store' });
+    } catch (e) { /* unreachable: the banner says so */ }
+    if (answer && answer.status === 401) {
+      setMessage($('auth-message'), 'The scanner refused that token; the page keeps using the one it had.', 'error');
+      return;
+    }
+  }
+  useToken(token);
+}
+
 function useToken(token) {
+  page.tokenWorks = page.tokenWorks && token === page.token;
   page.token = token;
   try {
     localStorage.setItem(TOKEN_KEY, token);
@@ -156,7 +236,15 @@ function setState(state, error) {
   s.textContent = page.state;
   s.className = 'state ' + page.state;
   $('state-error').textContent = error ? '(' + error + ')' : '';
-  $('scan-button').disabled = page.state === 'scanning';
+  updateScanButton();
+}
+
+// Scan is off while a scan runs, the scanner is unreachable, or no table is
+// installed for a scan that needs one (keeping the capture set needs none).
+function updateScanButton() {
+  const needsTable = !$('scan-capture').checked;
+  $('scan-button').disabled = page.state === 'scanning' || !page.reachable ||
+                              (needsTable && page.noTable === true);
 }
 
 function describeTable(table) {
@@ -183,9 +271,16 @@ function renderStatus(status) {
   $('store').textContent = formatBytes(st.used_bytes) + ' of ' + formatBytes(st.max_bytes) + percent +
                            ', ' + st.scans + ' scans, ' + st.sessions + ' sessions';
   const last = status.last_scan;
-  $('last-scan').textContent = !last ? 'none yet'
-    : last.id + ' (' + last.mode + '): ' + (last.ok ? formatCount(last.points) + ' points' : 'failed: ' + last.error);
-  reconcileScan(last);
+  $('last-scan').textContent = !last ? (st.scans ? 'none since the scanner started' : 'none yet')
+    : last.id + ' (' + last.mode + '): ' + (last.ok ? formatCount(last.points) + ' points' +
+        (last.quality && !last.quality.good ? ', poor: ' + last.quality.reasons.join('; ') : '')
+      : 'failed: ' + last.error);
+  page.noTable = !status.table;
+  $('no-table').hidden = !page.noTable;
+  updateScanButton();
+  $('board-yaml-hint').textContent = board.session_board
+    ? ': may be left out, the simulated board has its own' : ': needed';
+  reconcileScan(last, status.state);
 }
 
 async function refreshStatus() {
@@ -193,7 +288,7 @@ async function refreshStatus() {
     renderStatus(await apiJson('/status'));
     return true;
   } catch (e) {
-    if (e.status !== 401 && e.status !== 0) $('state-error').textContent = '(status: ' + errorMessage(e) + ')';
+    if (reportable(e)) $('state-error').textContent = '(status: ' + errorMessage(e) + ')';
     return false;
   }
 }
@@ -203,8 +298,8 @@ async function refreshAll() {
   refreshSettings();
   refreshSessions();
   const scans = await refreshScans();
-  // Show the newest cloud unless one is shown already.
-  const newest = scans && scans.find(s => s.cloud);
+  // Show the newest good cloud unless one is shown already.
+  const newest = scans && scans.find(s => s.cloud && (!s.quality || s.quality.good));
   if (newest && !window.fppViewer && !page.cloudWanted) loadCloud(newest.id);
 }
 
@@ -235,6 +330,7 @@ async function runEvents(generation) {
       watch();
       const response = await api('/events', { signal: controller.signal, headers: { Accept: 'text/event-stream' } });
       setEventsBadge(true);
+      refreshStatus(); // what happened while the stream was down
       await readEventStream(response.body.getReader(), handleEvent, watch);
     } catch (e) {
       if (e.status === 401) return; // wait for a new token
@@ -303,6 +399,28 @@ function handleEvent(name, text) {
       if (document.activeElement !== $('exposure')) $('exposure').value = data.exposure_us;
       refreshStatus();
       break;
+    case 'deleted': onDeleted(data); break;
+  }
+}
+
+// A scan, pose or session deleted here or by another client: it goes from
+// every list, and its cloud from the viewer.
+function onDeleted(data) {
+  if (data.session === null && data.id) {
+    const row = document.querySelector('#scan-list tr[data-scan-id="' + CSS.escape(data.id) + '"]');
+    if (row) row.remove();
+    if ((window.fppViewer && window.fppViewer.scanId === data.id) || page.cloudWanted === data.id) {
+      page.cloudWanted = null;
+      if (page.viewer) page.viewer.clear();
+      $('viewer-title').textContent = '';
+      $('viewer-info').textContent = '';
+      $('viewer-legend').hidden = true;
+      setMessage($('viewer-message'), 'Scan ' + data.id + ' was deleted.');
+    }
+    refreshStatus();
+  } else if (data.session) {
+    refreshSessions();
+    if (data.session === page.session) showSession(data.id ? page.session : '');
   }
 }
 
@@ -316,6 +434,7 @@ function onStateEvent(data) {
 // ---- scanning ---------------------------------------------------------------
 
 function onScanStarted(data) {
+  if (page.finished.has(data.id)) return; // repeated after a reconnect
   page.scanId = data.id;
   const progress = $('progress');
   progress.max = Math.max(1, data.frames);
@@ -326,6 +445,7 @@ function onScanStarted(data) {
 }
 
 function onFrameCaptured(data) {
+  if (page.finished.has(data.id)) return;
   if (data.id !== page.scanId) onScanStarted({ id: data.id, mode: '?', source: '?', frames: data.frames });
   const progress = $('progress');
   progress.max = Math.max(1, data.frames);
@@ -339,15 +459,21 @@ function onDecoded(data) {
 }
 
 function onWritten(data) {
-  finishScan(data.id, true, data.mode, data.points, null, data.session);
+  finishScan(data.id, true, data.mode, data.points, null, data.session, data.quality);
 }
 
 function onFailed(data) {
-  finishScan(data.id, false, null, null, data.error, null);
+  finishScan(data.id, false, null, null, data.error, null, null);
+}
+
+function showQuality(id, quality) {
+  const poor = quality && !quality.good;
+  setMessage($('scan-quality'), poor ? 'Poor scan (' + id + '): ' + quality.reasons.join('; ') + '. ' +
+                                        quality.advice : '', 'warning');
 }
 
 // Shows a scan's end once, from its event or, if events were lost, the status.
-function finishScan(id, ok, mode, points, error, session) {
+function finishScan(id, ok, mode, points, error, session, quality) {
   if (page.finished.has(id)) return;
   page.finished.add(id);
   page.scanId = id;
@@ -358,9 +484,11 @@ function finishScan(id, ok, mode, points, error, session) {
                  (points || mode !== 'capture' ? formatCount(points) + ' points' : '');
     setMessage($('scan-status'), 'written: ' + id + ', ' + what + (session ? ' (session ' + session + ')' : ''));
     setMessage($('scan-error'), '');
+    showQuality(id, quality);
   } else {
     setMessage($('scan-status'), 'failed: ' + id);
     setMessage($('scan-error'), 'The scan failed: ' + error, 'error');
+    showQuality(id, null);
   }
   if (session || id === page.poseId) onPoseDone(id, ok, error);
   refreshStatus();
@@ -370,10 +498,20 @@ function finishScan(id, ok, mode, points, error, session) {
   });
 }
 
-function reconcileScan(last) {
-  if (!last || page.finished.has(last.id)) return;
-  if (last.id === page.scanId || last.id === page.poseId)
-    finishScan(last.id, last.ok, last.mode, last.points, last.error, null);
+// The status after events were lost: the followed scan's end shows, and a
+// scan that the scanner no longer runs and never ended (it stopped during
+// it) is said to be cut short, its progress reset.
+function reconcileScan(last, state) {
+  if (last && !page.finished.has(last.id) && (last.id === page.scanId || last.id === page.poseId))
+    finishScan(last.id, last.ok, last.mode, last.points, last.error, null, last.quality);
+  const id = page.scanId;
+  if (id && !page.finished.has(id) && state !== 'scanning' && (!last || last.id !== id)) {
+    page.finished.add(id);
+    $('progress').value = 0;
+    setMessage($('scan-status'), 'Scan ' + id + ' did not finish: the scanner stopped during it, ' +
+                                 'and nothing was written.');
+    if (id === page.poseId) onPoseDone(id, false, 'the scanner stopped during it');
+  }
 }
 
 async function startScan() {
@@ -388,8 +526,8 @@ async function startScan() {
       setMessage($('scan-status'), 'started ' + started.id + ' (' + started.mode + ')');
     }
   } catch (e) {
-    setMessage($('scan-error'), errorMessage(e), 'error');
-    $('scan-button').disabled = page.state === 'scanning';
+    if (e.status !== -1) setMessage($('scan-error'), errorMessage(e), 'error');
+    updateScanButton();
   }
 }
 
@@ -405,17 +543,38 @@ async function loadCloud(id) {
     const buffer = await response.arrayBuffer();
     if (page.cloudWanted !== id) return;
     const parsed = FppViewer.parsePly(buffer);
-    const quality = $('colour-by').querySelector('option[value="quality"]');
-    quality.disabled = !parsed.columns.quality;
-    if (quality.disabled) $('colour-by').value = 'depth';
     const drawn = page.viewer.show(parsed, id, $('colour-by').value);
+    for (const option of $('colour-by').options) option.disabled = !drawn.modes.includes(option.value);
+    $('colour-by').value = drawn.colourBy;
     $('viewer-title').textContent = id;
     $('viewer-info').textContent = formatCount(drawn.points) + ' of ' + formatCount(drawn.total) + ' points' +
       (parsed.stride > 1 ? ' (1 in ' + parsed.stride + ')' : '');
-    setMessage(message, drawn.points ? '' : 'The cloud has no points.');
+    showLegend(drawn.range);
+    setMessage($('scans-message'), '');
+    setMessage(message, drawn.points ? '' : 'The cloud of ' + id + ' has no points.', drawn.points ? '' : 'warning');
   } catch (e) {
-    if (page.cloudWanted === id) setMessage(message, 'Cannot show ' + id + ': ' + errorMessage(e), 'error');
+    if (page.cloudWanted !== id) return;
+    if (page.viewer) page.viewer.clear();
+    $('viewer-title').textContent = '';
+    $('viewer-info').textContent = '';
+    $('viewer-legend').hidden = true;
+    setMessage(message, 'Cannot show ' + id + ': ' + errorMessage(e), 'error');
   }
+}
+
+// The colour scale of the view: low and high ends with their unit.
+function showLegend(range) {
+  $('viewer-legend').hidden = !range;
+  if (!range) return;
+  const digits = range.unit === 'mm' && range.hi - range.lo < 1 ? 3 : 1;
+  $('legend-low').textContent = range.lo.toFixed(digits) + ' ' + range.unit;
+  $('legend-high').textContent = range.hi.toFixed(digits) + ' ' + range.unit + ' (' + range.label + ')';
+}
+
+function recolour() {
+  if (!page.viewer) return;
+  const range = page.viewer.recolour($('colour-by').value);
+  if (window.fppViewer) showLegend(range);
 }
 
 // ---- the scan list ------------------------------------------------------------
@@ -439,6 +598,13 @@ function scanRow(scan) {
   row.appendChild(element('td', scan.mode, 'optional'));
   row.appendChild(element('td', scan.started_utc));
   row.appendChild(element('td', scan.cloud ? formatCount(scan.points) : '–'));
+  const q = scan.quality;
+  const quality = element('td', !q ? '–' : q.good ? 'good' : 'poor', q && !q.good ? 'poor' : null);
+  if (q && !q.good) {
+    quality.title = q.reasons.join('; ') + '. ' + q.advice;
+    row.classList.add('poor');
+  }
+  row.appendChild(quality);
   row.appendChild(element('td', formatBytes(scan.bytes), 'optional'));
   const actions = element('td', null, 'actions');
   const base = '/scans/' + pathId(scan.id);
@@ -466,13 +632,13 @@ async function refreshScans() {
     body.replaceChildren(...list.map(scanRow));
     if (list.length === 0) {
       const empty = element('td', 'No scans yet.', 'muted');
-      empty.colSpan = 6;
+      empty.colSpan = 7;
       body.appendChild(element('tr')).appendChild(empty);
     }
     setMessage($('scans-message'), '');
     return list;
   } catch (e) {
-    if (e.status !== 401 && e.status !== 0) setMessage($('scans-message'), 'Scan list: ' + errorMessage(e), 'error');
+    if (reportable(e)) setMessage($('scans-message'), 'Scan list: ' + errorMessage(e), 'error');
     return null;
   }
 }
@@ -481,6 +647,7 @@ async function deleteScan(id) {
   if (!confirm('Delete ' + id + '? Its cloud and capture set are removed from the scanner.')) return;
   try {
     await api('/scans/' + pathId(id), { method: 'DELETE' });
+    onDeleted({ id: id, session: null }); // the event says it too
   } catch (e) {
     setMessage($('scans-message'), 'Delete ' + id + ': ' + errorMessage(e), 'error');
   }
@@ -509,7 +676,7 @@ async function refreshSessions() {
     select.value = list.some(s => s.name === page.session) ? page.session : '';
     if (select.value !== page.session) showSession('');
   } catch (e) {
-    if (e.status !== 401 && e.status !== 0) setMessage($('session-message'), 'Sessions: ' + errorMessage(e), 'error');
+    if (reportable(e)) setMessage($('session-message'), 'Sessions: ' + errorMessage(e), 'error');
   }
 }
 
@@ -635,11 +802,21 @@ function schedulePreview() {
   page.previewTimer = setTimeout(updatePreview, PREVIEW_PERIOD_MS);
 }
 
-// One preview frame, then the next a second later, while the helper is open.
+function previewWanted() {
+  return helperOpen() || $('scan-preview-on').checked;
+}
+
+function setPreviewInfo(text) {
+  $('preview-info').textContent = text;
+  $('scan-preview-info').textContent = text;
+}
+
+// One preview frame, then the next a second later, while the session helper
+// or the scan section's live preview is open.
 async function updatePreview() {
-  if (!helperOpen()) return;
+  if (!previewWanted()) return;
   if (page.state === 'scanning' || !page.token || document.hidden) {
-    if (page.state === 'scanning') $('preview-info').textContent = 'preview paused: a scan is running';
+    if (page.state === 'scanning') setPreviewInfo('preview paused: a scan is running');
     schedulePreview();
     return;
   }
@@ -651,10 +828,13 @@ async function updatePreview() {
     if (page.previewUrl) URL.revokeObjectURL(page.previewUrl);
     page.previewUrl = url;
     $('preview').src = url;
-    $('preview-info').textContent = 'mean level ' + mean.toFixed(3) + ', saturated ' + (100 * saturated).toFixed(2) + ' %';
-    setMessage($('preview-warning'), previewWarning(saturated, mean), 'warning');
+    $('scan-preview').src = url;
+    const warning = previewWarning(saturated, mean);
+    setPreviewInfo('mean level ' + mean.toFixed(3) + ', saturated ' + (100 * saturated).toFixed(2) + ' %' +
+                   (warning ? ': ' + warning : ''));
+    setMessage($('preview-warning'), warning, 'warning');
   } catch (e) {
-    $('preview-info').textContent = e.status === 409 ? 'preview paused: a scan is running' : 'preview: ' + errorMessage(e);
+    setPreviewInfo(e.status === 409 ? 'preview paused: a scan is running' : 'preview: ' + errorMessage(e));
   }
   schedulePreview();
 }
@@ -667,12 +847,10 @@ function previewWarning(saturated, mean) {
 }
 
 function onHelperToggle() {
-  if (helperOpen()) {
-    refreshSessions();
-    updatePreview();
-  } else {
-    clearTimeout(page.previewTimer);
-  }
+  if (helperOpen()) refreshSessions();
+  $('scan-preview-wrap').hidden = !$('scan-preview-on').checked;
+  if (previewWanted()) updatePreview();
+  else clearTimeout(page.previewTimer);
 }
 
 // ---- table and settings ---------------------------------------------------------
@@ -701,7 +879,7 @@ async function refreshSettings() {
     const settings = await apiJson('/settings');
     if (document.activeElement !== $('exposure')) $('exposure').value = settings.exposure_us;
   } catch (e) {
-    if (e.status !== 401 && e.status !== 0) setMessage($('settings-message'), 'Settings: ' + errorMessage(e), 'error');
+    if (reportable(e)) setMessage($('settings-message'), 'Settings: ' + errorMessage(e), 'error');
   }
 }
 
@@ -725,11 +903,15 @@ function init() {
 
   $('token-form').addEventListener('submit', event => {
     event.preventDefault();
-    useToken($('token').value.trim());
+    tryToken($('token').value.trim());
   });
   $('status-refresh').addEventListener('click', refreshStatus);
   $('scan-button').addEventListener('click', startScan);
-  $('colour-by').addEventListener('change', () => page.viewer && page.viewer.recolour($('colour-by').value));
+  $('scan-capture').addEventListener('change', updateScanButton);
+  $('scan-preview-on').addEventListener('change', onHelperToggle);
+  $('colour-by').addEventListener('change', recolour);
+  $('point-size').addEventListener('input', () => page.viewer && page.viewer.setPointSize(Number($('point-size').value)));
+  $('view-reset').addEventListener('click', () => page.viewer && page.viewer.resetView());
   $('scans-refresh').addEventListener('click', refreshScans);
   $('calibration').addEventListener('toggle', onHelperToggle);
   $('session-form').addEventListener('submit', createSession);

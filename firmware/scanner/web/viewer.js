@@ -1,8 +1,12 @@
 // The cloud viewer: a PLY parser (ascii, binary little/big endian; any
 // scalar vertex properties) and a three.js r111 point view with orbit
 // controls. The scanner writes float x y z (mm, camera frame: z away from
-// the camera, y down), float quality (fringe modulation), float intensity
-// and uint pixel (firmware/core/src/point_cloud.cpp).
+// the camera, y down), float quality (fringe modulation), float intensity,
+// float sigma_z (when the board gives the camera's noise) and uint pixel,
+// with the organised size (firmware/core/src/point_cloud.cpp): normals come
+// from the pixel grid and shade the points. While the view turns, fewer
+// points are drawn (a frame within 50 ms, measured), all of them when it
+// stops.
 'use strict';
 
 const FppViewer = (function () {
@@ -45,6 +49,8 @@ const FppViewer = (function () {
       const keyword = words[0];
       if (keyword === 'format') {
         header.format = words[1];
+      } else if (keyword === 'obj_info' && /^organised_(width|height)$/.test(words[1])) {
+        header[words[1]] = Number(words[2]);
       } else if (keyword === 'element') {
         const count = Number(words[2]);
         if (!Number.isInteger(count) || count < 0) throw new Error('PLY: bad count in "' + raw + '"');
@@ -84,15 +90,73 @@ const FppViewer = (function () {
     const kept = Math.ceil(vertex.count / stride);
     const columns = {};
     for (const p of vertex.properties) columns[p.name] = new Float32Array(kept);
+    const organised = organisedGrid(header, vertex);
     if (header.format === 'ascii')
-      readAscii(bytes, bodyStart, header, vertexIndex, stride, columns);
+      readAscii(bytes, bodyStart, header, vertexIndex, stride, columns, organised);
     else
-      readBinary(buffer, bodyStart, header, vertexIndex, stride, columns);
+      readBinary(buffer, bodyStart, header, vertexIndex, stride, columns, organised);
+    if (organised) addNormals(organised, columns);
     return { total: vertex.count, count: kept, stride: stride, columns: columns,
-             properties: vertex.properties.map(p => p.name), format: header.format };
+             properties: vertex.properties.map(p => p.name), format: header.format,
+             normals: !!organised };
   }
 
-  function readBinary(buffer, offset, header, vertexIndex, stride, columns) {
+  // The scanner's cloud is organised (obj_info organised_width / height and
+  // a pixel property, row * width + column): every point's position goes
+  // into a grid of the camera's pixels, so that normals come from the
+  // neighbours of the full cloud even when one point in `stride` is drawn.
+  function organisedGrid(header, vertex) {
+    const w = header.organised_width, h = header.organised_height;
+    if (!(w > 0 && h > 0 && w * h <= (1 << 25)) || !vertex.properties.some(p => p.name === 'pixel'))
+      return null;
+    const xyz = new Float32Array(3 * w * h).fill(NaN);
+    return { width: w, height: h, xyz: xyz };
+  }
+
+  function putInGrid(grid, pixel, x, y, z) {
+    if (!(pixel >= 0 && pixel < grid.width * grid.height)) return;
+    grid.xyz[3 * pixel] = x;
+    grid.xyz[3 * pixel + 1] = y;
+    grid.xyz[3 * pixel + 2] = z;
+  }
+
+  // The unit normal at each drawn point, from the grid: the cross product of
+  // the steps to its row and column neighbours (central where both sides
+  // have points, one-sided at edges), turned towards the camera (-z).
+  function addNormals(grid, columns) {
+    const n = columns.x.length;
+    const nx = new Float32Array(n), ny = new Float32Array(n), nz = new Float32Array(n);
+    const { width: w, height: h, xyz } = grid;
+    const d = [0, 0, 0, 0, 0, 0];
+    function step(p, q, out, at) { // q - p, false when either is missing
+      if (q < 0 || !(xyz[3 * q + 2] === xyz[3 * q + 2])) return false;
+      out[at] = xyz[3 * q] - xyz[3 * p];
+      out[at + 1] = xyz[3 * q + 1] - xyz[3 * p + 1];
+      out[at + 2] = xyz[3 * q + 2] - xyz[3 * p + 2];
+      return true;
+    }
+    const a = [0, 0, 0], b = [0, 0, 0];
+    for (let i = 0; i < n; ++i) {
+      const p = columns.pixel[i];
+      const col = p % w, row = (p - col) / w;
+      let okU = false, okV = false;
+      if (col + 1 < w && col > 0 && step(p - 1, p + 1, d, 0)) okU = true;
+      else if (col + 1 < w && step(p, p + 1, d, 0)) okU = true;
+      else if (col > 0 && step(p - 1, p, d, 0)) okU = true;
+      if (row + 1 < h && row > 0 && step(p - w, p + w, d, 3)) okV = true;
+      else if (row + 1 < h && step(p, p + w, d, 3)) okV = true;
+      else if (row > 0 && step(p - w, p, d, 3)) okV = true;
+      if (!okU || !okV) { nz[i] = -1; continue; }
+      a[0] = d[0]; a[1] = d[1]; a[2] = d[2]; b[0] = d[3]; b[1] = d[4]; b[2] = d[5];
+      let cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2], cz = a[0] * b[1] - a[1] * b[0];
+      const len = Math.hypot(cx, cy, cz) || 1;
+      if (cz > 0) { cx = -cx; cy = -cy; cz = -cz; }
+      nx[i] = cx / len; ny[i] = cy / len; nz[i] = cz / len;
+    }
+    columns.nx = nx; columns.ny = ny; columns.nz = nz;
+  }
+
+  function readBinary(buffer, offset, header, vertexIndex, stride, columns, grid) {
     const little = header.format === 'binary_little_endian';
     const view = new DataView(buffer);
     // Skip the elements before the vertices (fixed-size records only).
@@ -116,13 +180,21 @@ const FppViewer = (function () {
       const base = offset + i * size;
       for (const f of fields) f.column[out] = view[f.read](base + f.at, little);
     }
+    if (!grid) return;
+    const pick = name => fields[vertex.properties.findIndex(p => p.name === name)];
+    const [fx, fy, fz, fp] = ['x', 'y', 'z', 'pixel'].map(pick);
+    for (let i = 0; i < vertex.count; ++i) {
+      const base = offset + i * size;
+      putInGrid(grid, view[fp.read](base + fp.at, little), view[fx.read](base + fx.at, little),
+                view[fy.read](base + fy.at, little), view[fz.read](base + fz.at, little));
+    }
   }
 
   function recordSize(element) {
     return element.properties.reduce((sum, p) => sum + PLY_TYPES[p.type][0], 0);
   }
 
-  function readAscii(bytes, offset, header, vertexIndex, stride, columns) {
+  function readAscii(bytes, offset, header, vertexIndex, stride, columns, grid) {
     const body = new TextDecoder('latin1').decode(bytes.subarray(offset));
     const lines = body.split('\n');
     let line = 0;
@@ -137,6 +209,12 @@ const FppViewer = (function () {
       const words = text.trim().split(/\s+/);
       if (words.length < names.length) throw new Error('PLY: vertex ' + i + ' has too few values');
       for (let k = 0; k < names.length; ++k) columns[names[k]][out] = Number(words[k]);
+    }
+    if (!grid) return;
+    const at = ['x', 'y', 'z', 'pixel'].map(name => names.indexOf(name));
+    for (let i = 0; i < vertex.count; ++i) {
+      const words = lines[line + i].trim().split(/\s+/);
+      putInGrid(grid, Number(words[at[3]]), Number(words[at[0]]), Number(words[at[1]]), Number(words[at[2]]));
     }
   }
 
@@ -166,11 +244,44 @@ const FppViewer = (function () {
     return hi > lo ? [lo, hi] : [lo, lo + 1];
   }
 
-  function colourArray(values, colours) {
-    const [lo, hi] = robustRange(values);
-    const scale = 1 / (hi - lo);
-    for (let i = 0; i < values.length; ++i) turbo((values[i] - lo) * scale, colours, 3 * i);
-    return [lo, hi];
+  // What each colouring shows, its unit and the column it reads.
+  const MODES = {
+    shaded: { label: 'shaded surface', column: null, unit: '' },
+    depth: { label: 'depth z', column: 'z', unit: 'mm' },
+    intensity: { label: 'intensity (texture)', column: 'intensity', unit: 'DN' },
+    quality: { label: 'fringe modulation', column: 'quality', unit: 'DN' },
+    sigma_z: { label: 'predicted sigma z', column: 'sigma_z', unit: 'mm' },
+  };
+  // Light from the viewer's upper left, in the camera frame (y down, z away).
+  const LIGHT = (function () {
+    const l = [-0.35, -0.45, -1], len = Math.hypot(l[0], l[1], l[2]);
+    return l.map(v => v / len);
+  })();
+  // While the view turns, a frame may take this long; fewer points are drawn.
+  const FRAME_BUDGET_MS = 50;
+  const MIN_MOVING_POINTS = 20000;
+
+  // The modes this cloud can show.
+  function modesOf(parsed) {
+    return Object.keys(MODES).filter(m =>
+      m === 'shaded' ? parsed.normals : !!parsed.columns[MODES[m].column]);
+  }
+
+  // Lambert shading of point i, 0.12 .. 1 (1 without normals).
+  function shadeOf(columns, i) {
+    if (!columns.nx) return 1;
+    const facing = columns.nx[i] * LIGHT[0] + columns.ny[i] * LIGHT[1] + columns.nz[i] * LIGHT[2];
+    return 0.12 + 0.88 * Math.max(0, facing);
+  }
+
+  // A visiting order in which every prefix is an even sample of the cloud:
+  // i -> i * P mod n with P prime and not a factor of n.
+  function spreadOrder(n) {
+    const order = new Uint32Array(n);
+    let prime = 1;
+    for (const p of [7919, 104729, 1299709, 15485863]) if (n % p !== 0) { prime = p; break; }
+    for (let j = 0; j < n; ++j) order[j] = (j * prime) % n;
+    return order;
   }
 
   // ---- the view ----------------------------------------------------------
@@ -187,19 +298,53 @@ const FppViewer = (function () {
     }
     renderer.setPixelRatio(window.devicePixelRatio || 1);
     renderer.setClearColor(CLEAR_COLOUR, 1);
-    container.appendChild(renderer.domElement);
+    const canvas = renderer.domElement;
+    canvas.setAttribute('role', 'img');
+    canvas.setAttribute('aria-label', 'point cloud view: no cloud loaded');
+    canvas.tabIndex = 0;
+    container.appendChild(canvas);
 
     const scene = new THREE.Scene();
     const camera = new THREE.PerspectiveCamera(45, 1, 1, 10000);
-    const controls = new THREE.OrbitControls(camera, renderer.domElement);
+    const controls = new THREE.OrbitControls(camera, canvas);
     controls.screenSpacePanning = true;
     let points = null;
     let cloud = null;
+    let order = null;
     let userMoved = false; // until the user turns the view, a resize re-frames the cloud
+    let moving = false;
+    let pointsPerMs = 0;   // measured drawing rate
+    let pointSize = 2;
+    const lod = { frameMs: 0, movingPoints: 0, fullPoints: 0 };
+    const probe = new Uint8Array(4);
 
-    function render() { renderer.render(scene, camera); }
-    controls.addEventListener('change', render);
-    controls.addEventListener('start', () => { userMoved = true; });
+    // Draws `count` points (all when not given) and measures the frame.
+    function draw(count) {
+      if (!points) { renderer.render(scene, camera); return; }
+      const n = points.geometry.getAttribute('position').count;
+      const drawn = Math.min(n, count || n);
+      points.geometry.setDrawRange(0, drawn);
+      const began = performance.now();
+      renderer.render(scene, camera);
+      // Reading a pixel waits for the frame (finish() need not, in software GL).
+      const gl = renderer.getContext();
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, probe);
+      const ms = performance.now() - began;
+      if (drawn > 0 && ms > 0) pointsPerMs = pointsPerMs ? 0.7 * pointsPerMs + 0.3 * drawn / ms : drawn / ms;
+      lod.frameMs = ms;
+      if (drawn === n) lod.fullPoints = n;
+      if (window.fppViewer) window.fppViewer.lod = Object.assign({}, lod);
+    }
+    function movingBudget() {
+      const n = points ? points.geometry.getAttribute('position').count : 0;
+      if (!pointsPerMs) return n;
+      return Math.max(Math.min(n, MIN_MOVING_POINTS), Math.min(n, Math.floor(0.8 * FRAME_BUDGET_MS * pointsPerMs)));
+    }
+    controls.addEventListener('change', () => {
+      if (moving) { lod.movingPoints = movingBudget(); draw(lod.movingPoints); } else draw();
+    });
+    controls.addEventListener('start', () => { userMoved = true; moving = true; });
+    controls.addEventListener('end', () => { moving = false; draw(); });
 
     function resize() {
       const w = Math.max(1, container.clientWidth), h = Math.max(1, container.clientHeight);
@@ -207,14 +352,15 @@ const FppViewer = (function () {
       camera.aspect = w / h;
       camera.updateProjectionMatrix();
       if (points && !userMoved && points.geometry.getAttribute('position').count > 0) frame(points.geometry);
-      render();
+      draw();
     }
     if (window.ResizeObserver) new ResizeObserver(resize).observe(container);
     else window.addEventListener('resize', resize);
     resize();
 
-    // Looks along +z with y down, as the scanner's camera does, at the
-    // cloud's bounding box: its near face fills the view with a margin.
+    // Looks along +z with y down, as the scanner's camera does (the first
+    // view is the camera's own picture), at the cloud's bounding box: its
+    // near face fills the view with a margin.
     function frame(geometry) {
       geometry.computeBoundingBox();
       const box = geometry.boundingBox;
@@ -233,59 +379,112 @@ const FppViewer = (function () {
       controls.update();
     }
 
+    // Fills the colour attribute for `mode`; the legend's range (null for
+    // shaded grey).
     function applyColours(mode) {
-      const values = mode === 'quality' && cloud.columns.quality ? cloud.columns.quality : cloud.columns.z;
+      const columns = cloud.columns;
       const attribute = points.geometry.getAttribute('color');
-      const range = colourArray(values, attribute.array);
+      const rgb = attribute.array;
+      const info = MODES[mode];
+      const values = info.column ? columns[info.column] : null;
+      const [lo, hi] = values ? robustRange(values) : [0, 1];
+      const scale = 1 / (hi - lo);
+      const tmp = [0, 0, 0];
+      for (let j = 0; j < order.length; ++j) {
+        const i = order[j];
+        const shade = shadeOf(columns, i);
+        if (mode === 'shaded' || mode === 'intensity') {
+          const grey = mode === 'shaded' ? shade : clamp01((values[i] - lo) * scale);
+          rgb[3 * j] = rgb[3 * j + 1] = rgb[3 * j + 2] = grey;
+        } else {
+          turbo((values[i] - lo) * scale, tmp, 0);
+          const lit = 0.35 + 0.65 * shade; // the shape stays readable under the colours
+          rgb[3 * j] = tmp[0] * lit; rgb[3 * j + 1] = tmp[1] * lit; rgb[3 * j + 2] = tmp[2] * lit;
+        }
+      }
       attribute.needsUpdate = true;
-      return range;
+      return values && mode !== 'intensity' ? { lo: lo, hi: hi, unit: info.unit, label: info.label } : null;
     }
 
-    // Draws a parsed cloud; returns what was drawn.
-    function show(parsed, scanId, mode) {
+    function describe(mode, range) {
+      canvas.setAttribute('aria-label', 'point cloud of ' + (window.fppViewer ? window.fppViewer.scanId : '') +
+        ', ' + points.geometry.getAttribute('position').count + ' points, coloured by ' + MODES[mode].label +
+        (range ? ' from ' + range.lo.toFixed(2) + ' to ' + range.hi.toFixed(2) + ' ' + range.unit : '') +
+        '. Drag to turn, scroll to zoom.');
+    }
+
+    function clear() {
       if (points) {
         scene.remove(points);
         points.geometry.dispose();
         points.material.dispose();
       }
+      points = null;
+      cloud = null;
+      window.fppViewer = null;
+      canvas.setAttribute('aria-label', 'point cloud view: no cloud loaded');
+      draw();
+    }
+
+    // Draws a parsed cloud; returns what was drawn.
+    function show(parsed, scanId, mode) {
+      clear();
       cloud = parsed;
       const n = parsed.count;
+      order = spreadOrder(n);
       const positions = new Float32Array(3 * n);
       const { x, y, z } = parsed.columns;
-      for (let i = 0; i < n; ++i) {
-        positions[3 * i] = x[i];
-        positions[3 * i + 1] = y[i];
-        positions[3 * i + 2] = z[i];
+      for (let j = 0; j < n; ++j) {
+        const i = order[j];
+        positions[3 * j] = x[i];
+        positions[3 * j + 1] = y[i];
+        positions[3 * j + 2] = z[i];
       }
       const geometry = new THREE.BufferGeometry();
       geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
       geometry.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
       // Screen-sized points: the cloud stays solid at any zoom on any screen.
       const material = new THREE.PointsMaterial({
-        size: 2 * (window.devicePixelRatio || 1), sizeAttenuation: false,
+        size: pointSize * (window.devicePixelRatio || 1), sizeAttenuation: false,
         vertexColors: THREE.VertexColors,
       });
       points = new THREE.Points(geometry, material);
       scene.add(points);
+      if (!modesOf(parsed).includes(mode)) mode = parsed.normals ? 'shaded' : 'depth';
       const range = applyColours(mode);
       userMoved = false;
       if (n > 0) frame(geometry);
-      render();
       const drawn = { points: n, total: parsed.total, scanId: scanId, colourBy: mode, range: range,
+                      modes: modesOf(parsed), normals: parsed.normals,
                       clearColour: '#' + CLEAR_COLOUR.toString(16).padStart(6, '0') };
       window.fppViewer = drawn;
+      draw();
+      describe(mode, range);
       return drawn;
     }
 
     function recolour(mode) {
-      if (!points) return null;
+      if (!points || !modesOf(cloud).includes(mode)) return null;
       const range = applyColours(mode);
-      render();
+      draw();
       if (window.fppViewer) { window.fppViewer.colourBy = mode; window.fppViewer.range = range; }
+      describe(mode, range);
       return range;
     }
 
-    return { show: show, recolour: recolour, hasQuality: () => !!(cloud && cloud.columns.quality) };
+    function setPointSize(size) {
+      pointSize = size;
+      if (points) { points.material.size = size * (window.devicePixelRatio || 1); draw(); }
+    }
+
+    function resetView() {
+      userMoved = false;
+      if (points && points.geometry.getAttribute('position').count > 0) frame(points.geometry);
+      draw();
+    }
+
+    return { show: show, recolour: recolour, clear: clear, setPointSize: setPointSize,
+             resetView: resetView, modes: () => (cloud ? modesOf(cloud) : []), MODES: MODES };
   }
 
   return { create: create, parsePly: parsePly, MAX_POINTS: MAX_POINTS };
