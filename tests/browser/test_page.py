@@ -579,6 +579,59 @@ def check_scanner_gone(driver, restart):
     log("scanner stopped while idle and back: banner, Scan off while away, back on after")
 
 
+def check_replayed_events(driver, scan_id):
+    """Events repeated after a reconnect, or out of order, leave the page
+    where the scanner is."""
+    before = driver.execute_script("""
+        const p = document.getElementById('progress');
+        return [document.getElementById('scan-status').textContent, p.value, p.max];""")
+    driver.execute_script("""
+        const id = arguments[0], send = (n, d) => handleEvent(n, JSON.stringify(d));
+        send('scan-started', {id: id, mode: 'scan', frames: 17, source: 'api', session: null});
+        send('frame-captured', {id: id, frame: 3, frames: 17});
+        send('decoded', {id: id});
+        send('written', {id: id, mode: 'scan', points: 1, quality: null, session: null});
+        send('state', {state: 'idle', error: null});""", scan_id)
+    after = driver.execute_script("""
+        const p = document.getElementById('progress');
+        return [document.getElementById('scan-status').textContent, p.value, p.max];""")
+    check(after == before, f"replayed events changed the page: {before} -> {after}")
+    log(f"events of {scan_id} replayed: the page stays at {after[0]!r}")
+
+
+def check_bad_cloud(driver, store, scan_id):
+    """A truncated PLY on the scanner: the viewer says so; the page goes on."""
+    from selenium.webdriver.common.by import By
+
+    ply = Path(store) / scan_id / "cloud.ply"
+    data = ply.read_bytes()
+    ply.write_bytes(data[:len(data) // 2])
+    try:
+        driver.execute_script("loadCloud(arguments[0])", scan_id)
+        message = wait_for(driver, "the viewer's message", lambda d: text_of(d, "viewer-message")
+                           if "Cannot show" in text_of(d, "viewer-message") else None, timeout=20)
+        check("shorter" in message and not driver.execute_script("return window.fppViewer"),
+              f"a truncated PLY: {message!r}")
+        check(driver.find_element(By.ID, "scan-button").is_enabled(), "Scan is off after a bad cloud")
+        log(f"truncated PLY: {message!r}; the page stays usable")
+    finally:
+        ply.write_bytes(data)
+
+
+def check_reload_transfer(driver):
+    """A second load of the page: three.js from the cache, the page's files
+    revalidated (304): under 50 KB over the wire."""
+    driver.refresh()
+    wait_for(driver, "the page loaded again", lambda d: d.execute_script(
+        "return document.readyState === 'complete' && typeof FppViewer !== 'undefined'"), timeout=30)
+    total, parts = driver.execute_script("""
+        const entries = performance.getEntriesByType('navigation').concat(performance.getEntriesByType('resource'));
+        return [entries.reduce((s, e) => s + (e.transferSize || 0), 0),
+                entries.map(e => e.name.replace(location.origin, '') + ' ' + e.transferSize)];""")
+    log(f"second load: {total} bytes over the wire ({', '.join(parts[:8])})")
+    check(total < 50 * 1024, f"a second load transferred {total} bytes: {parts}")
+
+
 def check_download(driver, scan_id, downloads, expected):
     from selenium.webdriver.common.by import By
 
@@ -628,12 +681,16 @@ def browser_test(args, base, token, store, work, artifacts, restart=None):
             expected = api_get(base, f"/api/v1/scans/{scan_id}/cloud.ply", token)[2]
             log("expected bytes from GET /api/v1/scans/{id}/cloud.ply (no --store given)")
         check_download(driver, scan_id, downloads, expected)
+        check_replayed_events(driver, scan_id)
+        if store:
+            check_bad_cloud(driver, store, scan_id)
         check_accessibility(driver)
         poor = check_poor_scan(driver, base, token)
         check_deleted_elsewhere(driver, base, token, poor)
         if restart:
             check_scanner_gone(driver, restart)
         check_phone_layout(driver, artifacts)
+        check_reload_transfer(driver)
         check_console(driver)
         return scan_id
     except Exception:

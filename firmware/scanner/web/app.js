@@ -454,7 +454,7 @@ function onFrameCaptured(data) {
 }
 
 function onDecoded(data) {
-  if (data.id !== page.scanId) return;
+  if (data.id !== page.scanId || page.finished.has(data.id)) return;
   setMessage($('scan-status'), 'decoded ' + data.id + ', writing…');
 }
 
