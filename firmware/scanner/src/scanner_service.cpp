@@ -179,7 +179,7 @@ void ScannerService::serve_once(ScanMode button_mode, const std::atomic<bool>& s
         busy_ = true;
     } catch (const std::exception& e) {
         log_.error(std::string("scan failed: ") + e.what());
-        set_state("error", e.what());
+        set_state(ScannerState::error, e.what());
         return;
     }
     run_scan(button_mode, folder, "button", {}, stop);
@@ -246,7 +246,7 @@ void ScannerService::button_lost(const std::string& why) {
         log_.error("button: " + why +
                    "; looked for again every second (scans through the API still run)");
     // Again after a scan that ended the error state: it is still true.
-    if (set_state("error", why) || news) {
+    if (set_state(ScannerState::error, why) || news) {
         try {
             dev_.led.set(drivers::LedState::error);
         } catch (const drivers::DeviceError&) {
@@ -262,11 +262,11 @@ void ScannerService::button_back() {
     {
         const std::lock_guard lock(mutex_);
         // Only the button's own error: a failed scan's stays until the next scan.
-        if (state_ == "error" && error_ == was)
-            ended = change_state_locked("idle", {});
+        if (state_ == ScannerState::error && error_ == was)
+            ended = change_state_locked(ScannerState::idle, {});
     }
     if (ended) {
-        publish_state("idle", {});
+        publish_state(ScannerState::idle, {});
         dev_.led.set(drivers::LedState::ready);
     }
     log_.info("idle: waiting for the button or a request");
@@ -296,7 +296,7 @@ void ScannerService::scan_started(const std::string& id, ScanMode mode, int fram
     }
     current_id_ = id;
     current_mode_ = mode;
-    set_state("scanning", {});
+    set_state(ScannerState::scanning, {});
     events_.publish("scan-started", json{{"id", id},
                                          {"mode", mode == ScanMode::scan ? "scan" : "capture"},
                                          {"frames", frames},
@@ -332,7 +332,7 @@ void ScannerService::written(const ScanOutcome& outcome) {
         store_bytes_at_ = {}; // measure again
         // The state changes with busy_, under one lock: a status read by a
         // client woken by `written` says idle. Its event follows `written`.
-        state_changed = change_state_locked("idle", {});
+        state_changed = change_state_locked(ScannerState::idle, {});
     }
     events_.publish("written", json{{"id", current_id_},
                                     {"mode", mode},
@@ -341,7 +341,7 @@ void ScannerService::written(const ScanOutcome& outcome) {
                                     {"session", text_or_null(current_session_)}}
                                    .dump());
     if (state_changed)
-        publish_state("idle", {});
+        publish_state(ScannerState::idle, {});
 }
 
 void ScannerService::failed(const std::string& reason) {
@@ -355,14 +355,26 @@ void ScannerService::failed(const std::string& reason) {
             {"error", reason},   {"session", text_or_null(current_session_)}};
         busy_ = false;
         store_bytes_at_ = {};
-        state_changed = change_state_locked("error", reason);
+        state_changed = change_state_locked(ScannerState::error, reason);
     }
     events_.publish("failed", json{{"id", current_id_}, {"error", reason}}.dump());
     if (state_changed)
-        publish_state("error", reason);
+        publish_state(ScannerState::error, reason);
 }
 
-bool ScannerService::set_state(const std::string& state, const std::string& error) {
+const char* to_string(ScannerState state) {
+    switch (state) {
+    case ScannerState::idle:
+        return "idle";
+    case ScannerState::scanning:
+        return "scanning";
+    case ScannerState::error:
+        return "error";
+    }
+    return "?";
+}
+
+bool ScannerService::set_state(ScannerState state, const std::string& error) {
     bool changed = false;
     {
         const std::lock_guard lock(mutex_);
@@ -373,7 +385,7 @@ bool ScannerService::set_state(const std::string& state, const std::string& erro
     return changed;
 }
 
-bool ScannerService::change_state_locked(const std::string& state, const std::string& error) {
+bool ScannerService::change_state_locked(ScannerState state, const std::string& error) {
     if (state_ == state && error_ == error)
         return false;
     state_ = state;
@@ -381,8 +393,9 @@ bool ScannerService::change_state_locked(const std::string& state, const std::st
     return true;
 }
 
-void ScannerService::publish_state(const std::string& state, const std::string& error) {
-    events_.publish("state", json{{"state", state}, {"error", text_or_null(error)}}.dump());
+void ScannerService::publish_state(ScannerState state, const std::string& error) {
+    events_.publish("state",
+                    json{{"state", to_string(state)}, {"error", text_or_null(error)}}.dump());
 }
 
 // ---------------------------------------------------------------- any thread
@@ -566,8 +579,8 @@ std::uint64_t ScannerService::store_bytes() const {
 
 std::string ScannerService::state_event() const {
     const std::lock_guard lock(mutex_);
-    return EventHub::format("state",
-                            json{{"state", state_}, {"error", text_or_null(error_)}}.dump());
+    return EventHub::format(
+        "state", json{{"state", to_string(state_)}, {"error", text_or_null(error_)}}.dump());
 }
 
 json ScannerService::status() const {
@@ -579,7 +592,7 @@ json ScannerService::status() const {
     const std::lock_guard lock(mutex_);
     const auto& s = board_.camera.settings;
     return {{"api", 1},
-            {"state", state_},
+            {"state", to_string(state_)},
             {"error", text_or_null(error_)},
             {"board",
              {{"name", board_.name},

@@ -37,6 +37,12 @@ struct Preview {
     double mean = 0;      // mean level, 0..1
 };
 
+// What the scanner is doing: waiting, scanning, or in error (a failed scan,
+// a camera that does not answer, a button whose GPIO chip went away; the
+// error's reason beside it).
+enum class ScannerState { idle, scanning, error };
+const char* to_string(ScannerState state); // "idle", "scanning", "error"
+
 class ScannerService final : public ScanObserver {
 public:
     // `board` is the scanner's: exposure changes are written into it.
@@ -87,7 +93,7 @@ private:
     // Queues `work` for the scanning thread and waits for it (ApiError 409
     // while a scan is queued or running, 503 when it does not run in 30 s).
     void run_on_scanner_thread(std::function<void()> work);
-    bool set_state(const std::string& state, const std::string& error); // true if it changed
+    bool set_state(ScannerState state, const std::string& error); // true if it changed
     // On the scanning thread: the idle wait for a press (50 ms), true on
     // one. A button whose line failed (DeviceError: its GPIO chip went away)
     // puts the scanner in the error state with the reason, and is asked
@@ -96,8 +102,8 @@ private:
     void button_lost(const std::string& why);
     void button_back();
     void drop_presses_during_scan(); // on the scanning thread
-    bool change_state_locked(const std::string& state, const std::string& error); // under mutex_
-    void publish_state(const std::string& state, const std::string& error);
+    bool change_state_locked(ScannerState state, const std::string& error); // under mutex_
+    void publish_state(ScannerState state, const std::string& error);
     void refresh_table_json();         // after the table changed
     void publish_table_event();        // the `table` event, from table_json_
     std::uint64_t store_bytes() const; // under mutex_
@@ -116,7 +122,7 @@ private:
     std::deque<std::shared_ptr<Job>> jobs_;
     bool busy_ = false; // a scan accepted or running
     bool stopping_ = false;
-    std::string state_ = "idle";
+    ScannerState state_ = ScannerState::idle;
     std::string error_;
     nlohmann::json last_scan_; // null before the first
     nlohmann::json table_json_;
