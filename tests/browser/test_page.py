@@ -577,6 +577,21 @@ def check_scanner_gone(driver, restart):
     wait_for(driver, "the page back", lambda d: not shown(d, "connection-banner")
              and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
     log("scanner stopped while idle and back: banner, Scan off while away, back on after")
+    # Without a table: Scan off with a plain message and a link, on again
+    # for a capture-only scan; with the table back, on again.
+    restart(lambda: None, table_path="/nonexistent/table.fpt")
+    message = wait_for(driver, "the no-table message", lambda d: text_of(d, "no-table")
+                       if shown(d, "no-table") and not d.find_element(By.ID, "scan-button").is_enabled()
+                       else None, timeout=30)
+    check("No calibration table is installed" in message and driver.find_element(
+        By.CSS_SELECTOR, "#no-table a[href='#table-section']"), f"the no-table message: {message!r}")
+    driver.find_element(By.ID, "scan-capture").click()
+    check(driver.find_element(By.ID, "scan-button").is_enabled(), "Scan stays off for a capture-only scan")
+    driver.find_element(By.ID, "scan-capture").click()
+    log(f"no table: Scan off, {message!r}; on for a capture-only scan")
+    restart(lambda: None)
+    wait_for(driver, "the table back", lambda d: not shown(d, "no-table")
+             and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
 
 
 def check_replayed_events(driver, scan_id):
@@ -624,11 +639,13 @@ def check_reload_transfer(driver):
     driver.refresh()
     wait_for(driver, "the page loaded again", lambda d: d.execute_script(
         "return document.readyState === 'complete' && typeof FppViewer !== 'undefined'"), timeout=30)
+    # The page's own files (the API's answers, a cloud among them, are data).
     total, parts = driver.execute_script("""
-        const entries = performance.getEntriesByType('navigation').concat(performance.getEntriesByType('resource'));
+        const entries = performance.getEntriesByType('navigation').concat(performance.getEntriesByType('resource'))
+          .filter(e => !new URL(e.name).pathname.startsWith('/api/'));
         return [entries.reduce((s, e) => s + (e.transferSize || 0), 0),
                 entries.map(e => e.name.replace(location.origin, '') + ' ' + e.transferSize)];""")
-    log(f"second load: {total} bytes over the wire ({', '.join(parts[:8])})")
+    log(f"second load: the page's files {total} bytes over the wire ({', '.join(parts)})")
     check(total < 50 * 1024, f"a second load transferred {total} bytes: {parts}")
 
 
@@ -730,9 +747,9 @@ def main():
             store = work / "store"
             board = board_file("sim.yaml", args.binning, work)
 
-            def command(port):
+            def command(port, table_path=table):
                 return [args.scanner, "--board", board, "--http", f"127.0.0.1:{port}",
-                        "--token-file", token_file, "--store", store, "--table", table,
+                        "--token-file", token_file, "--store", store, "--table", table_path,
                         "--settings", work / "settings.yaml", "--web-root", args.web_root]
 
             daemon = Daemon(command(0), artifacts / "daemon.log")
@@ -741,11 +758,13 @@ def main():
             log(f"scanner listening at {base}")
             runs = [daemon]
 
-            def restart(while_away, kill=False):
-                """Stops (or kills) the scanner, runs `while_away`, starts it on the same port."""
+            def restart(while_away, kill=False, table_path=table):
+                """Stops (or kills) the scanner, runs `while_away`, starts it on the
+                same port (with `table_path` as its table: one that is not there
+                starts it without)."""
                 runs[-1].stop(kill)
                 while_away()
-                runs.append(Daemon(command(port), artifacts / f"daemon-{len(runs)}.log"))
+                runs.append(Daemon(command(port, table_path), artifacts / f"daemon-{len(runs)}.log"))
                 runs[-1].wait_listening()
         if args.url:
             restart = None
