@@ -259,7 +259,7 @@ const FppViewer = (function () {
   })();
   // While the view turns, a frame may take this long; fewer points are drawn.
   const FRAME_BUDGET_MS = 50;
-  const MIN_MOVING_POINTS = 20000;
+  const MIN_MOVING_POINTS = 2000;
 
   // The modes this cloud can show.
   function modesOf(parsed) {
@@ -315,7 +315,7 @@ const FppViewer = (function () {
     let moving = false;
     let pointsPerMs = 0;   // measured drawing rate
     let pointSize = 2;
-    const lod = { frameMs: 0, movingPoints: 0, fullPoints: 0 };
+    const lod = { fullFrameMs: 0, fullPoints: 0, movingFrameMs: 0, movingPoints: 0 };
     const probe = new Uint8Array(4);
 
     // Draws `count` points (all when not given) and measures the frame.
@@ -331,8 +331,7 @@ const FppViewer = (function () {
       gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, probe);
       const ms = performance.now() - began;
       if (drawn > 0 && ms > 0) pointsPerMs = pointsPerMs ? 0.7 * pointsPerMs + 0.3 * drawn / ms : drawn / ms;
-      lod.frameMs = ms;
-      if (drawn === n) lod.fullPoints = n;
+      if (drawn === n) { lod.fullPoints = n; lod.fullFrameMs = ms; } else lod.movingFrameMs = ms;
       if (window.fppViewer) window.fppViewer.lod = Object.assign({}, lod);
     }
     function movingBudget() {
