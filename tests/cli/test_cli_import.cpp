@@ -177,9 +177,8 @@ Frames slstudio_micro(int w, int h) {
     return f;
 }
 
-// SLMaster: 127.5 + 127.5 cos(2 pi (k mod P) / P - pi + 2 pi i / N), then the
-// Gray planes of width / 2^(i+1) blocks, reflected; shift-gray moves them by P/2.
-Frames slmaster(int w, int h, int steps, int fringes, bool shifted) {
+// SLMaster's phase frames: 127.5 + 127.5 cos(2 pi (k mod P) / P - pi + 2 pi i / N).
+Frames slmaster_phase(int w, int h, int steps, int fringes) {
     Frames f;
     const int P = w / fringes;
     for (int i = 0; i < steps; ++i)
@@ -187,6 +186,14 @@ Frames slmaster(int w, int h, int steps, int fringes, bool shifted) {
             return 127.5 +
                    127.5 * std::cos((k % P) / double(P) * 2 * kPi - kPi + 2 * kPi / steps * i);
         }));
+    return f;
+}
+
+// SLMaster: its phase frames, then the Gray planes of width / 2^(i+1) blocks,
+// reflected; shift-gray moves them by P/2.
+Frames slmaster(int w, int h, int steps, int fringes, bool shifted) {
+    Frames f = slmaster_phase(w, h, steps, fringes);
+    const int P = w / fringes;
     const int planes = static_cast<int>(std::log2(double(fringes))) + (shifted ? 0 : 1);
     std::vector<int> sequential{0, 255};
     for (int i = 0; i < planes; ++i) {
@@ -206,13 +213,7 @@ Frames slmaster(int w, int h, int steps, int fringes, bool shifted) {
 // frames of blocks of width / 4^(i+1) coloured 0, 85, 170, 255, each frame's
 // sequence the previous one, reversed, again and reversed again.
 Frames slmaster_interzone(int w, int h, int steps, int fringes) {
-    Frames f;
-    const int P = w / fringes;
-    for (int i = 0; i < steps; ++i)
-        f.push_back(profile_image(w, h, true, [=](int k) {
-            return 127.5 +
-                   127.5 * std::cos((k % P) / double(P) * 2 * kPi - kPi + 2 * kPi / steps * i);
-        }));
+    Frames f = slmaster_phase(w, h, steps, fringes);
     std::vector<int> sequential{0, 85, 170, 255};
     for (int blocks = 4; blocks <= fringes; blocks *= 4) {
         const std::vector<int> seq = sequential;
