@@ -277,6 +277,7 @@ class Scans(DaemonCase):
         d = self.daemon
         for path, ctype in (("/", "text/html"), ("/index.html", "text/html"),
                             ("/app.js", "text/javascript"), ("/viewer.js", "text/javascript"),
+                            ("/session.js", "text/javascript"),
                             ("/style.css", "text/css")):
             r = d.request("GET", path, token=None)
             self.assertEqual(r.status, 200, (path, r))
@@ -297,7 +298,7 @@ class Scans(DaemonCase):
         # The page is revalidated on every load (no-cache + ETag: 304 while
         # unchanged); three.js is kept a week. A reload transfers headers only.
         d = self.daemon
-        paths = ["/", "/app.js", "/viewer.js", "/style.css"]
+        paths = ["/", "/app.js", "/session.js", "/viewer.js", "/style.css"]
         three = "/usr/share/javascript/three/build/three.module.js"
         if os.path.exists(three):
             paths.append("/three/build/three.module.js")

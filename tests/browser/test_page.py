@@ -227,7 +227,7 @@ def api_get(base, path, token):
 
 def check_server_basics(base, token):
     """What the page relies on: its files need no token, the API does."""
-    for path in ("/", "/app.js", "/viewer.js", "/style.css", "/three/build/three.min.js",
+    for path in ("/", "/app.js", "/session.js", "/viewer.js", "/style.css", "/three/build/three.min.js",
                  "/three/examples/js/controls/OrbitControls.js"):
         try:
             status, _, body = api_get(base, path, None)
