@@ -38,10 +38,14 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
+from browser_support import START, Failure, check, log, shown, text_of, wait_for
+from page_states import (check_accessibility, check_bad_cloud, check_deleted_elsewhere,
+                         check_poor_scan, check_reload_transfer, check_replayed_events,
+                         check_scanner_gone)
+
 SOURCE_DIR = Path(__file__).resolve().parents[2]
 TEST_NAME = "Browser.PageScansAndDrawsTheCloud"
 EXIT_SKIP = 77
-START = time.monotonic()
 CHROME_ARGS = [
     "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
     "--disable-background-networking", "--disable-component-update", "--disable-sync",
@@ -52,24 +56,11 @@ CHROME_ARGS = [
 ]
 
 
-class Failure(Exception):
-    pass
-
-
-def log(message):
-    print(f"[{time.monotonic() - START:6.1f} s] {message}", flush=True)
-
-
 def skip(reason):
     if os.environ.get("CI") == "true":
         raise Failure(f"(CI, where every tool must be installed) {reason}")
     print(f"{TEST_NAME}: SKIPPED: {reason}", flush=True)
     sys.exit(EXIT_SKIP)
-
-
-def check(condition, message):
-    if not condition:
-        raise Failure(message)
 
 
 def parse_args():
@@ -271,25 +262,6 @@ def start_browser(args, profile, downloads):
     return driver
 
 
-def wait_for(driver, what, condition, timeout=30, poll=0.05):
-    from selenium.common.exceptions import TimeoutException
-    from selenium.webdriver.support.ui import WebDriverWait
-
-    try:
-        return WebDriverWait(driver, timeout, poll_frequency=poll).until(condition)
-    except TimeoutException:
-        raise Failure(f"timed out after {timeout} s waiting for {what}") from None
-
-
-def text_of(driver, element_id):
-    return driver.execute_script(f"return document.getElementById('{element_id}').textContent")
-
-
-def shown(driver, element_id):
-    return driver.execute_script(
-        f"const e = document.getElementById('{element_id}'); return !e.hidden && e.offsetParent !== null")
-
-
 def enter_token(driver, token):
     from selenium.webdriver.common.by import By
 
@@ -483,175 +455,6 @@ def check_phone_layout(driver, artifacts):
         driver.set_window_size(size["width"], size["height"])
 
 
-def api_send(base, token, method, path, body=None):
-    data = json.dumps(body).encode() if body is not None else None
-    request = urllib.request.Request(base + path, data=data, method=method)
-    request.add_header("Authorization", "Bearer " + token)
-    if data is not None:
-        request.add_header("Content-Type", "application/json")
-    with urllib.request.urlopen(request, timeout=30) as response:
-        return response.status
-
-
-def check_accessibility(driver):
-    """Labels, live regions, headings without controls, the canvas's text."""
-    problems = driver.execute_script("""
-        const out = [];
-        for (const e of document.querySelectorAll('input, select, textarea, progress')) {
-          if (e.type === 'hidden') continue;
-          const named = (e.labels && e.labels.length) || e.getAttribute('aria-label');
-          if (!named) out.push('no label: ' + (e.id || e.tagName));
-        }
-        for (const id of ['scan-status', 'scan-error', 'scan-quality', 'viewer-message', 'connection-banner'])
-          if (!document.getElementById(id).matches('[aria-live], [role="alert"]'))
-            out.push('not a live region: ' + id);
-        if (!document.getElementById('state').closest('[aria-live]')) out.push('the state is not live');
-        for (const h of document.querySelectorAll('h1, h2, h3'))
-          if (h.querySelector('button, a, input, select')) out.push('a control inside heading ' + h.textContent);
-        const canvas = document.querySelector('#viewer canvas');
-        if (!canvas.getAttribute('aria-label')) out.push('the canvas has no text');
-        return out;""")
-    check(not problems, f"accessibility: {problems}")
-    text = driver.execute_script("return document.querySelector('#viewer canvas').getAttribute('aria-label')")
-    log(f"accessibility: every control labelled, live regions for state and messages, canvas: {text!r}")
-
-
-def check_poor_scan(driver, base, token):
-    """A scan at 100 us is written, flagged on the page with what to do, and
-    started from the keyboard."""
-    from selenium.webdriver.common.by import By
-    from selenium.webdriver.common.keys import Keys
-
-    check(api_send(base, token, "PUT", "/api/v1/settings", {"exposure_us": 100}) == 200, "exposure 100 us")
-    button = driver.find_element(By.ID, "scan-button")
-    driver.execute_script("arguments[0].focus()", button)
-    check(driver.switch_to.active_element == button, "the Scan button takes the keyboard focus")
-    button.send_keys(Keys.ENTER)
-    quality = wait_for(driver, "the poor scan's warning",
-                       lambda d: text_of(d, "scan-quality") if shown(d, "scan-quality") else None, timeout=60)
-    check("Raise the exposure (now 100 us)" in quality, f"the warning says {quality!r}")
-    log(f"poor scan (started with Enter): {quality!r}")
-    scan_id = wait_for(driver, "the poor scan's row", lambda d: d.execute_script(
-        "const r = document.querySelector('#scan-list tr.poor'); return r && r.dataset.scanId"), timeout=20)
-    check(api_send(base, token, "PUT", "/api/v1/settings", {"exposure_us": 8000}) == 200, "exposure back")
-    return scan_id
-
-
-def check_deleted_elsewhere(driver, base, token, scan_id):
-    """The scan on screen deleted through the API: its row and its cloud go."""
-    driver.execute_script("loadCloud(arguments[0])", scan_id)
-    wait_for(driver, f"{scan_id} on screen", lambda d: d.execute_script(
-        "return window.fppViewer && window.fppViewer.scanId === arguments[0]", scan_id), timeout=30)
-    check(api_send(base, token, "DELETE", f"/api/v1/scans/{scan_id}") == 204, "DELETE through the API")
-    wait_for(driver, "the deleted scan to leave the page", lambda d: d.execute_script("""
-        return !document.querySelector('#scan-list tr[data-scan-id="' + arguments[0] + '"]') &&
-               !window.fppViewer && document.getElementById('viewer-title').textContent === '' &&
-               document.getElementById('viewer-message').textContent.includes('was deleted')""", scan_id),
-             timeout=10)
-    log(f"{scan_id} deleted through the API: its row and its cloud left the page")
-
-
-def check_scanner_gone(driver, restart):
-    """The scanner killed mid-scan (no `failed` event: a crash, a power cut)
-    and stopped while idle, then back: the page says so at once, greys its
-    actions, and ends right."""
-    from selenium.webdriver.common.by import By
-
-    driver.find_element(By.ID, "scan-button").click()
-    wait_for(driver, "a scan under way", lambda d: d.execute_script(
-        "return document.getElementById('progress').value >= 2"), timeout=30)
-    began = time.monotonic()
-    restart(lambda: wait_for(driver, "the banner", lambda d: shown(d, "connection-banner"), timeout=30),
-            kill=True)
-    log(f"scanner killed mid-scan: banner after {time.monotonic() - began:.1f} s: "
-        f"{text_of(driver, 'connection-banner')!r}")
-    wait_for(driver, "the page back", lambda d: not shown(d, "connection-banner")
-             and text_of(d, "state") == "idle" and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
-    status = text_of(driver, "scan-status")
-    check("did not finish" in status and driver.execute_script(
-        "return document.getElementById('progress').value") == 0,
-        f"after the restart the scan's line says {status!r}")
-    check(not shown(driver, "scan-error"), f"a stale error stays: {text_of(driver, 'scan-error')!r}")
-    log(f"scanner back: {status!r}, progress reset, no stale error")
-    # While idle: the same, and Scan is off while it is away.
-    restart(lambda: (wait_for(driver, "the banner", lambda d: shown(d, "connection-banner"), timeout=30),
-                     check(not driver.find_element(By.ID, "scan-button").is_enabled(),
-                           "Scan is enabled while the scanner is away")))
-    wait_for(driver, "the page back", lambda d: not shown(d, "connection-banner")
-             and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
-    log("scanner stopped while idle and back: banner, Scan off while away, back on after")
-    # Without a table: Scan off with a plain message and a link, on again
-    # for a capture-only scan; with the table back, on again.
-    restart(lambda: None, table_path="/nonexistent/table.fpt")
-    message = wait_for(driver, "the no-table message", lambda d: text_of(d, "no-table")
-                       if shown(d, "no-table") and not d.find_element(By.ID, "scan-button").is_enabled()
-                       else None, timeout=30)
-    check("No calibration table is installed" in message and driver.find_element(
-        By.CSS_SELECTOR, "#no-table a[href='#table-section']"), f"the no-table message: {message!r}")
-    driver.find_element(By.ID, "scan-capture").click()
-    check(driver.find_element(By.ID, "scan-button").is_enabled(), "Scan stays off for a capture-only scan")
-    driver.find_element(By.ID, "scan-capture").click()
-    log(f"no table: Scan off, {message!r}; on for a capture-only scan")
-    restart(lambda: None)
-    wait_for(driver, "the table back", lambda d: not shown(d, "no-table")
-             and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
-
-
-def check_replayed_events(driver, scan_id):
-    """Events repeated after a reconnect, or out of order, leave the page
-    where the scanner is."""
-    before = driver.execute_script("""
-        const p = document.getElementById('progress');
-        return [document.getElementById('scan-status').textContent, p.value, p.max];""")
-    driver.execute_script("""
-        const id = arguments[0], send = (n, d) => handleEvent(n, JSON.stringify(d));
-        send('scan-started', {id: id, mode: 'scan', frames: 17, source: 'api', session: null});
-        send('frame-captured', {id: id, frame: 3, frames: 17});
-        send('decoded', {id: id});
-        send('written', {id: id, mode: 'scan', points: 1, quality: null, session: null});
-        send('state', {state: 'idle', error: null});""", scan_id)
-    after = driver.execute_script("""
-        const p = document.getElementById('progress');
-        return [document.getElementById('scan-status').textContent, p.value, p.max];""")
-    check(after == before, f"replayed events changed the page: {before} -> {after}")
-    log(f"events of {scan_id} replayed: the page stays at {after[0]!r}")
-
-
-def check_bad_cloud(driver, store, scan_id):
-    """A truncated PLY on the scanner: the viewer says so; the page goes on."""
-    from selenium.webdriver.common.by import By
-
-    ply = Path(store) / scan_id / "cloud.ply"
-    data = ply.read_bytes()
-    ply.write_bytes(data[:len(data) // 2])
-    try:
-        driver.execute_script("loadCloud(arguments[0])", scan_id)
-        message = wait_for(driver, "the viewer's message", lambda d: text_of(d, "viewer-message")
-                           if "Cannot show" in text_of(d, "viewer-message") else None, timeout=20)
-        check("shorter" in message and not driver.execute_script("return window.fppViewer"),
-              f"a truncated PLY: {message!r}")
-        check(driver.find_element(By.ID, "scan-button").is_enabled(), "Scan is off after a bad cloud")
-        log(f"truncated PLY: {message!r}; the page stays usable")
-    finally:
-        ply.write_bytes(data)
-
-
-def check_reload_transfer(driver):
-    """A second load of the page: three.js from the cache, the page's files
-    revalidated (304): under 50 KB over the wire."""
-    driver.refresh()
-    wait_for(driver, "the page loaded again", lambda d: d.execute_script(
-        "return document.readyState === 'complete' && typeof FppViewer !== 'undefined'"), timeout=30)
-    # The page's own files (the API's answers, a cloud among them, are data).
-    total, parts = driver.execute_script("""
-        const entries = performance.getEntriesByType('navigation').concat(performance.getEntriesByType('resource'))
-          .filter(e => !new URL(e.name).pathname.startsWith('/api/'));
-        return [entries.reduce((s, e) => s + (e.transferSize || 0), 0),
-                entries.map(e => e.name.replace(location.origin, '') + ' ' + e.transferSize)];""")
-    log(f"second load: the page's files {total} bytes over the wire ({', '.join(parts)})")
-    check(total < 50 * 1024, f"a second load transferred {total} bytes: {parts}")
-
-
 def check_download(driver, scan_id, downloads, expected):
     from selenium.webdriver.common.by import By
 
@@ -738,6 +541,7 @@ def main():
     artifacts.mkdir(parents=True, exist_ok=True)
     daemon = None
     failed = False
+    restart = None  # a scanner someone else started is not ours to restart
     try:
         if args.url:
             base = args.url.rstrip("/")
@@ -769,8 +573,6 @@ def main():
                 while_away()
                 runs.append(Daemon(command(port, table_path), artifacts / f"daemon-{len(runs)}.log"))
                 runs[-1].wait_listening()
-        if args.url:
-            restart = None
         status = check_server_basics(base, token)
         log(f"status: state {status['state']}, board {status['board']['name']}, "
             f"camera {status['camera']['width']} x {status['camera']['height']}, "
