@@ -135,7 +135,6 @@ const FppViewer = (function () {
       out[at + 2] = xyz[3 * q + 2] - xyz[3 * p + 2];
       return true;
     }
-    const a = [0, 0, 0], b = [0, 0, 0];
     for (let i = 0; i < n; ++i) {
       const p = columns.pixel[i];
       const col = p % w, row = (p - col) / w;
@@ -147,8 +146,8 @@ const FppViewer = (function () {
       else if (row + 1 < h && step(p, p + w, d, 3)) okV = true;
       else if (row > 0 && step(p - w, p, d, 3)) okV = true;
       if (!okU || !okV) { nz[i] = -1; continue; }
-      a[0] = d[0]; a[1] = d[1]; a[2] = d[2]; b[0] = d[3]; b[1] = d[4]; b[2] = d[5];
-      let cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2], cz = a[0] * b[1] - a[1] * b[0];
+      // (d0 d1 d2) along the row x (d3 d4 d5) down the column.
+      let cx = d[1] * d[5] - d[2] * d[4], cy = d[2] * d[3] - d[0] * d[5], cz = d[0] * d[4] - d[1] * d[3];
       const len = Math.hypot(cx, cy, cz) || 1;
       if (cz > 0) { cx = -cx; cy = -cy; cz = -cz; }
       nx[i] = cx / len; ny[i] = cy / len; nz[i] = cz / len;
