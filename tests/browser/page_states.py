@@ -56,7 +56,7 @@ def check_poor_scan(driver, base, token):
     check(driver.switch_to.active_element == button, "the Scan button takes the keyboard focus")
     button.send_keys(Keys.ENTER)
     quality = wait_for(driver, "the poor scan's warning",
-                       lambda d: text_of(d, "scan-quality") if shown(d, "scan-quality") else None, timeout=60)
+                       lambda d: text_of(d, "scan-quality") if shown(d, "scan-quality") else None, timeout=180)
     check("Raise the exposure (now 100 us)" in quality, f"the warning says {quality!r}")
     log(f"poor scan (started with Enter): {quality!r}")
     scan_id = wait_for(driver, "the poor scan's row", lambda d: d.execute_script(

@@ -507,9 +507,10 @@ def browser_test(args, base, token, store, work, artifacts, restart=None):
         if store:
             check_bad_cloud(driver, store, scan_id)
         check_accessibility(driver)
-        poor = check_poor_scan(driver, base, token)
-        check_deleted_elsewhere(driver, base, token, poor)
-        if restart:
+        if restart:  # the simulated board: its brightness follows the exposure
+            # (Aravis's fake camera on the virtual ARM board ignores it)
+            poor = check_poor_scan(driver, base, token)
+            check_deleted_elsewhere(driver, base, token, poor)
             check_scanner_gone(driver, restart)
         check_phone_layout(driver, artifacts)
         check_reload_transfer(driver)
