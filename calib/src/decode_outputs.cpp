@@ -68,22 +68,6 @@ std::string fixed(double v, int digits) {
 
 } // namespace
 
-void check_decode_options(const DecodeOptions& options) {
-    try {
-        options.validate();
-    } catch (const InputError& e) { // the field of DecodeOptions: name the option instead
-        const std::string& field = e.field();
-        const std::string option = field == "min_modulation" ? "--min-modulation"
-                                   : field == "threads"      ? "--threads"
-                                                             : "decode options: " + field;
-        std::string what = e.what();
-        const std::string prefix = e.file().string() + ": " + field + ": ";
-        if (what.starts_with(prefix))
-            what.erase(0, prefix.size());
-        throw InputError("command line", option, what);
-    }
-}
-
 void write_decode_images(const std::filesystem::path& folder, const DecodeResult& result,
                          const CaptureManifest& manifest) {
     std::filesystem::create_directories(folder);

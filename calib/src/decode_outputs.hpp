@@ -12,6 +12,7 @@
 //                             check (fpp/decode_consistency.hpp); with ground
 //                             truth, the error against it
 
+#include "fpp/calib/decode_options.hpp" // check_decode_options (the commands' options)
 #include "fpp/capture_set.hpp"
 #include "fpp/decode_consistency.hpp"
 #include "fpp/decode_diagnosis.hpp"
@@ -48,10 +49,6 @@ private:
 
 // The consistency check's figures for decode.md ("## Consistency").
 std::string consistency_text(const DecodeConsistency& consistency);
-
-// DecodeOptions::validate(), its refusal as InputError("command line",
-// "--option", what was expected) naming the command's option.
-void check_decode_options(const DecodeOptions& options);
 
 // Writes the images above (each atomically) into `folder` (created if needed).
 void write_decode_images(const std::filesystem::path& folder, const DecodeResult& result,

@@ -273,18 +273,14 @@ CaptureSet read_capture_set(const std::filesystem::path& folder,
     return set;
 }
 
-void write_capture_set(const std::filesystem::path& folder, const CaptureManifest& manifest,
-                       const std::vector<Frame>& frames) {
-    write_capture_set(folder, manifest, frames, TruthImages{});
-}
+namespace {
 
-void write_capture_set(const std::filesystem::path& folder, const CaptureManifest& manifest,
-                       const std::vector<Frame>& frames, const TruthImages& truth) {
+// The frames given for `m` (write_capture_set, make_capture_set): as many as
+// it lists, 8- or 16-bit grey, the camera's size, one bit depth, within the
+// declared bit_depth. InputError naming folder / the frame and "frames[i]".
+void check_frames(const fs::path& folder, const CaptureManifest& m,
+                  const std::vector<Frame>& frames, const Checker& check) {
     const fs::path origin = folder / kManifestName;
-    const Checker check(origin, nullptr);
-    capture_check::check_manifest(manifest, check, 2);
-    const CaptureManifest& m = manifest;
-
     if (frames.size() != m.frames.size()) {
         check.fail("frames", std::to_string(frames.size()) + " frame images given for " +
                                  std::to_string(m.frames.size()) + " listed frames");
@@ -327,6 +323,43 @@ void write_capture_set(const std::filesystem::path& folder, const CaptureManifes
             }
         }
     }
+}
+
+} // namespace
+
+CaptureSet make_capture_set(const std::filesystem::path& folder, CaptureManifest manifest,
+                            std::vector<Frame> frames) {
+    const fs::path origin = folder / kManifestName;
+    const Checker check(origin, nullptr);
+    capture_check::check_manifest(manifest, check, 2);
+    check_frames(folder, manifest, frames, check);
+    CaptureSet set;
+    set.folder = folder;
+    set.manifest = std::move(manifest);
+    set.frames = std::move(frames);
+    std::vector<int> largest(set.frames.size());
+    std::vector<std::size_t> listed(set.frames.size());
+    for (std::size_t i = 0; i < set.frames.size(); ++i) {
+        largest[i] = largest_value(set.frames[i]);
+        listed[i] = i;
+    }
+    set_bits_in_use(set, largest, listed);
+    return set;
+}
+
+void write_capture_set(const std::filesystem::path& folder, const CaptureManifest& manifest,
+                       const std::vector<Frame>& frames) {
+    write_capture_set(folder, manifest, frames, TruthImages{});
+}
+
+void write_capture_set(const std::filesystem::path& folder, const CaptureManifest& manifest,
+                       const std::vector<Frame>& frames, const TruthImages& truth) {
+    const fs::path origin = folder / kManifestName;
+    const Checker check(origin, nullptr);
+    capture_check::check_manifest(manifest, check, 2);
+    const CaptureManifest& m = manifest;
+
+    check_frames(folder, m, frames, check);
     struct TruthEntry {
         std::string name;
         const Image<float>* image;

@@ -127,6 +127,14 @@ void write_capture_set(const std::filesystem::path& folder, const CaptureManifes
 void write_capture_set(const std::filesystem::path& folder, const CaptureManifest& manifest,
                        const std::vector<Frame>& frames, const TruthImages& truth);
 
+// A capture set held in memory (frames from a program rather than files):
+// the manifest checked as write_capture_set checks it, the frames against it
+// as write_capture_set checks them (InputError naming folder / the frame's
+// listed name and "frames[i]"), the bits in use set as read_capture_set sets
+// them. `folder` only names the set in errors; nothing is read or written.
+CaptureSet make_capture_set(const std::filesystem::path& folder, CaptureManifest manifest,
+                            std::vector<Frame> frames);
+
 // Reads a pattern sequence alone from a YAML file holding a `sequence:` list in
 // the manifest's syntax (used for named scan sequences and board configs).
 // Other top-level keys of that file are ignored. Every fpp-capture/2 block
