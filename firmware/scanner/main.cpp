@@ -5,6 +5,7 @@
 #include "fpp/atomic_file.hpp"
 #include "fpp/drivers/device_error.hpp"
 #include "fpp/error.hpp"
+#include "fpp/scanner/api_events.hpp"
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/hardware_board.hpp"
 #include "fpp/scanner/log.hpp"
@@ -77,14 +78,18 @@ void apply_options(const Options& o, fpp::scanner::BoardConfig& board) {
         board.http->web_root = o.web_root;
 }
 
-// The exposure a person set last (through the API), over the board file's.
-void apply_settings_file(fpp::scanner::BoardConfig& board, fpp::drivers::Camera& camera) {
+// The settings at start: the board file's, and over them what a person set
+// last through the API (the settings file), applied to the camera.
+fpp::scanner::ScannerSettings settings_at_start(const fpp::scanner::BoardConfig& board,
+                                                fpp::drivers::Camera& camera) {
+    fpp::scanner::ScannerSettings settings{board.camera.settings.exposure_us};
     if (!board.settings_file)
-        return;
+        return settings;
     if (const auto s = fpp::scanner::read_settings_file(*board.settings_file)) {
         camera.set_exposure_us(s->exposure_us);
-        board.camera.settings.exposure_us = s->exposure_us;
+        settings = *s;
     }
+    return settings;
 }
 
 // A power cut or SIGKILL in the middle of a scan or of a table or settings
@@ -168,12 +173,12 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
         opened.emplace(hardware->devices());
     }
     Devices devices = *opened;
-    apply_settings_file(board, devices.camera);
+    const ScannerSettings settings = settings_at_start(board, devices.camera);
     // Lines and display are released by the destructors, on every path.
     try {
         std::optional<Scanner> made;
         try {
-            made.emplace(board, devices, log);
+            made.emplace(board, settings, devices, log);
         } catch (const fpp::InputError& e) {
             // A network scanner with a bad table still serves, so that a
             // good one can be installed.
@@ -181,7 +186,7 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
                 throw;
             log.error(std::string(e.what()) + ": serving without a table until one is installed");
             board.table.reset();
-            made.emplace(board, devices, log);
+            made.emplace(board, settings, devices, log);
         }
         Scanner& scanner = *made;
         if (scans > 0) {
@@ -198,7 +203,8 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
                 face.run(mode, g_stop);
             } else {
                 EventHub events; // nobody listens without a network face
-                ScannerService service(board, scanner, devices, events, log, options);
+                ApiEvents rendered(events);
+                ScannerService service(board, scanner, devices, rendered, log, options);
                 service.run(mode, g_stop);
             }
             log.info("stopped");

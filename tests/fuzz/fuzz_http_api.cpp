@@ -11,6 +11,7 @@
 // 500 is a finding, as is a crash or a sanitizer report.
 #include "fpp/coefficient_table.hpp"
 #include "fpp/scanner/api.hpp"
+#include "fpp/scanner/api_events.hpp"
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/event_hub.hpp"
 #include "fpp/scanner/scanner.hpp"
@@ -49,6 +50,7 @@ struct World {
     Logger log{[](LogLevel, const std::string&) {}};
     std::optional<Scanner> scanner;
     EventHub events;
+    ApiEvents rendered{events};
     std::optional<ScannerService> service;
     std::optional<Api> api;
     std::atomic<bool> stop{false};
@@ -70,7 +72,7 @@ struct World {
         sim->limit_records(SimBoard::kDaemonRecordLimit);
         write_table(dir / "table.fpt", fpp::test::rig_truth_table(sim->rig()));
         scanner.emplace(board, sim->devices(), log);
-        service.emplace(board, *scanner, sim->devices(), events, log,
+        service.emplace(board, *scanner, sim->devices(), rendered, log,
                         ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
         ApiOptions options;
         options.token = kToken;

@@ -84,7 +84,7 @@ TEST(ScannerFaults, FullThenReadOnlyStoreFailsCleanlyAndTheNextScanAfterItSuccee
     auto [name, data] = scan_through_api(rs);
     EXPECT_EQ(name, "failed");
     EXPECT_NE(data.find("No space left on device"), std::string::npos) << data;
-    EXPECT_EQ(rs.service->status()["state"], "error");
+    EXPECT_EQ(rs.service->state().state, ScannerState::error);
     EXPECT_EQ(rs.sim.led().state(), drivers::LedState::error);
     // Nothing half written on the full disk: not a file, not a folder.
     EXPECT_TRUE(fpp::test::entries_under(store).empty()) << fpp::test::entries_under(store).front();
@@ -93,7 +93,7 @@ TEST(ScannerFaults, FullThenReadOnlyStoreFailsCleanlyAndTheNextScanAfterItSuccee
     ASSERT_EQ(::umount2(store.c_str(), 0), 0) << std::strerror(errno);
     EXPECT_EQ(scan_through_api(rs).first, "written");
     EXPECT_EQ(list_scans(store).size(), 2u);
-    EXPECT_EQ(rs.service->status()["state"], "idle");
+    EXPECT_EQ(rs.service->state().state, ScannerState::idle);
     EXPECT_EQ(rs.sim.led().state(), drivers::LedState::ready);
 
     // The store's file system goes read-only (a read-only bind mount of it).
@@ -116,7 +116,7 @@ TEST(ScannerFaults, FullThenReadOnlyStoreFailsCleanlyAndTheNextScanAfterItSuccee
     ASSERT_EQ(::umount2(store.c_str(), 0), 0) << std::strerror(errno);
     EXPECT_EQ(scan_through_api(rs).first, "written");
     EXPECT_EQ(list_scans(store).size(), 3u);
-    EXPECT_EQ(rs.service->status()["state"], "idle");
+    EXPECT_EQ(rs.service->state().state, ScannerState::idle);
     // Every scan left is whole: its cloud close to the truth.
     for (const auto& scan : list_scans(store))
         EXPECT_LT(rms_against_truth(rs, scan), 0.1) << scan;
@@ -151,13 +151,8 @@ TEST(ScannerFaults, TableChangedOnDiskIsReloadedAndADamagedOneStopsScansUntilWho
     std::printf("scan with the table copied over: RMS %.2f mm against truth\n", shifted_rms);
     EXPECT_GT(shifted_rms, 3.0);
     EXPECT_LT(shifted_rms, 7.0);
-    EXPECT_EQ(rs.service->table_json()["file_fnv1a64"].get<std::string>(), [&] {
-        char hex[17];
-        std::snprintf(
-            hex, sizeof hex, "%016llx",
-            static_cast<unsigned long long>(fnv1a64(other_bytes.data(), other_bytes.size())));
-        return std::string(hex);
-    }());
+    ASSERT_TRUE(rs.service->table());
+    EXPECT_EQ(rs.service->table()->file_hash, fnv1a64(other_bytes.data(), other_bytes.size()));
 
     // Damaged in place: one byte of the coefficients flipped. Scans stop
     // with the loader's reason (the file and the tile), nothing written.
@@ -172,7 +167,7 @@ TEST(ScannerFaults, TableChangedOnDiskIsReloadedAndADamagedOneStopsScansUntilWho
         EXPECT_EQ(name, "failed") << k;
         EXPECT_NE(data.find(table.string()), std::string::npos) << data;
         EXPECT_NE(data.find("crc"), std::string::npos) << data;
-        EXPECT_EQ(rs.service->status()["state"], "error");
+        EXPECT_EQ(rs.service->state().state, ScannerState::error);
         EXPECT_EQ(rs.sim.led().state(), drivers::LedState::error);
     }
     EXPECT_EQ(list_scans(store).size(), written_before);
@@ -188,7 +183,7 @@ TEST(ScannerFaults, TableChangedOnDiskIsReloadedAndADamagedOneStopsScansUntilWho
     std::ofstream(table, std::ios::binary | std::ios::trunc) << good;
     ASSERT_EQ(scan_through_api(rs).first, "written");
     EXPECT_LT(rms_against_truth(rs, list_scans(store).back()), 0.1);
-    EXPECT_EQ(rs.service->status()["state"], "idle");
+    EXPECT_EQ(rs.service->state().state, ScannerState::idle);
     EXPECT_EQ(list_scans(store).size(), written_before + 1);
 }
 
@@ -204,13 +199,13 @@ TEST(ScannerFaults, DisplayDisconnectedFailsTheScanAndItsReturnEndsTheError) {
     EXPECT_NE(data.find("sim display: page flip refused: the output is disconnected"),
               std::string::npos)
         << data;
-    EXPECT_EQ(rs.service->status()["state"], "error");
+    EXPECT_EQ(rs.service->state().state, ScannerState::error);
     EXPECT_EQ(rs.sim.led().state(), drivers::LedState::error);
     EXPECT_EQ(list_scans(store).size(), 1u);
 
     rs.sim.display().set_connected(true);
     ASSERT_EQ(scan_through_api(rs).first, "written");
-    EXPECT_EQ(rs.service->status()["state"], "idle");
+    EXPECT_EQ(rs.service->state().state, ScannerState::idle);
     EXPECT_EQ(list_scans(store).size(), 2u);
     EXPECT_LT(rms_against_truth(rs, list_scans(store).back()), 0.1);
 }
@@ -224,7 +219,7 @@ TEST(ScannerFaults, DisplayDisconnectedFailsTheScanAndItsReturnEndsTheError) {
 TEST(ScannerFaults, GpioChipGoneIsAnErrorUntilItReturnsThenTheButtonScans) {
     fpp::test::Journal journal;
     RunningService rs(journal.sink());
-    const auto state = [&] { return rs.service->status()["state"].get<std::string>(); };
+    const auto state = [&] { return to_string(rs.service->status().state.state); };
     const auto wait_for_state = [&](const std::string& wanted) {
         for (int i = 0; i < 100 && state() != wanted; ++i)
             std::this_thread::sleep_for(std::chrono::milliseconds(30));
@@ -234,8 +229,7 @@ TEST(ScannerFaults, GpioChipGoneIsAnErrorUntilItReturnsThenTheButtonScans) {
     rs.sim.button().set_connected(false);
     rs.sim.trigger().set_connected(false);
     ASSERT_EQ(wait_for_state("error"), "error");
-    EXPECT_EQ(rs.service->status()["error"],
-              "sim button: reading an edge failed: the chip went away");
+    EXPECT_EQ(rs.service->state().error, "sim button: reading an edge failed: the chip went away");
     EXPECT_EQ(rs.sim.led().state(), drivers::LedState::error);
 
     auto [name, data] = scan_through_api(rs);
@@ -246,8 +240,7 @@ TEST(ScannerFaults, GpioChipGoneIsAnErrorUntilItReturnsThenTheButtonScans) {
     // and back in the error state after the failed scan's own error.
     std::this_thread::sleep_for(std::chrono::milliseconds(2500));
     EXPECT_EQ(journal.count("button: sim button: reading an edge failed"), 1);
-    EXPECT_EQ(rs.service->status()["error"],
-              "sim button: reading an edge failed: the chip went away");
+    EXPECT_EQ(rs.service->state().error, "sim button: reading an edge failed: the chip went away");
     rs.sim.button().press(); // lost: no chip, no edge
     EXPECT_EQ(journal.count("button answers again"), 0);
 

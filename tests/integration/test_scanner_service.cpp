@@ -235,11 +235,12 @@ TEST(ScannerService, FailedScanIsReportedWithItsReason) {
     EXPECT_NE(data.find("camera"), std::string::npos) << data;
     EXPECT_EQ(std::count(names.begin(), names.end(), "written"), 0);
     EXPECT_EQ(names.back(), "state"); // the error state comes after the event
-    const nlohmann::json status = service.status();
-    EXPECT_EQ(status["state"], "error");
-    EXPECT_NE(status["error"].get<std::string>().find("camera"), std::string::npos);
-    EXPECT_EQ(status["last_scan"]["id"], id);
-    EXPECT_EQ(status["last_scan"]["ok"], false);
+    const ScannerStatus status = service.status();
+    EXPECT_EQ(status.state.state, ScannerState::error);
+    EXPECT_NE(status.state.error.find("camera"), std::string::npos);
+    ASSERT_TRUE(status.last_scan);
+    EXPECT_EQ(status.last_scan->id, id);
+    EXPECT_FALSE(status.last_scan->ok);
     EXPECT_TRUE(list_scans(store).empty());
     EXPECT_EQ(sim.led().state(), drivers::LedState::error);
 }

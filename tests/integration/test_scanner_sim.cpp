@@ -9,6 +9,7 @@
 #include "fpp/error.hpp"
 #include "fpp/patterns.hpp"
 #include "fpp/point_cloud.hpp"
+#include "fpp/scanner/api_events.hpp"
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/scanner.hpp"
@@ -423,7 +424,8 @@ TEST(ScannerSim, ButtonDuringScanIsIgnoredAndLogged) {
     f.make_table(sim.rig());
     Scanner scanner(f.board, sim.devices(), f.log);
     EventHub events;
-    ScannerService service(f.board, scanner, sim.devices(), events, f.log, {});
+    ApiEvents rendered(events);
+    ScannerService service(f.board, scanner, sim.devices(), rendered, f.log, {});
     sim.display().on_flip([&](const drivers::FlipEvent& e) {
         if (e.index == 3)
             sim.button().press(2); // one press, two bounces

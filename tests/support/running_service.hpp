@@ -18,6 +18,7 @@
 #include <vector>
 
 #include <fpp/coefficient_table.hpp>
+#include <fpp/scanner/api_events.hpp>
 #include <fpp/scanner/board_config.hpp>
 #include <fpp/scanner/event_hub.hpp>
 #include <fpp/scanner/scanner.hpp>
@@ -88,7 +89,7 @@ struct RunningService {
         : board(sim_board_in(dir.path(), dir / "scans")), sim(board), log(std::move(sink)) {
         write_table(dir / "table.fpt", rig_truth_table(sim.rig()));
         scanner.emplace(board, sim.devices(), log);
-        service.emplace(board, *scanner, sim.devices(), events, log,
+        service.emplace(board, *scanner, sim.devices(), rendered, log,
                         scanner::ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
         stream = events.subscribe("");
         loop = std::thread([this] { service->run(scanner::ScanMode::scan, stop); });
@@ -110,6 +111,7 @@ struct RunningService {
     scanner::Logger log;
     std::optional<scanner::Scanner> scanner;
     scanner::EventHub events;
+    scanner::ApiEvents rendered{events};            // the service's events as the API sends them
     std::optional<scanner::ScannerService> service; // after what it uses: destroyed first
     std::shared_ptr<scanner::EventHub::Subscription> stream;
     std::atomic<bool> stop{false};

@@ -1,10 +1,12 @@
 #include "fpp/scanner/api.hpp"
 
+#include "api_json.hpp"
 #include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/error.hpp"
 #include "fpp/scanner/access_token.hpp"
 #include "fpp/scanner/api_error.hpp"
+#include "fpp/scanner/api_events.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/yaml_fields.hpp"
 #include "scan_metadata.hpp"
@@ -291,7 +293,7 @@ HttpResponse Api::route(HttpRequest& request, const std::vector<std::string>& pa
     if (parts.size() != 3)
         return HttpResponse::error(404, "no such path");
     if (what == "status")
-        return m == "GET" ? HttpResponse::json(200, service_.status().dump())
+        return m == "GET" ? HttpResponse::json(200, api_json::status(service_.status()).dump())
                           : method_not_allowed("GET");
     if (what == "events")
         return m == "GET" ? events() : method_not_allowed("GET");
@@ -453,7 +455,7 @@ HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>&
     if (parts[4] == "response" && parts.size() == 5) {
         if (m != "POST")
             return method_not_allowed("POST");
-        return HttpResponse::json(201, service_.record_response(name).dump());
+        return HttpResponse::json(201, api_json::response(service_.record_response(name)).dump());
     }
     if (parts[4] != "poses")
         return HttpResponse::error(404, "no such path");
@@ -486,7 +488,8 @@ HttpResponse Api::events() {
     HttpResponse r;
     r.content_type = "text/event-stream";
     r.headers.emplace_back("Cache-Control", "no-store");
-    r.stream = std::make_shared<EventStream>(events_.subscribe(service_.state_event()));
+    r.stream =
+        std::make_shared<EventStream>(events_.subscribe(ApiEvents::state_event(service_.state())));
     return r;
 }
 
@@ -517,18 +520,18 @@ HttpResponse Api::table(HttpRequest& request) {
     if (request.method == "PUT") {
         if (request.body_file.empty() || request.body_bytes == 0)
             throw ApiError(400, "the body must be the .fpt file");
-        json t = service_.install_table(request.body_file);
+        const TableDescription t = service_.install_table(request.body_file);
         request.body_file.clear(); // renamed into place
-        log_.info("http: table installed (" + t.value("model", "") + ", hash " +
-                  t.value("file_fnv1a64", "") + ")");
-        return HttpResponse::json(200, t.dump());
+        log_.info(std::string("http: table installed (") + to_string(t.info.model) + ", hash " +
+                  hex64(t.file_hash) + ")");
+        return HttpResponse::json(200, api_json::table(t).dump());
     }
     if (request.method != "GET")
         return method_not_allowed("GET, PUT");
-    const json t = service_.table_json();
-    if (t.is_null())
+    const std::optional<TableDescription> t = service_.table();
+    if (!t)
         return HttpResponse::error(404, "no table is installed");
-    return file_response(t["path"].get<std::string>(), "application/octet-stream", "table.fpt");
+    return file_response(t->path, "application/octet-stream", "table.fpt");
 }
 
 // Page files are revalidated on every load, three.js (from its Debian

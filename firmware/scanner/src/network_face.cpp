@@ -3,6 +3,7 @@
 #include "fpp/error.hpp"
 #include "fpp/scanner/access_token.hpp"
 #include "fpp/scanner/api.hpp"
+#include "fpp/scanner/api_events.hpp"
 #include "fpp/scanner/event_hub.hpp"
 #include "fpp/scanner/http_server.hpp"
 #include "fpp/scanner/scanner_service.hpp"
@@ -31,17 +32,18 @@ fs::path find_web_root(const std::optional<fs::path>& configured) {
 
 struct NetworkFace::Parts {
     EventHub events;
+    ApiEvents rendered{events};
     ScannerService service;
     Api api;
     HttpServer server; // last: stopped first
-    Parts(BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
+    Parts(const BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
           ServiceOptions service_options, ApiOptions api_options, HttpServerOptions http)
-        : service(board, scanner, devices, events, log, std::move(service_options)),
+        : service(board, scanner, devices, rendered, log, std::move(service_options)),
           api(service, events, log, std::move(api_options)), server(http, api, log) {}
 };
 
-NetworkFace::NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
-                         ServiceOptions options) {
+NetworkFace::NetworkFace(const BoardConfig& board, Scanner& scanner, Devices devices,
+                         const Logger& log, ServiceOptions options) {
     const HttpConfig& h = *board.http;
     ApiOptions api;
     api.token = read_token_file(h.token_file);

@@ -76,7 +76,7 @@ std::string scan_json(const ScanMetadata& m) {
                    {"height", m.camera.height},
                    {"bit_depth", m.camera_bit_depth},
                    {"pixel_format", s.pixel_format},
-                   {"exposure_us", s.exposure_us},
+                   {"exposure_us", m.settings.exposure_us},
                    {"trigger", s.trigger == drivers::TriggerMode::line ? "line" : "software"}};
     j["projector"] = {{"width", m.projector.width}, {"height", m.projector.height}};
     j["sequence"] = m.board.sequence_name.empty() ? "blocks" : m.board.sequence_name;

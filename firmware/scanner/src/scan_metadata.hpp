@@ -33,6 +33,7 @@ struct TableSummary {
 
 struct ScanMetadata {
     const BoardConfig& board;
+    const ScannerSettings& settings; // the exposure the scan ran at (without HDR)
     ScanMode mode = ScanMode::scan;
     std::string started_utc;
     Size camera;

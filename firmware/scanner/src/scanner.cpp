@@ -66,7 +66,11 @@ struct Scanner::Captured {
 };
 
 Scanner::Scanner(const BoardConfig& board, Devices devices, const Logger& log)
-    : board_(board), dev_(devices), log_(log) {
+    : Scanner(board, ScannerSettings{board.camera.settings.exposure_us}, devices, log) {}
+
+Scanner::Scanner(const BoardConfig& board, const ScannerSettings& settings, Devices devices,
+                 const Logger& log)
+    : board_(board), settings_(settings), dev_(devices), log_(log) {
     const Size projector = dev_.display.size();
     sequence_ = board_.sequence(projector);
     if (board_.table)
@@ -185,8 +189,13 @@ void Scanner::reload_table_if_changed() {
     log_.warning("table " + table_path_.string() + " changed on disk: reloaded");
 }
 
+void Scanner::apply_settings(const ScannerSettings& settings) {
+    dev_.camera.set_exposure_us(settings.exposure_us);
+    settings_ = settings;
+}
+
 Frame Scanner::preview_at(double exposure_us) {
-    const double own = board_.camera.settings.exposure_us;
+    const double own = settings_.exposure_us;
     dev_.camera.set_exposure_us(exposure_us);
     try {
         Frame frame = preview();
@@ -258,12 +267,12 @@ ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop, fs::path
 
 std::vector<double> Scanner::scan_exposures() {
     if (!board_.hdr)
-        return {board_.camera.settings.exposure_us};
+        return {settings_.exposure_us};
     if (!board_.hdr->automatic)
         return board_.hdr->exposures_us;
     const HdrConfig& hdr = *board_.hdr;
-    const double longest = hdr.longest_us.value_or(board_.camera.settings.exposure_us *
-                                                   std::pow(hdr.ratio, hdr.passes - 1));
+    const double longest =
+        hdr.longest_us.value_or(settings_.exposure_us * std::pow(hdr.ratio, hdr.passes - 1));
     const std::vector<double> chosen =
         automatic_exposures(hdr, longest, dev_.camera.exposure_range_us(),
                             [this](double exposure_us) { return preview_at(exposure_us); });
@@ -318,7 +327,7 @@ ScanOutcome Scanner::attempt(ScanMode mode, const std::atomic<bool>* stop, const
     const int passes = static_cast<int>(outcome.exposures_us.size());
     if (passes_.size() != static_cast<std::size_t>(passes))
         passes_.resize(static_cast<std::size_t>(passes));
-    ExposureRestorer exposure(dev_.camera, board_.camera.settings.exposure_us);
+    ExposureRestorer exposure(dev_.camera, settings_.exposure_us);
     double push_total = 0;
     double finish_ms = 0;
     auto& clock = dev_.clock;
@@ -566,6 +575,7 @@ void Scanner::write_outputs(const fs::path& temp, ScanMode mode, Captured& captu
         log_.warning("poor scan: " + outcome.verdict.reasons.front() + ". " +
                      outcome.verdict.advice);
     const ScanMetadata metadata{board_,
+                                settings_,
                                 mode,
                                 captured.started_utc,
                                 camera,

@@ -7,7 +7,7 @@
 #include "fpp/scanner/api_error.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/settings_file.hpp"
-#include "scan_metadata.hpp"
+#include "scan_metadata.hpp" // file_written_utc
 
 #include <algorithm>
 #include <cerrno>
@@ -19,7 +19,6 @@
 namespace fpp::scanner {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 namespace {
 
@@ -33,14 +32,6 @@ void throw_if_aborted(const std::exception_ptr& e) {
 }
 
 constexpr auto kJobTimeout = std::chrono::seconds(30);
-
-json size_json(Size s) {
-    return {{"width", s.width}, {"height", s.height}};
-}
-
-json text_or_null(const std::string& s) {
-    return s.empty() ? json(nullptr) : json(s);
-}
 
 // The largest value of a GenICam mono pixel format.
 double top_of(const std::string& pixel_format) {
@@ -87,49 +78,35 @@ struct ScannerService::Job {
     std::promise<void> done;
 };
 
-ScannerService::ScannerService(BoardConfig& board, Scanner& scanner, Devices devices,
-                               EventHub& events, const Logger& log, ServiceOptions options)
+ScannerService::ScannerService(const BoardConfig& board, Scanner& scanner, Devices devices,
+                               ServiceEvents& events, const Logger& log, ServiceOptions options)
     : board_(board), scanner_(scanner), dev_(devices), events_(events), log_(log),
       options_(std::move(options)), camera_size_(devices.camera.size()),
       camera_bit_depth_(devices.camera.bit_depth()), projector_size_(devices.display.size()),
-      exposure_us_(board.camera.settings.exposure_us) {
+      settings_(scanner.settings()) {
     scanner_.set_observer(this);
-    refresh_table_json();
+    refresh_table();
 }
 
 ScannerService::~ScannerService() {
     scanner_.set_observer(nullptr);
 }
 
-void ScannerService::refresh_table_json() {
-    json t = nullptr;
+void ScannerService::refresh_table() {
+    std::optional<TableDescription> t;
     if (scanner_.has_table()) {
-        const TableInfo& info = scanner_.table().info();
+        t.emplace();
+        t->path = scanner_.table_path();
+        t->info = scanner_.table().info();
         std::error_code ec;
-        const auto bytes = fs::file_size(scanner_.table_path(), ec);
-        const auto installed = file_written_utc(scanner_.table_path());
-        t = {{"path", scanner_.table_path().string()},
-             {"model", to_string(info.model)},
-             {"camera", size_json(info.camera)},
-             {"projector", size_json(info.projector)},
-             {"bytes", ec ? 0 : bytes},
-             {"file_fnv1a64", hex64(scanner_.table_file_hash())},
-             {"calibration_fnv1a64", hex64(info.calibration_hash)},
-             {"trueness", trueness_json(info.trueness)},
-             {"created_utc", utc_text(info.created_unix_s)},
-             {"installed_utc", installed ? json(*installed) : json(nullptr)}};
+        const auto bytes = fs::file_size(t->path, ec);
+        t->bytes = ec ? 0 : bytes;
+        t->file_hash = scanner_.table_file_hash();
+        t->installed_utc = file_written_utc(t->path);
     }
     const std::lock_guard lock(mutex_);
-    table_json_ = std::move(t);
+    table_ = std::move(t);
     table_hash_shown_ = scanner_.table_file_hash();
-}
-
-void ScannerService::publish_table_event() {
-    const json t = table_json();
-    events_.publish("table",
-                    t.is_null()
-                        ? json(nullptr).dump()
-                        : json{{"model", t["model"]}, {"file_fnv1a64", t["file_fnv1a64"]}}.dump());
 }
 
 // ---------------------------------------------------------------- scanning thread
@@ -266,7 +243,7 @@ void ScannerService::button_back() {
             ended = change_state_locked(ScannerState::idle, {});
     }
     if (ended) {
-        publish_state(ScannerState::idle, {});
+        events_.state_changed({ScannerState::idle, {}});
         dev_.led.set(drivers::LedState::ready);
     }
     log_.info("idle: waiting for the button or a request");
@@ -291,42 +268,31 @@ void ScannerService::scan_started(const std::string& id, ScanMode mode, int fram
     // The scan has just reloaded a table file that changed on disk
     // (Scanner::scan): described before anything of the scan is reported.
     if (scanner_.table_file_hash() != table_hash_shown_) {
-        refresh_table_json();
-        publish_table_event();
+        refresh_table();
+        events_.table_changed(table());
     }
     current_id_ = id;
     current_mode_ = mode;
     set_state(ScannerState::scanning, {});
-    events_.publish("scan-started", json{{"id", id},
-                                         {"mode", mode == ScanMode::scan ? "scan" : "capture"},
-                                         {"frames", frames},
-                                         {"source", current_source_},
-                                         {"session", text_or_null(current_session_)}}
-                                        .dump());
+    events_.scan_started({id, mode, frames, current_source_, current_session_});
 }
 
 void ScannerService::frame_captured(int frame, int frames) {
-    events_.publish("frame-captured",
-                    json{{"id", current_id_}, {"frame", frame}, {"frames", frames}}.dump());
+    events_.frame_captured(current_id_, frame, frames);
 }
 
 void ScannerService::decoded() {
-    events_.publish("decoded", json{{"id", current_id_}}.dump());
+    events_.decoded(current_id_);
 }
 
 void ScannerService::written(const ScanOutcome& outcome) {
-    const char* mode = current_mode_ == ScanMode::scan ? "scan" : "capture";
     drop_presses_during_scan();
+    const ScanEnd end{current_id_, current_mode_,   true, outcome.points, outcome.verdict,
+                      {},          current_session_};
     bool state_changed = false;
     {
         const std::lock_guard lock(mutex_);
-        last_scan_ = {{"id", current_id_},
-                      {"mode", mode},
-                      {"ok", true},
-                      {"points", outcome.points},
-                      {"quality", quality_json(outcome.verdict)},
-                      {"error", nullptr},
-                      {"session", text_or_null(current_session_)}};
+        last_scan_ = end;
         ++scans_completed_;
         busy_ = false;
         store_bytes_at_ = {}; // measure again
@@ -334,32 +300,25 @@ void ScannerService::written(const ScanOutcome& outcome) {
         // client woken by `written` says idle. Its event follows `written`.
         state_changed = change_state_locked(ScannerState::idle, {});
     }
-    events_.publish("written", json{{"id", current_id_},
-                                    {"mode", mode},
-                                    {"points", outcome.points},
-                                    {"quality", quality_json(outcome.verdict)},
-                                    {"session", text_or_null(current_session_)}}
-                                   .dump());
+    events_.scan_ended(end);
     if (state_changed)
-        publish_state(ScannerState::idle, {});
+        events_.state_changed({ScannerState::idle, {}});
 }
 
 void ScannerService::failed(const std::string& reason) {
     drop_presses_during_scan();
+    const ScanEnd end{current_id_, current_mode_, false, 0, {}, reason, current_session_};
     bool state_changed = false;
     {
         const std::lock_guard lock(mutex_);
-        last_scan_ = {
-            {"id", current_id_}, {"mode", current_mode_ == ScanMode::scan ? "scan" : "capture"},
-            {"ok", false},       {"points", 0},
-            {"error", reason},   {"session", text_or_null(current_session_)}};
+        last_scan_ = end;
         busy_ = false;
         store_bytes_at_ = {};
         state_changed = change_state_locked(ScannerState::error, reason);
     }
-    events_.publish("failed", json{{"id", current_id_}, {"error", reason}}.dump());
+    events_.scan_ended(end);
     if (state_changed)
-        publish_state(ScannerState::error, reason);
+        events_.state_changed({ScannerState::error, reason});
 }
 
 const char* to_string(ScannerState state) {
@@ -381,7 +340,7 @@ bool ScannerService::set_state(ScannerState state, const std::string& error) {
         changed = change_state_locked(state, error);
     }
     if (changed)
-        publish_state(state, error);
+        events_.state_changed({state, error});
     return changed;
 }
 
@@ -391,11 +350,6 @@ bool ScannerService::change_state_locked(ScannerState state, const std::string& 
     state_ = state;
     error_ = error;
     return true;
-}
-
-void ScannerService::publish_state(ScannerState state, const std::string& error) {
-    events_.publish("state",
-                    json{{"state", to_string(state)}, {"error", text_or_null(error)}}.dump());
 }
 
 // ---------------------------------------------------------------- any thread
@@ -417,7 +371,7 @@ std::string ScannerService::start_scan(ScanMode mode, const std::string& session
         throw ApiError(503, "the scanner is stopping");
     if (busy_)
         throw ApiError(409, "a scan is running: one at a time");
-    if (mode == ScanMode::scan && table_json_.is_null())
+    if (mode == ScanMode::scan && !table_)
         throw ApiError(409, "no table is loaded: install one (PUT /api/v1/table) or scan in "
                             "capture mode");
     fs::path folder;
@@ -468,9 +422,9 @@ Preview ScannerService::preview() {
     return p;
 }
 
-nlohmann::json ScannerService::record_response(const std::string& session) {
+ResponseRecorded ScannerService::record_response(const std::string& session) {
     const std::filesystem::path folder = sessions_dir() / session / "response";
-    json result;
+    ResponseRecorded result;
     run_on_scanner_thread([&] {
         ResponseRamp ramp;
         try {
@@ -484,7 +438,7 @@ nlohmann::json ScannerService::record_response(const std::string& session) {
         } catch (const std::exception& e) {
             throw ApiError(507, std::string("response ramp not written: ") + e.what());
         }
-        result = json{{"levels", ramp.levels}, {"frames", ramp.frames.size()}};
+        result = {ramp.levels, ramp.frames.size()};
     });
     log_.info("http: projector response ramp recorded into session " + session);
     return result;
@@ -492,7 +446,7 @@ nlohmann::json ScannerService::record_response(const std::string& session) {
 
 double ScannerService::exposure_us() const {
     const std::lock_guard lock(mutex_);
-    return exposure_us_;
+    return settings_.exposure_us;
 }
 
 double ScannerService::set_exposure_us(double exposure_us) {
@@ -501,30 +455,30 @@ double ScannerService::set_exposure_us(double exposure_us) {
     if (!options_.settings_file)
         throw ApiError(409, "the board names no settings file (board key settings, or "
                             "--settings)");
+    const ScannerSettings wanted{exposure_us};
     run_on_scanner_thread([&] {
-        const double before = board_.camera.settings.exposure_us;
+        const ScannerSettings before = scanner_.settings();
         try {
-            dev_.camera.set_exposure_us(exposure_us);
-            write_settings_file(*options_.settings_file, ScannerSettings{exposure_us});
+            scanner_.apply_settings(wanted);
+            write_settings_file(*options_.settings_file, wanted);
         } catch (const std::exception& e) {
             try {
-                dev_.camera.set_exposure_us(before);
+                scanner_.apply_settings(before);
             } catch (const std::exception&) {
             }
             throw ApiError(503, std::string("exposure not changed: ") + e.what());
         }
-        board_.camera.settings.exposure_us = exposure_us;
     });
     {
         const std::lock_guard lock(mutex_);
-        exposure_us_ = exposure_us;
+        settings_ = wanted;
     }
     log_.info("exposure set to " + std::to_string(exposure_us) + " us");
-    events_.publish("settings", json{{"exposure_us", exposure_us}}.dump());
+    events_.settings_changed(wanted);
     return exposure_us;
 }
 
-json ScannerService::install_table(const fs::path& uploaded) {
+TableDescription ScannerService::install_table(const fs::path& uploaded) {
     if (!options_.table_path)
         throw ApiError(409, "the board names no table path (board key table, or --table)");
     const fs::path target = *options_.table_path;
@@ -557,15 +511,16 @@ json ScannerService::install_table(const fs::path& uploaded) {
                 scanner_.reload_table(target);
             throw ApiError(507, std::string("table not installed: ") + e.what());
         }
-        refresh_table_json();
+        refresh_table();
     });
-    publish_table_event();
-    return table_json();
+    std::optional<TableDescription> installed = table();
+    events_.table_changed(installed);
+    return *installed;
 }
 
-json ScannerService::table_json() const {
+std::optional<TableDescription> ScannerService::table() const {
     const std::lock_guard lock(mutex_);
-    return table_json_;
+    return table_;
 }
 
 std::uint64_t ScannerService::store_bytes() const {
@@ -577,46 +532,36 @@ std::uint64_t ScannerService::store_bytes() const {
     return store_bytes_;
 }
 
-std::string ScannerService::state_event() const {
+StateNow ScannerService::state() const {
     const std::lock_guard lock(mutex_);
-    return EventHub::format(
-        "state", json{{"state", to_string(state_)}, {"error", text_or_null(error_)}}.dump());
+    return {state_, error_};
 }
 
-json ScannerService::status() const {
-    const std::size_t scans = list_scans(board_.store.directory).size();
-    std::size_t sessions = 0;
+ScannerStatus ScannerService::status() const {
+    ScannerStatus st;
+    st.store_scans = list_scans(board_.store.directory).size();
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(sessions_dir(), ec))
-        sessions += e.is_directory() ? 1 : 0;
+        st.store_sessions += e.is_directory() ? 1 : 0;
+    st.board_name = board_.name;
+    st.simulated = options_.simulated;
+    st.session_board = !options_.session_board_yaml.empty();
+    st.camera = camera_size_;
+    st.camera_bit_depth = camera_bit_depth_;
+    st.pixel_format = board_.camera.settings.pixel_format;
+    st.display = projector_size_;
+    st.sequence_name = board_.sequence_name.empty() ? "blocks" : board_.sequence_name;
+    st.sequence_frames = scanner_.frames_per_scan();
+    st.store_directory = board_.store.directory;
+    st.store_max_bytes = board_.store.max_bytes;
     const std::lock_guard lock(mutex_);
-    const auto& s = board_.camera.settings;
-    return {{"api", 1},
-            {"state", to_string(state_)},
-            {"error", text_or_null(error_)},
-            {"board",
-             {{"name", board_.name},
-              {"simulated", options_.simulated},
-              {"session_board", !options_.session_board_yaml.empty()}}},
-            {"camera",
-             {{"width", camera_size_.width},
-              {"height", camera_size_.height},
-              {"bit_depth", camera_bit_depth_},
-              {"pixel_format", s.pixel_format},
-              {"exposure_us", exposure_us_}}},
-            {"display", size_json(projector_size_)},
-            {"sequence",
-             {{"name", board_.sequence_name.empty() ? "blocks" : board_.sequence_name},
-              {"frames", scanner_.frames_per_scan()}}},
-            {"table", table_json_},
-            {"store",
-             {{"directory", board_.store.directory.string()},
-              {"used_bytes", store_bytes()},
-              {"max_bytes", board_.store.max_bytes},
-              {"scans", scans},
-              {"sessions", sessions}}},
-            {"last_scan", last_scan_},
-            {"scans_completed", scans_completed_}};
+    st.state = {state_, error_};
+    st.settings = settings_;
+    st.table = table_;
+    st.store_used_bytes = store_bytes();
+    st.last_scan = last_scan_;
+    st.scans_completed = scans_completed_;
+    return st;
 }
 
 } // namespace fpp::scanner

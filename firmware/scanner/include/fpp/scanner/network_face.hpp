@@ -20,7 +20,7 @@ public:
     // Reads the token, finds the page and starts listening (logged as
     // "http: listening on ADDRESS:PORT"). Throws InputError for a bad token
     // file, IoError when it cannot listen.
-    NetworkFace(BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
+    NetworkFace(const BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
                 ServiceOptions options);
     ~NetworkFace();
     NetworkFace(const NetworkFace&) = delete;

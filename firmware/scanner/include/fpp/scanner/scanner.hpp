@@ -28,6 +28,7 @@
 #include <fpp/scanner/board_config.hpp>
 #include <fpp/scanner/log.hpp>
 #include <fpp/scanner/scan_verdict.hpp>
+#include <fpp/scanner/settings_file.hpp>
 
 namespace fpp::scanner {
 
@@ -98,7 +99,11 @@ public:
     // (InputError naming hdr.exposures_us[i] and the range), renders the
     // patterns (through the response's inverse when there is one) and gives
     // them to the display. The devices must outlive the scanner.
+    // The board stays as parsed: what a person changes while the scanner
+    // runs (the exposure) is `settings`, the board's own when not given.
     Scanner(const BoardConfig& board, Devices devices, const Logger& log);
+    Scanner(const BoardConfig& board, const ScannerSettings& settings, Devices devices,
+            const Logger& log);
 
     // One scan: the sequence once, or once per exposure with hdr (fused per
     // pixel). A scan-mode scan first reloads the table when its file changed
@@ -133,6 +138,11 @@ public:
     void reload_table(const std::filesystem::path& path);
 
     void set_observer(ScanObserver* observer) { observer_ = observer; }
+
+    const ScannerSettings& settings() const { return settings_; }
+    // Sets the camera to `settings` and scans with them from the next scan
+    // on. Throws DeviceError (the settings in use stay).
+    void apply_settings(const ScannerSettings& settings);
 
     // Frames of one pass of the sequence (an HDR scan takes one pass per exposure).
     int frames_per_scan() const { return static_cast<int>(patterns_); }
@@ -196,6 +206,7 @@ private:
                        const std::optional<GoodScan>& last_good);
 
     const BoardConfig& board_;
+    ScannerSettings settings_;
     Devices dev_;
     const Logger& log_;
     Sequence sequence_;

@@ -5,7 +5,8 @@
 // threads (HTTP connections) only queue work and read the state.
 //
 // State: idle, scanning, or error (the last scan failed; the next good one
-// clears it). Every change and a scan's progress go to the EventHub.
+// clears it). Every change and a scan's progress go to ServiceEvents; what
+// it reports are types (service_reports.hpp), which the API renders.
 #include <atomic>
 #include <chrono>
 #include <deque>
@@ -15,12 +16,10 @@
 #include <optional>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include <fpp/scanner/board_config.hpp>
-#include <fpp/scanner/event_hub.hpp>
 #include <fpp/scanner/log.hpp>
 #include <fpp/scanner/scanner.hpp>
+#include <fpp/scanner/service_reports.hpp>
 
 namespace fpp::scanner {
 
@@ -37,17 +36,12 @@ struct Preview {
     double mean = 0;      // mean level, 0..1
 };
 
-// What the scanner is doing: waiting, scanning, or in error (a failed scan,
-// a camera that does not answer, a button whose GPIO chip went away; the
-// error's reason beside it).
-enum class ScannerState { idle, scanning, error };
-const char* to_string(ScannerState state); // "idle", "scanning", "error"
-
 class ScannerService final : public ScanObserver {
 public:
-    // `board` is the scanner's: exposure changes are written into it.
-    ScannerService(BoardConfig& board, Scanner& scanner, Devices devices, EventHub& events,
-                   const Logger& log, ServiceOptions options);
+    // `board` is the scanner's, as parsed; the settings a person changes
+    // are the scanner's (Scanner::settings) and the settings file's.
+    ScannerService(const BoardConfig& board, Scanner& scanner, Devices devices,
+                   ServiceEvents& events, const Logger& log, ServiceOptions options);
     ~ScannerService() override;
 
     // On the scanning thread: button presses (scans in `button_mode`) and
@@ -59,22 +53,21 @@ public:
     std::string start_scan(ScanMode mode, const std::string& session = {});
     Preview preview();
     // Captures the projector response ramp into `session`'s folder as
-    // response/ (replacing an earlier one): {"levels": [...], "frames": N}.
-    nlohmann::json record_response(const std::string& session);
+    // response/ (replacing an earlier one).
+    ResponseRecorded record_response(const std::string& session);
     double exposure_us() const;
     double set_exposure_us(double exposure_us);
     // Checks the uploaded file, installs it at the table path (the previous
     // one kept as PATH.previous) and uses it from the next scan on.
-    nlohmann::json install_table(const std::filesystem::path& uploaded);
+    TableDescription install_table(const std::filesystem::path& uploaded);
 
-    nlohmann::json status() const;
-    nlohmann::json table_json() const; // null without a table
+    ScannerStatus status() const;
+    StateNow state() const;
+    std::optional<TableDescription> table() const; // nullopt without a table
     std::optional<std::filesystem::path> table_path() const { return options_.table_path; }
     const std::filesystem::path& store() const { return board_.store.directory; }
     std::filesystem::path sessions_dir() const { return board_.store.directory / "sessions"; }
     const std::string& session_board_yaml() const { return options_.session_board_yaml; }
-    // The first event of a new /events stream: the state now.
-    std::string state_event() const;
 
     // ScanObserver (the scanning thread).
     void scan_started(const std::string& id, ScanMode mode, int frames) override;
@@ -103,15 +96,13 @@ private:
     void button_back();
     void drop_presses_during_scan(); // on the scanning thread
     bool change_state_locked(ScannerState state, const std::string& error); // under mutex_
-    void publish_state(ScannerState state, const std::string& error);
-    void refresh_table_json();         // after the table changed
-    void publish_table_event();        // the `table` event, from table_json_
+    void refresh_table();              // after the table changed
     std::uint64_t store_bytes() const; // under mutex_
 
-    BoardConfig& board_;
+    const BoardConfig& board_;
     Scanner& scanner_;
     Devices dev_;
-    EventHub& events_;
+    ServiceEvents& events_;
     const Logger& log_;
     ServiceOptions options_;
     const Size camera_size_;
@@ -124,11 +115,11 @@ private:
     bool stopping_ = false;
     ScannerState state_ = ScannerState::idle;
     std::string error_;
-    nlohmann::json last_scan_; // null before the first
-    nlohmann::json table_json_;
-    std::uint64_t table_hash_shown_ = 0; // the table table_json_ describes
+    std::optional<ScanEnd> last_scan_;
+    std::optional<TableDescription> table_;
+    std::uint64_t table_hash_shown_ = 0; // the table table_ describes
     int scans_completed_ = 0;
-    double exposure_us_;
+    ScannerSettings settings_; // the scanner's, readable from any thread
     mutable std::uint64_t store_bytes_ = 0;
     mutable std::chrono::steady_clock::time_point store_bytes_at_{};
     // The scan running now (the scanning thread's own).
