@@ -33,8 +33,8 @@ py::object view_array(const Image<T>& image, py::handle owner, bool writeable = 
         strides.push_back(item);
     }
     py::array array(py::dtype::of<T>(), std::move(shape), std::move(strides), image.data(), owner);
-    if (!writeable)
-        array.attr("flags").attr("writeable") = false;
+    if (!writeable) // numpy's flag itself (as arr.flags.writeable = False, without the lookups)
+        py::detail::array_proxy(array.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
     return array;
 }
 

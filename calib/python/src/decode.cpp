@@ -14,7 +14,31 @@
 
 namespace fpp::python {
 
+const DecodeReport& DecodeOutput::report() {
+    const std::lock_guard lock(mutex_);
+    if (!report_) {
+        DecodeReport r;
+        r.stats = decode_statistics(*result, frames_full_scale(*capture));
+        r.diagnosis = diagnose_decode(*capture, *result, r.stats, options);
+        r.consistency = check_decode_consistency(*result, capture->manifest.sequence);
+        report_ = std::move(r);
+    }
+    return *report_;
+}
+
 namespace {
+
+// A figure of the report (made on first use, without the GIL).
+template <class Get> auto figure(Get get) {
+    return [get](DecodeOutput& out) {
+        const DecodeReport* report;
+        {
+            py::gil_scoped_release release;
+            report = &out.report();
+        }
+        return get(*report);
+    };
+}
 
 // The capture a decode reads: fpp.Capture (its frames where they are) or
 // frames with a sequence (copied once into a set in memory).
@@ -34,7 +58,7 @@ std::shared_ptr<const CaptureSet> capture_of(py::handle source, py::handle seque
 
 py::object decode(py::handle source, py::handle sequence, py::handle projector, int bit_depth,
                   double min_modulation, int threads, bool correct_phase_error,
-                  bool accept_inconsistent) {
+                  bool accept_inconsistent, bool check) {
     DecodeOptions options;
     options.min_modulation = min_modulation;
     options.threads = threads;
@@ -47,21 +71,24 @@ py::object decode(py::handle source, py::handle sequence, py::handle projector, 
     {
         py::gil_scoped_release release;
         const auto start = std::chrono::steady_clock::now();
-        auto result = std::make_shared<DecodeResult>(fpp::decode(*capture, options));
+        out->result = std::make_shared<const DecodeResult>(fpp::decode(*capture, options));
         out->seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        out->stats = decode_statistics(*result, frames_full_scale(*capture));
-        out->diagnosis = diagnose_decode(*capture, *result, out->stats, options);
-        out->consistency = check_decode_consistency(*result, capture->manifest.sequence);
+        out->capture = capture;
+        out->options = options;
         out->projector = capture->manifest.projector;
-        out->result = std::move(result);
+        if (check)
+            out->report();
     }
     py::object made = py::cast(out);
+    if (!check)
+        return made;
+    const DecodeReport& report = out->report();
     const std::string where = capture->folder.string();
-    if (out->diagnosis.failed)
-        raise_decode_error(where + ": " + out->diagnosis.message, "failed", made);
-    if (out->consistency.inconsistent && !accept_inconsistent)
-        raise_decode_error(where + ": the decode is inconsistent: " + out->consistency.message +
+    if (report.diagnosis.failed)
+        raise_decode_error(where + ": " + report.diagnosis.message, "failed", made);
+    if (report.consistency.inconsistent && !accept_inconsistent)
+        raise_decode_error(where + ": the decode is inconsistent: " + report.consistency.message +
                                " (accept_inconsistent=True to take the field as it is)",
                            "inconsistent", made);
     return made;
@@ -168,28 +195,30 @@ void bind_decode(py::module_& m) {
             "method_y", [](const DecodeOutput& o) { return o.result->method_y; },
             "How y was unwrapped ('' if not coded).")
         .def_readonly("seconds", &DecodeOutput::seconds, "The decode's own time, s.")
+        .def_property_readonly("pixels",
+                               figure([](const DecodeReport& o) { return o.stats.pixels; }),
+                               "Camera pixels.")
         .def_property_readonly(
-            "pixels", [](const DecodeOutput& o) { return o.stats.pixels; }, "Camera pixels.")
-        .def_property_readonly(
-            "lit", [](const DecodeOutput& o) { return o.stats.lit; },
+            "lit", figure([](const DecodeReport& o) { return o.stats.lit; }),
             "Lit pixels: modulation at or above lit_floor, saturated, or decoded.")
+        .def_property_readonly("decoded",
+                               figure([](const DecodeReport& o) { return o.stats.decoded; }),
+                               "Decoded pixels.")
+        .def_property_readonly("coverage_of_lit", figure([](const DecodeReport& o) {
+                                   return o.stats.coverage_of_lit();
+                               }),
+                               "decoded / lit (0..1).")
+        .def_property_readonly("lit_floor",
+                               figure([](const DecodeReport& o) { return o.stats.lit_floor; }),
+                               "Modulation (camera DN) at or above which a pixel is lit.")
+        .def_property_readonly("full_scale",
+                               figure([](const DecodeReport& o) { return o.stats.full_scale; }),
+                               "The frames' full scale, DN (255, 4095, 65535).")
+        .def_property_readonly("floor_rule",
+                               figure([](const DecodeReport& o) { return o.stats.floor_rule(); }),
+                               "How the lit floor was found (one line).")
         .def_property_readonly(
-            "decoded", [](const DecodeOutput& o) { return o.stats.decoded; }, "Decoded pixels.")
-        .def_property_readonly(
-            "coverage_of_lit", [](const DecodeOutput& o) { return o.stats.coverage_of_lit(); },
-            "decoded / lit (0..1).")
-        .def_property_readonly(
-            "lit_floor", [](const DecodeOutput& o) { return o.stats.lit_floor; },
-            "Modulation (camera DN) at or above which a pixel is lit.")
-        .def_property_readonly(
-            "full_scale", [](const DecodeOutput& o) { return o.stats.full_scale; },
-            "The frames' full scale, DN (255, 4095, 65535).")
-        .def_property_readonly(
-            "floor_rule", [](const DecodeOutput& o) { return o.stats.floor_rule(); },
-            "How the lit floor was found (one line).")
-        .def_property_readonly(
-            "dropped",
-            [](const DecodeOutput& o) {
+            "dropped", figure([](const DecodeReport& o) {
                 py::dict d;
                 d["dark"] = o.stats.dark;
                 d["saturated"] = o.stats.saturated;
@@ -199,21 +228,22 @@ void bind_decode(py::module_& m) {
                 d["no_cue"] = o.stats.no_cue;
                 d["other"] = o.stats.other;
                 return d;
-            },
+            }),
             "Pixels not decoded, by reason, each counted once in this order: dark,\n"
             "saturated, low_modulation, unwrap_inconsistent, out_of_range, no_cue, other.")
         .def_property_readonly(
-            "diagnosis", [](const DecodeOutput& o) { return o.diagnosis.message; },
+            "diagnosis", figure([](const DecodeReport& o) { return o.diagnosis.message; }),
             "The likely cause when little decoded or the description looks wrong ('' when\n"
             "the decode is not suspect).")
+        .def_property_readonly("failed",
+                               figure([](const DecodeReport& o) { return o.diagnosis.failed; }),
+                               "Whether the decode failed (fpp-calib decode's exit 3).")
         .def_property_readonly(
-            "failed", [](const DecodeOutput& o) { return o.diagnosis.failed; },
-            "Whether the decode failed (fpp-calib decode's exit 3).")
-        .def_property_readonly(
-            "inconsistent", [](const DecodeOutput& o) { return o.consistency.inconsistent; },
+            "inconsistent",
+            figure([](const DecodeReport& o) { return o.consistency.inconsistent; }),
             "Whether the field is inconsistent with itself (fpp-calib decode's exit 5).")
         .def_property_readonly(
-            "consistency", [](const DecodeOutput& o) { return o.consistency.message; },
+            "consistency", figure([](const DecodeReport& o) { return o.consistency.message; }),
             "What the consistency check measured and the field to check ('' when consistent).")
         .def_property_readonly(
             "phase_correction_x",
@@ -224,11 +254,13 @@ void bind_decode(py::module_& m) {
             [](const DecodeOutput& o) { return phase_correction(o.result->phase_correction_y); },
             "The same for y.")
         .def("__repr__", [](const DecodeOutput& o) {
+            std::size_t decoded = 0;
+            for (const std::uint8_t f : o.result->mask.storage())
+                decoded += (f & kDecodeValid) ? 1 : 0;
             return "<fpp.DecodeResult " + std::to_string(o.result->camera.width) + "x" +
                    std::to_string(o.result->camera.height) + " " + o.result->method_x +
                    (o.result->method_y.empty() ? "" : " / " + o.result->method_y) + ": " +
-                   std::to_string(o.stats.decoded) + " of " + std::to_string(o.stats.lit) +
-                   " lit pixels decoded>";
+                   std::to_string(decoded) + " pixels decoded>";
         });
 
     m.def("_cpp_decode_seconds", &cpp_decode_seconds, py::arg("capture"), py::arg("repeats"),
@@ -238,6 +270,7 @@ void bind_decode(py::module_& m) {
           py::arg("projector") = py::none(), py::arg("bit_depth") = 0,
           py::arg("min_modulation") = 0.02, py::arg("threads") = 0,
           py::arg("correct_phase_error") = false, py::arg("accept_inconsistent") = false,
+          py::arg("check") = true,
           R"(Decodes a capture into projector coordinates per camera pixel (fpp-calib decode).
 
 capture: an fpp.Capture (fpp.read_capture, Capture.from_frames; its frames are
@@ -252,6 +285,11 @@ correct_phase_error: remove the periodic phase error of a non-linear response
   from the capture alone (--correct-phase-error).
 accept_inconsistent: return a field that is inconsistent with itself rather
   than raise (--accept-inconsistent).
+check: judge the decode as fpp-calib decode does (the report's statistics,
+  diagnosis and consistency check; DecodeError below) before returning. False
+  returns the arrays alone, at the C++ decoder's own speed (the report is
+  then made when a figure is first read; at 1600 x 1200 it costs several
+  times the decode itself).
 
 Returns an fpp.DecodeResult: proj_x, proj_y (projector px, pixel centres on
 integers, NaN invalid), modulation, mean, mask, flags, and the report's

@@ -9,21 +9,37 @@
 #include <pybind11/pybind11.h>
 
 #include <memory>
+#include <mutex>
+#include <optional>
 
 namespace fpp::python {
 
 namespace py = pybind11;
 
-// A decode as Python sees it: the C++ result (its images viewed by the
-// arrays, no copy) and the report's figures.
-struct DecodeOutput {
-    std::shared_ptr<const DecodeResult> result;
+// The report's figures of a decode (fpp-calib decode's decode.md).
+struct DecodeReport {
     DecodeStatistics stats;
     DecodeDiagnosis diagnosis;
     DecodeConsistency consistency;
+};
+
+// A decode as Python sees it: the C++ result (its images viewed by the
+// arrays, no copy) and the report, made when the decode is checked or on
+// the first figure asked for.
+struct DecodeOutput {
+    std::shared_ptr<const DecodeResult> result;
+    std::shared_ptr<const CaptureSet> capture; // for the report's diagnosis
+    DecodeOptions options;
     Size projector;
     double seconds = 0;
     py::object mask; // the valid pixels as booleans, made on first use
+
+    // Computes the report on the first call (call with the GIL released).
+    const DecodeReport& report();
+
+private:
+    std::mutex mutex_;
+    std::optional<DecodeReport> report_;
 };
 
 } // namespace fpp::python
