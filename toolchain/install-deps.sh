@@ -92,6 +92,9 @@ test_packages=(
   "${format_packages[@]}"
   # the compiler cache of every preset (toolchain/ccache.cmake)
   ccache
+  # the Python package fpp (calib/python, FPP_BUILD_PYTHON: presets ci and
+  # dev) and its tests (tests/python, pytest); Open3D for to_open3d is above
+  pybind11-dev python3-dev python3-numpy python3-pytest
   # packet loss on the GigE link in a test's network namespace
   # (iptables-legacy's statistic match)
   iptables
