@@ -21,27 +21,65 @@ def api_send(base, token, method, path, body=None):
         return response.status
 
 
-def check_accessibility(driver):
-    """Labels, live regions, headings without controls, the canvas's text."""
-    problems = driver.execute_script("""
+ACCESSIBILITY_RULES = (Path(__file__).parent / "accessibility.js").read_text()
+
+
+def check_accessibility(driver, where):
+    """The page's accessibility in its state now (`where`): the rules of
+    accessibility.js (WCAG A/AA checks in the manner of axe-core), and this
+    page's own: its state and messages in live regions."""
+    result = driver.execute_script("const result =\n" + ACCESSIBILITY_RULES + "\nreturn result;")
+    problems = result["violations"] + driver.execute_script("""
         const out = [];
-        for (const e of document.querySelectorAll('input, select, textarea, progress')) {
-          if (e.type === 'hidden') continue;
-          const named = (e.labels && e.labels.length) || e.getAttribute('aria-label');
-          if (!named) out.push('no label: ' + (e.id || e.tagName));
-        }
         for (const id of ['scan-status', 'scan-error', 'scan-quality', 'viewer-message', 'connection-banner'])
-          if (!document.getElementById(id).matches('[aria-live], [role="alert"]'))
-            out.push('not a live region: ' + id);
-        if (!document.getElementById('state').closest('[aria-live]')) out.push('the state is not live');
-        for (const h of document.querySelectorAll('h1, h2, h3'))
-          if (h.querySelector('button, a, input, select')) out.push('a control inside heading ' + h.textContent);
-        const canvas = document.querySelector('#viewer canvas');
-        if (!canvas.getAttribute('aria-label')) out.push('the canvas has no text');
+          if (!document.getElementById(id).matches('[aria-live], [role="alert"], [role="status"]'))
+            out.push('live-region: #' + id + ' is not a live region');
+        if (!document.getElementById('state').closest('[aria-live]')) out.push('live-region: the state is not live');
         return out;""")
-    check(not problems, f"accessibility: {problems}")
-    text = driver.execute_script("return document.querySelector('#viewer canvas').getAttribute('aria-label')")
-    log(f"accessibility: every control labelled, live regions for state and messages, canvas: {text!r}")
+    check(not problems, f"accessibility ({where}): {len(problems)} violation(s):\n  " + "\n  ".join(problems))
+    c = result["contrast"]
+    check(c["judged"] > 10, f"accessibility ({where}): contrast decided for {c['judged']} text elements only")
+    log(f"accessibility ({where}): {len(result['rules']) + 1} rules, no violation; contrast of "
+        f"{c['judged']} text elements, the lowest {c['lowest']:.1f}:1 (as normal text)")
+
+
+def check_accessibility_checker(driver):
+    """The checker finds what it should: a block with one fault per rule it
+    can see in a fragment, put into the page and taken out again."""
+    driver.execute_script("""
+        const block = document.createElement('div');
+        block.id = 'a11y-faults';
+        block.innerHTML = `
+          <h4>skips two levels</h4>
+          <button></button>
+          <a href="#x"></a>
+          <img src="data:,">
+          <input type="text">
+          <span id="twice"></span><span id="twice"></span>
+          <div role="buton">x</div>
+          <div aria-live="loud">x</div>
+          <p aria-labelledby="no-such-id">x</p>
+          <div aria-hidden="true"><button>hidden but focusable</button></div>
+          <button tabindex="3">ahead of order</button>
+          <a href="#y"><button>inside a link</button></a>
+          <ul><div>not an item</div></ul>
+          <p id="a11y-grey">grey on white</p>`;
+        document.querySelector('main').appendChild(block);
+        // Through the CSSOM: the page's Content-Security-Policy drops style attributes.
+        const grey = document.getElementById('a11y-grey');
+        grey.style.color = '#999';
+        grey.style.background = '#fff';""")
+    try:
+        result = driver.execute_script("const result =\n" + ACCESSIBILITY_RULES + "\nreturn result;")
+    finally:
+        driver.execute_script("document.getElementById('a11y-faults').remove()")
+    expected = {"heading-order", "button-name", "link-name", "image-alt", "label", "duplicate-id",
+                "aria-valid-role", "aria-live-value", "aria-valid-reference", "aria-hidden-focus",
+                "tabindex", "nested-interactive", "list", "color-contrast"}
+    found = {v.split(":")[0] for v in result["violations"]}
+    check(expected <= found, f"the accessibility checker missed {sorted(expected - found)} in a block "
+          f"made to fail them; it found: {result['violations']}")
+    log(f"accessibility checker: {len(expected)} kinds of fault put into the page, each found")
 
 
 def check_poor_scan(driver, base, token):
@@ -104,7 +142,8 @@ def check_scanner_gone(driver, restart):
     # While idle: the same, and Scan is off while it is away.
     restart(lambda: (wait_for(driver, "the banner", lambda d: shown(d, "connection-banner"), timeout=30),
                      check(not driver.find_element(By.ID, "scan-button").is_enabled(),
-                           "Scan is enabled while the scanner is away")))
+                           "Scan is enabled while the scanner is away"),
+                     check_accessibility(driver, "the scanner away")))
     wait_for(driver, "the page back", lambda d: not shown(d, "connection-banner")
              and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
     log("scanner stopped while idle and back: banner, Scan off while away, back on after")
@@ -120,6 +159,7 @@ def check_scanner_gone(driver, restart):
     check(driver.find_element(By.ID, "scan-button").is_enabled(), "Scan stays off for a capture-only scan")
     driver.find_element(By.ID, "scan-capture").click()
     log(f"no table: Scan off, {message!r}; on for a capture-only scan")
+    check_accessibility(driver, "no table")
     restart(lambda: None)
     wait_for(driver, "the table back", lambda d: not shown(d, "no-table")
              and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)

@@ -39,9 +39,9 @@ import urllib.request
 from pathlib import Path
 
 from browser_support import START, Failure, check, log, shown, text_of, wait_for
-from page_states import (check_accessibility, check_bad_cloud, check_deleted_elsewhere,
-                         check_poor_scan, check_reload_transfer, check_replayed_events,
-                         check_scanner_gone)
+from page_states import (check_accessibility, check_accessibility_checker, check_bad_cloud,
+                         check_deleted_elsewhere, check_poor_scan, check_reload_transfer,
+                         check_replayed_events, check_scanner_gone)
 
 SOURCE_DIR = Path(__file__).resolve().parents[2]
 TEST_NAME = "Browser.PageScansAndDrawsTheCloud"
@@ -450,6 +450,7 @@ def check_phone_layout(driver, artifacts):
             return out;""")
         check(not small, f"tap targets under 44 px on a phone: {small}")
         log("phone layout: every visible control at least 44 px tall")
+        check_accessibility(driver, "phone")
     finally:
         driver.set_window_size(size["width"], size["height"])
 
@@ -506,7 +507,8 @@ def browser_test(args, base, token, store, work, artifacts, restart=None):
         check_replayed_events(driver, scan_id)
         if store:
             check_bad_cloud(driver, store, scan_id)
-        check_accessibility(driver)
+        check_accessibility_checker(driver)
+        check_accessibility(driver, "a cloud on screen")
         if restart:  # the simulated board: its brightness follows the exposure
             # (Aravis's fake camera on the virtual ARM board ignores it)
             poor = check_poor_scan(driver, base, token)
