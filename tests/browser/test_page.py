@@ -24,6 +24,7 @@ selenium missing; with CI=true that is a failure). Runs with /usr/bin/python3
 import argparse
 import hashlib
 import json
+import math
 import os
 import re
 import secrets
@@ -412,6 +413,7 @@ def check_viewer(driver, scan_id, artifacts):
     wait_for(driver, "the view to turn under a mouse drag",
              lambda d: d.execute_script("return arguments[0].toDataURL('image/png')", canvas) != before, timeout=10)
     driver.find_element(By.ID, "viewer").screenshot(str(artifacts / "viewer-turned.png"))
+    check_scale_bar(driver, canvas)
     log(f"a mouse drag turned the view: {artifacts / 'viewer-turned.png'}")
     lod = driver.execute_script("return window.fppViewer.lod")
     log(f"level of detail: a full frame of {lod['fullPoints']} points took {lod['fullFrameMs']:.0f} ms here; "
@@ -423,6 +425,34 @@ def check_viewer(driver, scan_id, artifacts):
     driver.execute_script("const s = document.getElementById('colour-by'); s.value = 'shaded';"
                           "s.dispatchEvent(new Event('change'));")
     return viewer
+
+
+def scale_bar(driver):
+    """The scale bar as shown: its length in mm and on screen (px)."""
+    text, width = driver.execute_script("""
+        const bar = document.querySelector('#viewer .scale-bar');
+        return bar.hidden ? [null, 0] : [bar.querySelector('.scale-text').textContent,
+                                         bar.querySelector('.scale-line').getBoundingClientRect().width];""")
+    match = re.fullmatch(r"([0-9.]+) mm at the centre", text or "")
+    check(match, f"the viewer's scale bar says {text!r}")
+    return float(match.group(1)), width
+
+
+def check_scale_bar(driver, canvas):
+    """A scale bar of a round length in mm, as long as that length looks at
+    the view's centre: it follows the zoom."""
+    mm, px = scale_bar(driver)
+    mantissa = mm / 10 ** math.floor(math.log10(mm))
+    check(any(abs(mantissa - m) < 1e-6 for m in (1, 2, 5)), f"the scale bar's {mm} mm is not 1, 2 or 5 x 10^k")
+    check(140 / 2.5 - 1 <= px <= 140 + 1, f"the scale bar is {px:.0f} px long for {mm} mm (56..140 px expected)")
+    driver.execute_script("""
+        for (let i = 0; i < 5; ++i)
+          arguments[0].dispatchEvent(new WheelEvent('wheel', {deltaY: -100, bubbles: true, cancelable: true}));""",
+                          canvas)
+    zoomed_mm, zoomed_px = wait_for(driver, "the scale bar to follow the zoom", lambda d: (
+        lambda bar: bar if bar[1] / bar[0] > 1.2 * px / mm else None)(scale_bar(d)), timeout=10)
+    log(f"scale bar: {mm:g} mm over {px:.0f} px; zoomed in, {zoomed_mm:g} mm over {zoomed_px:.0f} px "
+        f"({zoomed_px / zoomed_mm / (px / mm):.2f}x the pixels per mm)")
 
 
 def check_phone_layout(driver, artifacts):

@@ -273,6 +273,32 @@ const FppViewer = (function () {
     return 0.12 + 0.88 * Math.max(0, facing);
   }
 
+  // The scale bar: at most this long on screen, a round length in mm.
+  const SCALE_BAR_PX = 140;
+
+  // The largest of 1, 2, 5 x 10^k mm not above `mm`.
+  function roundLength(mm) {
+    const decade = Math.pow(10, Math.floor(Math.log10(mm)));
+    return [5, 2, 1].map(m => m * decade).find(l => l <= mm * (1 + 1e-9)) || decade;
+  }
+
+  function formatMm(mm) {
+    return (mm >= 1 ? String(Math.round(mm)) : mm.toPrecision(1)) + ' mm';
+  }
+
+  function makeScaleBar(container) {
+    const box = document.createElement('div');
+    box.className = 'scale-bar';
+    box.hidden = true;
+    const line = document.createElement('span');
+    line.className = 'scale-line';
+    const text = document.createElement('span');
+    text.className = 'scale-text';
+    box.append(line, text);
+    container.appendChild(box);
+    return { box: box, line: line, text: text };
+  }
+
   // A visiting order in which every prefix is an even sample of the cloud:
   // i -> i * P mod n with P prime and not a factor of n.
   function spreadOrder(n) {
@@ -302,6 +328,7 @@ const FppViewer = (function () {
     canvas.setAttribute('aria-label', 'point cloud view: no cloud loaded');
     canvas.tabIndex = 0;
     container.appendChild(canvas);
+    const scaleBar = makeScaleBar(container);
 
     const scene = new THREE.Scene();
     const camera = new THREE.PerspectiveCamera(45, 1, 1, 10000);
@@ -319,7 +346,7 @@ const FppViewer = (function () {
 
     // Draws `count` points (all when not given) and measures the frame.
     function draw(count) {
-      if (!points) { renderer.render(scene, camera); return; }
+      if (!points) { renderer.render(scene, camera); updateScaleBar(); return; }
       const n = points.geometry.getAttribute('position').count;
       const drawn = Math.min(n, count || n);
       points.geometry.setDrawRange(0, drawn);
@@ -332,6 +359,19 @@ const FppViewer = (function () {
       if (drawn > 0 && ms > 0) pointsPerMs = pointsPerMs ? 0.7 * pointsPerMs + 0.3 * drawn / ms : drawn / ms;
       if (drawn === n) { lod.fullPoints = n; lod.fullFrameMs = ms; } else lod.movingFrameMs = ms;
       if (window.fppViewer) window.fppViewer.lod = Object.assign({}, lod);
+      updateScaleBar();
+    }
+
+    // The bar's length in mm at the orbit centre's depth (nearer parts look
+    // larger): the view's height there is 2 d tan(fov / 2).
+    function updateScaleBar() {
+      if (!points || points.geometry.getAttribute('position').count === 0) { scaleBar.box.hidden = true; return; }
+      const distance = camera.position.distanceTo(controls.target);
+      const pxPerMm = container.clientHeight / (2 * distance * Math.tan(camera.fov * Math.PI / 360));
+      const mm = roundLength(SCALE_BAR_PX / pxPerMm);
+      scaleBar.line.style.width = (mm * pxPerMm).toFixed(1) + 'px';
+      scaleBar.text.textContent = formatMm(mm) + ' at the centre';
+      scaleBar.box.hidden = false;
     }
     function movingBudget() {
       const n = points ? points.geometry.getAttribute('position').count : 0;
