@@ -8,7 +8,7 @@ import time
 import urllib.request
 from pathlib import Path
 
-from browser_support import check, log, shown, text_of, wait_for
+from browser_support import call_page, check, log, shown, text_of, viewer_state, wait_for
 
 
 def api_send(base, token, method, path, body=None):
@@ -105,15 +105,15 @@ def check_poor_scan(driver, base, token):
 
 def check_deleted_elsewhere(driver, base, token, scan_id):
     """The scan on screen deleted through the API: its row and its cloud go."""
-    driver.execute_script("loadCloud(arguments[0])", scan_id)
-    wait_for(driver, f"{scan_id} on screen", lambda d: d.execute_script(
-        "return window.fppViewer && window.fppViewer.scanId === arguments[0]", scan_id), timeout=30)
+    call_page(driver, "cloud.js", "loadCloud", scan_id)
+    wait_for(driver, f"{scan_id} on screen", lambda d: (lambda v: v and v["scanId"] == scan_id)(viewer_state(d)),
+             timeout=30)
     check(api_send(base, token, "DELETE", f"/api/v1/scans/{scan_id}") == 204, "DELETE through the API")
     wait_for(driver, "the deleted scan to leave the page", lambda d: d.execute_script("""
         return !document.querySelector('#scan-list tr[data-scan-id="' + arguments[0] + '"]') &&
-               !window.fppViewer && document.getElementById('viewer-title').textContent === '' &&
-               document.getElementById('viewer-message').textContent.includes('was deleted')""", scan_id),
-             timeout=10)
+               document.getElementById('viewer-title').textContent === '' &&
+               document.getElementById('viewer-message').textContent.includes('was deleted')""", scan_id)
+             and viewer_state(d) is None, timeout=10)
     log(f"{scan_id} deleted through the API: its row and its cloud left the page")
 
 
@@ -165,19 +165,67 @@ def check_scanner_gone(driver, restart):
              and d.find_element(By.ID, "scan-button").is_enabled(), timeout=30)
 
 
+CHECKERBOARD_YAML = "format: fpp-board/1\nkind: checkerboard\ninner_corners: [13, 9]\nsquare_size: 10.0\n"
+
+
+def check_controls(driver, table):
+    """The page's other controls, each through its form: the exposure, the
+    live preview beside Scan, a table upload, and the calibration helper (a
+    session made, a pose taken, its thumbnail shown)."""
+    from selenium.webdriver.common.by import By
+
+    field = driver.find_element(By.ID, "exposure")
+    for exposure in ("9000", "8000"):
+        field.clear()
+        field.send_keys(exposure)
+        driver.find_element(By.CSS_SELECTOR, "#settings-form button[type=submit]").click()
+        wait_for(driver, f"exposure {exposure}", lambda d: f"Exposure now {exposure} µs" in text_of(d, "settings-message"),
+                 timeout=20)
+    log(f"exposure set from the page: {text_of(driver, 'settings-message')!r}")
+    driver.find_element(By.ID, "scan-preview-on").click()
+    info = wait_for(driver, "the live preview beside Scan", lambda d: text_of(d, "scan-preview-info")
+                    if "mean level" in text_of(d, "scan-preview-info") and d.execute_script(
+                        "return document.getElementById('scan-preview').naturalWidth > 0") else None, timeout=20)
+    driver.find_element(By.ID, "scan-preview-on").click()
+    log(f"live preview beside Scan: {info!r}")
+    driver.find_element(By.ID, "table-file").send_keys(str(table))
+    driver.find_element(By.ID, "table-upload").click()
+    installed = wait_for(driver, "the table installed", lambda d: text_of(d, "table-message")
+                         if text_of(d, "table-message").startswith("Installed") else None, timeout=60)
+    log(f"table uploaded from the page: {installed[:90]!r}...")
+    driver.find_element(By.CSS_SELECTOR, "#calibration summary").click()
+    driver.find_element(By.ID, "session-name").send_keys("page-session")
+    driver.find_element(By.ID, "board-yaml").send_keys(CHECKERBOARD_YAML)
+    driver.find_element(By.ID, "session-create").click()
+    wait_for(driver, "the new session selected", lambda d: d.execute_script(
+        "return document.getElementById('session-select').value") == "page-session"
+        and d.find_element(By.ID, "take-pose").is_enabled(), timeout=20)
+    driver.find_element(By.ID, "take-pose").click()
+    wait_for(driver, "the pose and its thumbnail", lambda d: text_of(d, "pose-count") == "1" and d.execute_script(
+        "const i = document.querySelector('#poses img'); return !!i && i.naturalWidth > 0"), timeout=60)
+    preview = wait_for(driver, "the helper's preview", lambda d: text_of(d, "preview-info")
+                       if "mean level" in text_of(d, "preview-info") else None, timeout=20)
+    log(f"calibration helper: session page-session made, a pose taken and its thumbnail shown; "
+        f"{text_of(driver, 'session-message')!r}, preview {preview!r}")
+    driver.find_element(By.CSS_SELECTOR, "#calibration summary").click()
+
+
 def check_replayed_events(driver, scan_id):
     """Events repeated after a reconnect, or out of order, leave the page
     where the scanner is."""
     before = driver.execute_script("""
         const p = document.getElementById('progress');
         return [document.getElementById('scan-status').textContent, p.value, p.max];""")
-    driver.execute_script("""
-        const id = arguments[0], send = (n, d) => handleEvent(n, JSON.stringify(d));
+    driver.execute_async_script("""
+        const [id, done] = arguments;
+        import('/events.js').then(events => {
+        const send = (n, d) => events.handleEvent(n, JSON.stringify(d));
         send('scan-started', {id: id, mode: 'scan', frames: 17, source: 'api', session: null});
         send('frame-captured', {id: id, frame: 3, frames: 17});
         send('decoded', {id: id});
         send('written', {id: id, mode: 'scan', points: 1, quality: null, session: null});
-        send('state', {state: 'idle', error: null});""", scan_id)
+        send('state', {state: 'idle', error: null});
+        done(); });""", scan_id)
     after = driver.execute_script("""
         const p = document.getElementById('progress');
         return [document.getElementById('scan-status').textContent, p.value, p.max];""")
@@ -193,10 +241,10 @@ def check_bad_cloud(driver, store, scan_id):
     data = ply.read_bytes()
     ply.write_bytes(data[:len(data) // 2])
     try:
-        driver.execute_script("loadCloud(arguments[0])", scan_id)
+        call_page(driver, "cloud.js", "loadCloud", scan_id)
         message = wait_for(driver, "the viewer's message", lambda d: text_of(d, "viewer-message")
                            if "Cannot show" in text_of(d, "viewer-message") else None, timeout=20)
-        check("shorter" in message and not driver.execute_script("return window.fppViewer"),
+        check("shorter" in message and viewer_state(driver) is None,
               f"a truncated PLY: {message!r}")
         check(driver.find_element(By.ID, "scan-button").is_enabled(), "Scan is off after a bad cloud")
         log(f"truncated PLY: {message!r}; the page stays usable")
@@ -209,7 +257,7 @@ def check_reload_transfer(driver):
     revalidated (304): under 50 KB over the wire."""
     driver.refresh()
     wait_for(driver, "the page loaded again", lambda d: d.execute_script(
-        "return document.readyState === 'complete' && typeof FppViewer !== 'undefined'"), timeout=30)
+        "return document.readyState === 'complete' && !!document.querySelector('#viewer canvas')"), timeout=30)
     # The page's own files (the API's answers, a cloud among them, are data).
     total, parts = driver.execute_script("""
         const entries = performance.getEntriesByType('navigation').concat(performance.getEntriesByType('resource'))

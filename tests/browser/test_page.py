@@ -39,9 +39,9 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
-from browser_support import START, Failure, check, log, shown, text_of, wait_for
+from browser_support import START, Failure, check, log, shown, text_of, viewer_state, wait_for
 from page_states import (check_accessibility, check_accessibility_checker, check_bad_cloud,
-                         check_deleted_elsewhere, check_poor_scan, check_reload_transfer,
+                         check_controls, check_deleted_elsewhere, check_poor_scan, check_reload_transfer,
                          check_replayed_events, check_scanner_gone)
 
 SOURCE_DIR = Path(__file__).resolve().parents[2]
@@ -329,9 +329,8 @@ def scan(driver):
     log(f"scan written in {time.monotonic() - began:.1f} s: {status!r}; progress seen "
         + ", ".join(f"{v:g}/{m:g}" for v, m in seen))
     scan_id = match.group(1)
-    wait_for(driver, f"the viewer to draw {scan_id}", lambda d: d.execute_script(
-        "const v = window.fppViewer; return v && v.points > 0 && v.scanId === arguments[0]", scan_id),
-        timeout=60, poll=0.02)
+    wait_for(driver, f"the viewer to draw {scan_id}", lambda d: (
+        lambda v: v and v["points"] > 0 and v["scanId"] == scan_id)(viewer_state(d)), timeout=60, poll=0.02)
     log(f"click to shaded cloud on screen: {time.monotonic() - began:.2f} s")
     return scan_id
 
@@ -343,7 +342,7 @@ def count_drawn_pixels(driver):
         const done = arguments[arguments.length - 1];
         const canvas = document.querySelector('#viewer canvas');
         if (!canvas) { done({error: 'no canvas in #viewer'}); return; }
-        const clear = window.fppViewer.clearColour;
+        const clear = document.getElementById('viewer').dataset.clearColour;
         const bg = [1, 3, 5].map(i => parseInt(clear.slice(i, i + 2), 16));
         const image = new Image();
         image.onerror = () => done({error: 'the canvas PNG did not load'});
@@ -368,10 +367,8 @@ def check_viewer(driver, scan_id, artifacts):
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
 
-    viewer = wait_for(driver, f"the viewer to draw {scan_id}",
-                      lambda d: d.execute_script(
-                          "const v = window.fppViewer; return v && v.points > 0 && v.scanId === arguments[0] ? v : null",
-                          scan_id), timeout=60)
+    viewer = wait_for(driver, f"the viewer to draw {scan_id}", lambda d: (
+        lambda v: v if v and v["points"] > 0 and v["scanId"] == scan_id else None)(viewer_state(d)), timeout=60)
     log(f"viewer: {viewer['points']} of {viewer['total']} points drawn, coloured by {viewer['colourBy']}, "
         f"normals {viewer['normals']}")
     check(viewer["colourBy"] == "shaded" and viewer["normals"],
@@ -398,7 +395,7 @@ def check_viewer(driver, scan_id, artifacts):
     for mode, unit in (("depth", "mm"), ("quality", "DN")):
         driver.execute_script("const s = document.getElementById('colour-by'); s.value = arguments[0];"
                               "s.dispatchEvent(new Event('change'));", mode)
-        wait_for(driver, f"the {mode} colours", lambda d: d.execute_script("return window.fppViewer.colourBy") == mode)
+        wait_for(driver, f"the {mode} colours", lambda d: viewer_state(d)["colourBy"] == mode)
         legend = driver.find_element(By.ID, "viewer-legend")
         check(legend.is_displayed() and unit in legend.text, f"the {mode} legend shows {legend.text!r}")
         log(f"{mode} legend: {legend.text!r}")
@@ -415,7 +412,7 @@ def check_viewer(driver, scan_id, artifacts):
     driver.find_element(By.ID, "viewer").screenshot(str(artifacts / "viewer-turned.png"))
     check_scale_bar(driver, canvas)
     log(f"a mouse drag turned the view: {artifacts / 'viewer-turned.png'}")
-    lod = driver.execute_script("return window.fppViewer.lod")
+    lod = viewer_state(driver)["lod"]
     log(f"level of detail: a full frame of {lod['fullPoints']} points took {lod['fullFrameMs']:.0f} ms here; "
         f"while turning, {lod['movingPoints']} points in {lod['movingFrameMs']:.0f} ms a frame (budget 50 ms)")
     check(0 < lod["movingPoints"] <= lod["fullPoints"], f"no level of detail measured: {lod}")
@@ -514,7 +511,7 @@ def check_console(driver):
     check(not errors, f"JavaScript errors on the page: {[e['message'] for e in errors]}")
 
 
-def browser_test(args, base, token, store, work, artifacts, restart=None):
+def browser_test(args, base, token, store, work, artifacts, restart=None, table=None):
     downloads = work / "downloads"
     downloads.mkdir()
     log(f"chromium {args.chromium}, chromedriver {args.chromedriver}")
@@ -535,6 +532,8 @@ def browser_test(args, base, token, store, work, artifacts, restart=None):
             log("expected bytes from GET /api/v1/scans/{id}/cloud.ply (no --store given)")
         check_download(driver, scan_id, downloads, expected)
         check_replayed_events(driver, scan_id)
+        if table:
+            check_controls(driver, table)
         if store:
             check_bad_cloud(driver, store, scan_id)
         check_accessibility_checker(driver)
@@ -609,7 +608,8 @@ def main():
         log(f"status: state {status['state']}, board {status['board']['name']}, "
             f"camera {status['camera']['width']} x {status['camera']['height']}, "
             f"table {'loaded' if status['table'] else 'none'}")
-        scan_id = browser_test(args, base, token, store, work, artifacts, restart)
+        scan_id = browser_test(args, base, token, store, work, artifacts, restart,
+                               None if args.url else table)
         log(f"{TEST_NAME}: PASSED ({scan_id}, {time.monotonic() - START:.1f} s)")
         return 0
     except Failure as e:

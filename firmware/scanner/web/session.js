@@ -1,16 +1,18 @@
 // fpp-scanner's page: the calibration session helper (sessions, poses and
 // their thumbnails) and the live preview, shown in the helper and beside
-// Scan. Loaded before app.js, whose helpers (api, $, setMessage, ...) these
-// call once the page runs.
-'use strict';
+// Scan.
 
-// ---- calibration sessions -------------------------------------------------------
+import { api, apiJson, errorMessage, jsonBody, reportable } from './api.js';
+import { $, element, pathId, setMessage } from './dom.js';
+import { page } from './state.js';
+
+const PREVIEW_PERIOD_MS = 1000;
 
 function helperOpen() {
   return $('calibration').open;
 }
 
-async function refreshSessions() {
+export async function refreshSessions() {
   try {
     const list = (await apiJson('/sessions')).sessions;
     const select = $('session-select');
@@ -29,7 +31,7 @@ async function refreshSessions() {
   }
 }
 
-async function createSession(event) {
+export async function createSession(event) {
   event.preventDefault();
   const name = $('session-name').value.trim();
   const body = { name };
@@ -46,7 +48,7 @@ async function createSession(event) {
   }
 }
 
-async function showSession(name) {
+export async function showSession(name) {
   page.session = name;
   $('session-select').value = name;
   $('take-pose').disabled = !name || page.poseId !== null;
@@ -105,7 +107,7 @@ async function loadThumbnail(session, id, image) {
   image.src = url;
 }
 
-async function takePose() {
+export async function takePose() {
   const name = page.session;
   if (!name) return;
   $('take-pose').disabled = true;
@@ -120,7 +122,7 @@ async function takePose() {
   }
 }
 
-function onPoseDone(id, ok, error) {
+export function onPoseDone(id, ok, error) {
   if (id === page.poseId) {
     page.poseId = null;
     setMessage($('session-message'), ok ? 'Pose ' + id + ' taken.' : 'Pose ' + id + ' failed: ' + error, ok ? '' : 'error');
@@ -195,7 +197,7 @@ function previewWarning(saturated, mean) {
   return warnings.join('; ');
 }
 
-function onHelperToggle() {
+export function onHelperToggle() {
   if (helperOpen()) refreshSessions();
   $('scan-preview-wrap').hidden = !$('scan-preview-on').checked;
   if (previewWanted()) updatePreview();

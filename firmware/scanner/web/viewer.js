@@ -6,10 +6,11 @@
 // with the organised size (firmware/core/src/point_cloud.cpp): normals come
 // from the pixel grid and shade the points. While the view turns, fewer
 // points are drawn (a frame within 50 ms, measured), all of them when it
-// stops.
-'use strict';
+// stops. What is on screen is also written on the viewer's element as
+// data-* attributes (scan id, points, colouring, frame times): the page's
+// state as the DOM shows it.
 
-const FppViewer = (function () {
+export const FppViewer = (function () {
   // Browsers slow down past a few hundred thousand points on phones.
   const MAX_POINTS = 300000;
   const CLEAR_COLOUR = 0x10141a;
@@ -341,12 +342,13 @@ const FppViewer = (function () {
     let moving = false;
     let pointsPerMs = 0;   // measured drawing rate
     let pointSize = 2;
+    let current = null;    // what show() drew: scan id, points, colouring
     const lod = { fullFrameMs: 0, fullPoints: 0, movingFrameMs: 0, movingPoints: 0 };
     const probe = new Uint8Array(4);
 
     // Draws `count` points (all when not given) and measures the frame.
     function draw(count) {
-      if (!points) { renderer.render(scene, camera); updateScaleBar(); return; }
+      if (!points) { renderer.render(scene, camera); publish(); updateScaleBar(); return; }
       const n = points.geometry.getAttribute('position').count;
       const drawn = Math.min(n, count || n);
       points.geometry.setDrawRange(0, drawn);
@@ -358,7 +360,7 @@ const FppViewer = (function () {
       const ms = performance.now() - began;
       if (drawn > 0 && ms > 0) pointsPerMs = pointsPerMs ? 0.7 * pointsPerMs + 0.3 * drawn / ms : drawn / ms;
       if (drawn === n) { lod.fullPoints = n; lod.fullFrameMs = ms; } else lod.movingFrameMs = ms;
-      if (window.fppViewer) window.fppViewer.lod = Object.assign({}, lod);
+      publish();
       updateScaleBar();
     }
 
@@ -444,8 +446,23 @@ const FppViewer = (function () {
       return values && mode !== 'intensity' ? { lo: lo, hi: hi, unit: info.unit, label: info.label } : null;
     }
 
+    // The drawn cloud and the last frame times on the container's data-*.
+    function publish() {
+      const d = container.dataset;
+      if (!current) {
+        for (const key of Object.keys(d)) delete d[key];
+        return;
+      }
+      Object.assign(d, {
+        scanId: current.scanId, points: current.points, total: current.total, colourBy: current.colourBy,
+        normals: current.normals, clearColour: current.clearColour,
+        fullFrameMs: lod.fullFrameMs.toFixed(1), fullPoints: lod.fullPoints,
+        movingFrameMs: lod.movingFrameMs.toFixed(1), movingPoints: lod.movingPoints,
+      });
+    }
+
     function describe(mode, range) {
-      canvas.setAttribute('aria-label', 'point cloud of ' + (window.fppViewer ? window.fppViewer.scanId : '') +
+      canvas.setAttribute('aria-label', 'point cloud of ' + (current ? current.scanId : '') +
         ', ' + points.geometry.getAttribute('position').count + ' points, coloured by ' + MODES[mode].label +
         (range ? ' from ' + range.lo.toFixed(2) + ' to ' + range.hi.toFixed(2) + ' ' + range.unit : '') +
         '. Drag to turn, scroll to zoom.');
@@ -459,7 +476,7 @@ const FppViewer = (function () {
       }
       points = null;
       cloud = null;
-      window.fppViewer = null;
+      current = null;
       canvas.setAttribute('aria-label', 'point cloud view: no cloud loaded');
       draw();
     }
@@ -495,7 +512,7 @@ const FppViewer = (function () {
       const drawn = { points: n, total: parsed.total, scanId: scanId, colourBy: mode, range: range,
                       modes: modesOf(parsed), normals: parsed.normals,
                       clearColour: '#' + CLEAR_COLOUR.toString(16).padStart(6, '0') };
-      window.fppViewer = drawn;
+      current = drawn;
       draw();
       describe(mode, range);
       return drawn;
@@ -505,7 +522,9 @@ const FppViewer = (function () {
       if (!points || !modesOf(cloud).includes(mode)) return null;
       const range = applyColours(mode);
       draw();
-      if (window.fppViewer) { window.fppViewer.colourBy = mode; window.fppViewer.range = range; }
+      current.colourBy = mode;
+      current.range = range;
+      publish();
       describe(mode, range);
       return range;
     }
@@ -522,7 +541,8 @@ const FppViewer = (function () {
     }
 
     return { show: show, recolour: recolour, clear: clear, setPointSize: setPointSize,
-             resetView: resetView, modes: () => (cloud ? modesOf(cloud) : []), MODES: MODES };
+             resetView: resetView, shown: () => current, modes: () => (cloud ? modesOf(cloud) : []),
+             MODES: MODES };
   }
 
   return { create: create, parsePly: parsePly, MAX_POINTS: MAX_POINTS };
