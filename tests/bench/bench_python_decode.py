@@ -13,7 +13,7 @@ gray-x), read once; then, in the same process on the same frames in memory:
                consistency check (fpp-calib decode's judgement), in C++
   python checked  fpp.decode(capture), the default: the same from Python
   frames       fpp.decode(frames, sequence, projector=..., check=False): the
-               frames as NumPy arrays, copied once into fpp's frames
+               frames as NumPy arrays, read in place (borrowed, not copied)
 Best of --repetitions runs each (a shared machine: the least disturbed run),
 the runs interleaved. Prints the ratios; no threshold is judged here.
 
@@ -76,7 +76,7 @@ def main():
     print(f"ratio python checked / cpp checked: "
           f"{times['python checked'] / times['cpp checked']:.3f}")
     print(f"ratio frames / cpp:                 {times['frames'] / times['cpp']:.3f}  "
-          "(NumPy frames copied in)")
+          "(NumPy frames, borrowed)")
     return 0
 
 

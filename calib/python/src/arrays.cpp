@@ -54,7 +54,11 @@ Image<float> float_image(py::handle value, const std::string& name, int channels
     return image;
 }
 
-Frame frame_from_array(py::handle value, const std::string& name) {
+namespace {
+
+// `value` as a frame's array: uint8 or uint16, (H, W) or (H, W, 1), rows
+// contiguous (a view of it, or a contiguous copy when its layout is not).
+py::array frame_array(py::handle value, const std::string& name) {
     const py::array a = as_array(value);
     const std::string want = "an (H, W) uint8 or uint16 array (a grey camera frame)";
     const bool u8 = a.dtype().is(py::dtype::of<std::uint8_t>());
@@ -64,18 +68,42 @@ Frame frame_from_array(py::handle value, const std::string& name) {
                              " (convert with .astype(numpy.uint8) or .astype(numpy.uint16))");
     if (!(a.ndim() == 2 || (a.ndim() == 3 && a.shape(2) == 1)) || a.shape(0) < 1 || a.shape(1) < 1)
         throw py::type_error(name + ": expected " + want + ", got shape " + shape_text(a));
-    const int w = int(a.shape(1)), h = int(a.shape(0));
+    py::array c = u8 ? py::array(py::array_t<std::uint8_t, py::array::c_style>::ensure(a))
+                     : py::array(py::array_t<std::uint16_t, py::array::c_style>::ensure(a));
+    if (!c)
+        throw py::type_error(name + ": expected " + want + " (no contiguous copy could be made)");
+    return c;
+}
+
+FrameView view_of_array(const py::array& c) {
+    FrameView view;
+    view.bit_depth = c.itemsize() == 1 ? 8 : 16;
+    view.size = {int(c.shape(1)), int(c.shape(0))};
+    view.data = c.data();
+    return view;
+}
+
+} // namespace
+
+Frame frame_from_array(py::handle value, const std::string& name) {
+    const FrameView view = view_of_array(frame_array(value, name));
     Frame frame;
-    if (u8) {
-        frame.bit_depth = 8;
-        frame.u8 = Image<std::uint8_t>(w, h);
-        copy_into(a, frame.u8.data());
+    frame.bit_depth = view.bit_depth;
+    if (view.bit_depth == 8) {
+        frame.u8 = Image<std::uint8_t>(view.size);
+        std::memcpy(frame.u8.data(), view.data, view.sample_count());
     } else {
-        frame.bit_depth = 16;
-        frame.u16 = Image<std::uint16_t>(w, h);
-        copy_into(a, frame.u16.data());
+        frame.u16 = Image<std::uint16_t>(view.size);
+        std::memcpy(frame.u16.data(), view.data, view.sample_count() * 2);
     }
     return frame;
+}
+
+FrameView frame_view_from_array(py::handle value, const std::string& name, py::list& keep) {
+    py::array c = frame_array(value, name);
+    const FrameView view = view_of_array(c);
+    keep.append(std::move(c));
+    return view;
 }
 
 Size size_from(py::handle value, const std::string& name) {

@@ -1,8 +1,9 @@
 #pragma once
 // NumPy arrays to and from fpp's images. Out: without a copy (the array owns
 // the image, or views memory its owner keeps alive). In: copied into an
-// fpp::Image (it owns its pixels); another dtype converted where no value
-// can change, else TypeError naming the argument and what was expected.
+// fpp::Image (it owns its pixels), or for frames to decode borrowed
+// (FrameView); another dtype converted where no value can change, else
+// TypeError naming the argument and what was expected.
 
 #include "fpp/image.hpp"
 
@@ -58,6 +59,10 @@ Image<float> float_image(py::handle value, const std::string& name, int channels
 // layout (copied). Other dtypes: TypeError naming `name` (a frame's depth is
 // its container's, so no integer type is guessed into one).
 Frame frame_from_array(py::handle value, const std::string& name);
+// The same frame borrowed, not copied: a view of the array's samples when
+// its rows are contiguous (else of a contiguous copy). The array viewed is
+// appended to `keep`, which must outlive the view.
+FrameView frame_view_from_array(py::handle value, const std::string& name, py::list& keep);
 
 // (width, height) from a 2-sequence of positive integers; TypeError naming `name`.
 Size size_from(py::handle value, const std::string& name);

@@ -134,8 +134,10 @@ py::dict manifest_to_dict(const CaptureManifest& manifest) {
     return py::reinterpret_borrow<py::dict>(yaml_to_py(YAML::Load(manifest_to_yaml(manifest))));
 }
 
-CaptureSet capture_from_frames(py::handle frames, py::handle sequence, py::handle projector,
-                               int bit_depth, const fs::path& origin) {
+namespace {
+
+// The frames as a list (TypeError unless a sequence of arrays, with sequence= and projector=).
+py::sequence frame_list(py::handle frames, py::handle sequence, py::handle projector) {
     if (!py::isinstance<py::sequence>(frames) || py::isinstance<py::str>(frames) ||
         py::isinstance<py::array>(frames))
         throw py::type_error("frames: expected a list of (H, W) uint8 or uint16 arrays, got " +
@@ -144,30 +146,63 @@ CaptureSet capture_from_frames(py::handle frames, py::handle sequence, py::handl
         throw py::type_error("frames given without sequence= and projector=: the decoder needs "
                              "what the projector showed (capture.yaml's sequence list) and its "
                              "size (width, height)");
-    const auto list = py::reinterpret_borrow<py::sequence>(frames);
-    std::vector<Frame> images;
-    images.reserve(list.size());
-    for (std::size_t i = 0; i < list.size(); ++i)
-        images.push_back(frame_from_array(list[i], "frames[" + std::to_string(i) + "]"));
+    return py::reinterpret_borrow<py::sequence>(frames);
+}
+
+// The manifest of `count` frames of size `camera` (1 x 1 without frames)
+// shown `sequence` on `projector`.
+CaptureManifest frames_manifest(std::size_t count, Size camera, py::handle sequence,
+                                py::handle projector, int bit_depth, const fs::path& origin) {
     const Size proj = size_from(projector, "projector");
     py::dict m;
     m["format"] = kCaptureFormatV2;
-    const Size cam = images.empty() ? Size{1, 1} : images[0].size();
-    m["camera"] = py::dict(py::arg("width") = cam.width, py::arg("height") = cam.height);
+    m["camera"] = py::dict(py::arg("width") = camera.width, py::arg("height") = camera.height);
     m["projector"] = py::dict(py::arg("width") = proj.width, py::arg("height") = proj.height);
     if (bit_depth != 0)
         m["bit_depth"] = bit_depth;
     py::list names;
-    for (std::size_t i = 0; i < images.size(); ++i) {
+    for (std::size_t i = 0; i < count; ++i) {
         char name[32];
         std::snprintf(name, sizeof name, "%03zu.png", i);
         names.append(name);
     }
     m["frames"] = names;
     m["sequence"] = sequence;
-    CaptureManifest manifest = manifest_from_dict(m, origin / "capture.yaml");
+    return manifest_from_dict(m, origin / "capture.yaml");
+}
+
+std::string frame_name(std::size_t i) {
+    return "frames[" + std::to_string(i) + "]";
+}
+
+} // namespace
+
+CaptureSet capture_from_frames(py::handle frames, py::handle sequence, py::handle projector,
+                               int bit_depth, const fs::path& origin) {
+    const py::sequence list = frame_list(frames, sequence, projector);
+    std::vector<Frame> images;
+    images.reserve(list.size());
+    for (std::size_t i = 0; i < list.size(); ++i)
+        images.push_back(frame_from_array(list[i], frame_name(i)));
+    const Size cam = images.empty() ? Size{1, 1} : images[0].size();
+    CaptureManifest manifest =
+        frames_manifest(images.size(), cam, sequence, projector, bit_depth, origin);
     py::gil_scoped_release release;
     return make_capture_set(origin, std::move(manifest), std::move(images));
+}
+
+CaptureView capture_view_from_frames(py::handle frames, py::handle sequence, py::handle projector,
+                                     int bit_depth, const fs::path& origin, py::list& keep) {
+    const py::sequence list = frame_list(frames, sequence, projector);
+    std::vector<FrameView> views;
+    views.reserve(list.size());
+    for (std::size_t i = 0; i < list.size(); ++i)
+        views.push_back(frame_view_from_array(list[i], frame_name(i), keep));
+    const Size cam = views.empty() ? Size{1, 1} : views[0].size;
+    CaptureManifest manifest =
+        frames_manifest(views.size(), cam, sequence, projector, bit_depth, origin);
+    py::gil_scoped_release release;
+    return make_capture_view(origin, std::move(manifest), std::move(views));
 }
 
 // ---------------------------------------------------------------- bindings

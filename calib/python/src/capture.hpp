@@ -49,5 +49,11 @@ py::dict manifest_to_dict(const CaptureManifest& manifest);
 // it in errors.
 CaptureSet capture_from_frames(py::handle frames, py::handle sequence, py::handle projector,
                                int bit_depth, const std::filesystem::path& origin);
+// The same borrowing the frames (no sample copied where an array's rows are
+// contiguous): the arrays viewed are appended to `keep`, which must outlive
+// the view.
+CaptureView capture_view_from_frames(py::handle frames, py::handle sequence, py::handle projector,
+                                     int bit_depth, const std::filesystem::path& origin,
+                                     py::list& keep);
 
 } // namespace fpp::python

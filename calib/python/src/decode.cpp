@@ -18,9 +18,9 @@ const DecodeReport& DecodeOutput::report() {
     const std::lock_guard lock(mutex_);
     if (!report_) {
         DecodeReport r;
-        r.stats = decode_statistics(*result, frames_full_scale(*capture));
-        r.diagnosis = diagnose_decode(*capture, *result, r.stats, options);
-        r.consistency = check_decode_consistency(*result, capture->manifest.sequence);
+        r.stats = decode_statistics(*result, frames_full_scale(capture->view));
+        r.diagnosis = diagnose_decode(capture->view, *result, r.stats, options);
+        r.consistency = check_decode_consistency(*result, capture->view.manifest.sequence);
         report_ = std::move(r);
     }
     return *report_;
@@ -40,20 +40,27 @@ template <class Get> auto figure(Get get) {
     };
 }
 
-// The capture a decode reads: fpp.Capture (its frames where they are) or
-// frames with a sequence (copied once into a set in memory).
-std::shared_ptr<const CaptureSet> capture_of(py::handle source, py::handle sequence,
-                                             py::handle projector, int bit_depth) {
+// The capture a decode reads, its frames borrowed: fpp.Capture's (read on
+// first use and kept by it), or the arrays given with a sequence (viewed in
+// place where their rows are contiguous, else copied contiguous once).
+std::shared_ptr<const DecodeSource> capture_of(py::handle source, py::handle sequence,
+                                               py::handle projector, int bit_depth) {
+    auto made = std::make_shared<DecodeSource>();
     if (py::isinstance<Capture>(source)) {
         if (!sequence.is_none() || !projector.is_none())
             throw py::type_error("decode: a Capture carries its own sequence and projector; "
                                  "give sequence= and projector= only with frames");
         auto& capture = source.cast<Capture&>();
         py::gil_scoped_release release;
-        return capture.set();
+        made->set = capture.set();
+        made->view = view_of(*made->set);
+        return made;
     }
-    return std::make_shared<const CaptureSet>(
-        capture_from_frames(source, sequence, projector, bit_depth, "fpp.decode"));
+    py::list keep;
+    made->view =
+        capture_view_from_frames(source, sequence, projector, bit_depth, "fpp.decode", keep);
+    made->arrays = std::move(keep);
+    return made;
 }
 
 py::object decode(py::handle source, py::handle sequence, py::handle projector, int bit_depth,
@@ -64,19 +71,19 @@ py::object decode(py::handle source, py::handle sequence, py::handle projector, 
     options.threads = threads;
     options.correct_phase_error = correct_phase_error;
     calib::check_decode_options(options, calib::OptionSpelling::keyword, "fpp.decode");
-    const std::shared_ptr<const CaptureSet> capture =
+    const std::shared_ptr<const DecodeSource> capture =
         capture_of(source, sequence, projector, bit_depth);
 
     auto out = std::make_shared<DecodeOutput>();
     {
         py::gil_scoped_release release;
         const auto start = std::chrono::steady_clock::now();
-        out->result = std::make_shared<const DecodeResult>(fpp::decode(*capture, options));
+        out->result = std::make_shared<const DecodeResult>(fpp::decode(capture->view, options));
         out->seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         out->capture = capture;
         out->options = options;
-        out->projector = capture->manifest.projector;
+        out->projector = capture->view.manifest.projector;
         if (check)
             out->report();
     }
@@ -84,7 +91,7 @@ py::object decode(py::handle source, py::handle sequence, py::handle projector, 
     if (!check)
         return made;
     const DecodeReport& report = out->report();
-    const std::string where = capture->folder.string();
+    const std::string where = capture->view.folder.string();
     if (report.diagnosis.failed)
         raise_decode_error(where + ": " + report.diagnosis.message, "failed", made);
     if (report.consistency.inconsistent && !accept_inconsistent)
@@ -276,7 +283,9 @@ void bind_decode(py::module_& m) {
 capture: an fpp.Capture (fpp.read_capture, Capture.from_frames; its frames are
   used in place), or a list of (H, W) uint8 / uint16 frames, capture order,
   with sequence= (capture.yaml's list of block dicts) and projector=(width,
-  height) (copied once). The unwrapping method follows from the sequence.
+  height), read in place, not copied (a frame whose rows are not contiguous
+  is copied contiguous first); the result keeps them alive, and they must not
+  change while decoding. The unwrapping method follows from the sequence.
 bit_depth: with frames, bits in use of 16-bit frames (0 = found from the values).
 min_modulation: a pixel needs a modulation of at least this fraction of full
   scale (fpp-calib decode --min-modulation), in [0, 1).

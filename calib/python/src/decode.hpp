@@ -23,12 +23,20 @@ struct DecodeReport {
     DecodeConsistency consistency;
 };
 
+// The frames a decode reads, borrowed (no sample copied): a Capture's set or
+// the caller's NumPy arrays, kept alive here while the result lives.
+struct DecodeSource {
+    CaptureView view;
+    std::shared_ptr<const CaptureSet> set; // the frames' owner for an fpp.Capture
+    py::object arrays;                     // the frames' owner for arrays (release with the GIL)
+};
+
 // A decode as Python sees it: the C++ result (its images viewed by the
 // arrays, no copy) and the report, made when the decode is checked or on
 // the first figure asked for.
 struct DecodeOutput {
     std::shared_ptr<const DecodeResult> result;
-    std::shared_ptr<const CaptureSet> capture; // for the report's diagnosis
+    std::shared_ptr<const DecodeSource> capture; // for the report's diagnosis
     DecodeOptions options;
     Size projector;
     double seconds = 0;

@@ -94,21 +94,26 @@ void check_declared_depth(const CaptureManifest& m, int container_bits, const fs
     }
 }
 
-int largest_value(const Frame& frame) {
+int largest_value(const FrameView& frame) {
     int largest = 0;
+    const std::size_t n = frame.empty() ? 0 : frame.sample_count();
     if (frame.bit_depth == 8) {
-        for (const std::uint8_t v : frame.u8.storage())
-            largest = std::max(largest, int{v});
+        const std::uint8_t* v = frame.u8();
+        for (std::size_t i = 0; i < n; ++i)
+            largest = std::max(largest, int{v[i]});
     } else {
-        for (const std::uint16_t v : frame.u16.storage())
-            largest = std::max(largest, int{v});
+        const std::uint16_t* v = frame.u16();
+        for (std::size_t i = 0; i < n; ++i)
+            largest = std::max(largest, int{v[i]});
     }
     return largest;
 }
 
 // Declared bit_depth (checked against every frame's largest value), or found
 // from the largest value over the frames: 9 (<= 511), 10, 12, 14 or 16 bits.
-void set_bits_in_use(CaptureSet& set, const std::vector<int>& largest,
+// (A CaptureSet or a CaptureView.)
+template <class Set>
+void set_bits_in_use(Set& set, const std::vector<int>& largest,
                      const std::vector<std::size_t>& listed) {
     if (set.frames.empty())
         return;
@@ -141,7 +146,7 @@ void set_bits_in_use(CaptureSet& set, const std::vector<int>& largest,
         set.bits_source = BitsInUseSource::found;
     }
     set.bits_in_use = bits;
-    for (Frame& f : set.frames)
+    for (auto& f : set.frames)
         f.significant_bits = bits;
 }
 
@@ -279,14 +284,14 @@ namespace {
 // it lists, 8- or 16-bit grey, the camera's size, one bit depth, within the
 // declared bit_depth. InputError naming folder / the frame and "frames[i]".
 void check_frames(const fs::path& folder, const CaptureManifest& m,
-                  const std::vector<Frame>& frames, const Checker& check) {
+                  const std::vector<FrameView>& frames, const Checker& check) {
     const fs::path origin = folder / kManifestName;
     if (frames.size() != m.frames.size()) {
         check.fail("frames", std::to_string(frames.size()) + " frame images given for " +
                                  std::to_string(m.frames.size()) + " listed frames");
     }
     for (std::size_t i = 0; i < frames.size(); ++i) {
-        const Frame& f = frames[i];
+        const FrameView& f = frames[i];
         const fs::path path = folder / m.frames[i];
         const std::string field = item("frames", i);
         if (f.bit_depth != 8 && f.bit_depth != 16) {
@@ -294,14 +299,14 @@ void check_frames(const fs::path& folder, const CaptureManifest& m,
                              "bit depth " + std::to_string(f.bit_depth) +
                                  " (frames are 8- or 16-bit)");
         }
-        const int channels = f.bit_depth == 8 ? f.u8.channels() : f.u16.channels();
-        if (channels != 1) {
-            throw InputError(path, field, std::to_string(channels) + " channels (frames are grey)");
-        }
-        if (f.size() != m.camera) {
+        if (f.channels != 1) {
             throw InputError(path, field,
-                             "frame is " + std::to_string(f.size().width) + "x" +
-                                 std::to_string(f.size().height) + " pixels but camera is " +
+                             std::to_string(f.channels) + " channels (frames are grey)");
+        }
+        if (f.size != m.camera) {
+            throw InputError(path, field,
+                             "frame is " + std::to_string(f.size.width) + "x" +
+                                 std::to_string(f.size.height) + " pixels but camera is " +
                                  std::to_string(m.camera.width) + "x" +
                                  std::to_string(m.camera.height));
         }
@@ -325,14 +330,45 @@ void check_frames(const fs::path& folder, const CaptureManifest& m,
     }
 }
 
+std::vector<FrameView> views_of(const std::vector<Frame>& frames) {
+    return {frames.begin(), frames.end()};
+}
+
 } // namespace
+
+CaptureView view_of(const CaptureSet& set) {
+    return {set.folder, set.manifest, views_of(set.frames), set.bits_in_use, set.bits_source};
+}
+
+CaptureView make_capture_view(const std::filesystem::path& folder, CaptureManifest manifest,
+                              std::vector<FrameView> frames) {
+    const Checker check(folder / kManifestName, nullptr);
+    capture_check::check_manifest(manifest, check, 2);
+    check_frames(folder, manifest, frames, check);
+    CaptureView view;
+    view.folder = folder;
+    view.manifest = std::move(manifest);
+    view.frames = std::move(frames);
+    // The largest values matter to a declared depth and to 16-bit frames
+    // only (8-bit frames use their container's): no pass over 8-bit samples.
+    const bool needed =
+        view.manifest.bit_depth != 0 || (!view.frames.empty() && view.frames[0].bit_depth == 16);
+    std::vector<int> largest(view.frames.size());
+    std::vector<std::size_t> listed(view.frames.size());
+    for (std::size_t i = 0; i < view.frames.size(); ++i) {
+        largest[i] = needed ? largest_value(view.frames[i]) : 0;
+        listed[i] = i;
+    }
+    set_bits_in_use(view, largest, listed);
+    return view;
+}
 
 CaptureSet make_capture_set(const std::filesystem::path& folder, CaptureManifest manifest,
                             std::vector<Frame> frames) {
     const fs::path origin = folder / kManifestName;
     const Checker check(origin, nullptr);
     capture_check::check_manifest(manifest, check, 2);
-    check_frames(folder, manifest, frames, check);
+    check_frames(folder, manifest, views_of(frames), check);
     CaptureSet set;
     set.folder = folder;
     set.manifest = std::move(manifest);
@@ -359,7 +395,7 @@ void write_capture_set(const std::filesystem::path& folder, const CaptureManifes
     capture_check::check_manifest(manifest, check, 2);
     const CaptureManifest& m = manifest;
 
-    check_frames(folder, m, frames, check);
+    check_frames(folder, m, views_of(frames), check);
     struct TruthEntry {
         std::string name;
         const Image<float>* image;

@@ -25,45 +25,44 @@ std::string block_field(std::size_t index) {
     return "sequence[" + std::to_string(index) + "]";
 }
 
-template <class T> Image<T> subsample(const Image<T>& in) {
-    Image<T> out((in.width() + kStep - 1) / kStep, (in.height() + kStep - 1) / kStep);
-    for (int y = 0; y < out.height(); ++y)
+// Every kStep-th sample of `in` (width x height, rows contiguous) in x and y, << shift.
+template <class T> Image<T> subsample(const T* in, Size size, int shift) {
+    Image<T> out((size.width + kStep - 1) / kStep, (size.height + kStep - 1) / kStep);
+    for (int y = 0; y < out.height(); ++y) {
+        const T* row = in + std::size_t(y) * kStep * std::size_t(size.width);
         for (int x = 0; x < out.width(); ++x)
-            out.at(x, y) = in.at(x * kStep, y * kStep);
-    return out;
-}
-
-Frame subsample(const Frame& in, int shift) {
-    Frame out;
-    out.bit_depth = in.bit_depth;
-    out.significant_bits = in.significant_bits;
-    if (in.bit_depth == 8) {
-        out.u8 = subsample(in.u8);
-        for (auto& v : out.u8.storage())
-            v = static_cast<std::uint8_t>(v << shift);
-    } else {
-        out.u16 = subsample(in.u16);
-        for (auto& v : out.u16.storage())
-            v = static_cast<std::uint16_t>(v << shift);
+            out.at(x, y) = static_cast<T>(row[std::size_t(x) * kStep] << shift);
     }
     return out;
 }
 
-int largest_sample(const std::vector<Frame>& frames) {
+Frame subsample(const FrameView& in, int shift) {
+    Frame out;
+    out.bit_depth = in.bit_depth;
+    out.significant_bits = in.significant_bits;
+    if (in.bit_depth == 8)
+        out.u8 = subsample(in.u8(), in.size, shift);
+    else
+        out.u16 = subsample(in.u16(), in.size, shift);
+    return out;
+}
+
+int largest_sample(const std::vector<FrameView>& frames) {
     int largest = 0;
-    for (const Frame& f : frames) {
+    for (const FrameView& f : frames) {
+        const std::size_t n = f.empty() ? 0 : f.sample_count();
         if (f.bit_depth == 8)
-            for (const auto v : f.u8.storage())
-                largest = std::max(largest, int(v));
+            for (std::size_t i = 0; i < n; ++i)
+                largest = std::max(largest, int(f.u8()[i]));
         else
-            for (const auto v : f.u16.storage())
-                largest = std::max(largest, int(v));
+            for (std::size_t i = 0; i < n; ++i)
+                largest = std::max(largest, int(f.u16()[i]));
     }
     return largest;
 }
 
 struct Trials {
-    const CaptureSet& capture;
+    const CaptureView& capture;
     const DecodeOptions& options;
     std::vector<std::uint8_t> lit; // of the subsampled pixels, from the declared decode
     std::size_t lit_count = 0;
@@ -224,16 +223,25 @@ const char* main_reason(const DecodeStatistics& s, std::size_t& count) {
 } // namespace
 
 double frames_full_scale(const CaptureSet& capture) {
+    return frames_full_scale(view_of(capture));
+}
+
+DecodeDiagnosis diagnose_decode(const CaptureSet& capture, const DecodeResult& result,
+                                const DecodeStatistics& stats, const DecodeOptions& options) {
+    return diagnose_decode(view_of(capture), result, stats, options);
+}
+
+double frames_full_scale(const CaptureView& capture) {
     if (capture.frames.empty())
         return 255.0;
-    const Frame& first = capture.frames.front();
+    const FrameView& first = capture.frames.front();
     if (first.bit_depth == 8 || first.significant_bits > 0)
         return double(first.max_value());
     const int bits = std::max(8, int(std::bit_width(unsigned(largest_sample(capture.frames)))));
     return double((1 << bits) - 1);
 }
 
-DecodeDiagnosis diagnose_decode(const CaptureSet& capture, const DecodeResult& result,
+DecodeDiagnosis diagnose_decode(const CaptureView& capture, const DecodeResult& result,
                                 const DecodeStatistics& stats, const DecodeOptions& options) {
     DecodeDiagnosis d;
     const bool nearly_nothing = nearly_nothing_decoded(stats);

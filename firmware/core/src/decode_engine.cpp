@@ -341,7 +341,7 @@ void DecodeEngine::restart(DecodeResult* recycled) {
     finished_ = false;
 }
 
-void DecodeEngine::check_frame(const Frame& frame, int index) const {
+void DecodeEngine::check_frame(const FrameView& frame, int index) const {
     // Named as the capture-set reader names a frame: field "frames[i]".
     const std::string field = "frames[" + std::to_string(index) + "]";
     const std::string where = "frame " + std::to_string(index) + ": ";
@@ -350,23 +350,20 @@ void DecodeEngine::check_frame(const Frame& frame, int index) const {
     };
     if (frame.bit_depth != 8 && frame.bit_depth != 16)
         refuse("bit depth must be 8 or 16, got " + std::to_string(frame.bit_depth));
-    const bool eight = frame.bit_depth == 8;
-    const int channels = eight ? frame.u8.channels() : frame.u16.channels();
-    const bool empty = eight ? frame.u8.empty() : frame.u16.empty();
-    if (empty)
+    if (frame.empty())
         refuse("no pixel data for its bit depth");
-    if (channels != 1)
+    if (frame.channels != 1)
         refuse("must have one channel");
-    if (frame.size() != plan_.camera)
-        refuse("size " + std::to_string(frame.size().width) + "x" +
-               std::to_string(frame.size().height) + " differs from the camera size " +
+    if (frame.size != plan_.camera)
+        refuse("size " + std::to_string(frame.size.width) + "x" +
+               std::to_string(frame.size.height) + " differs from the camera size " +
                std::to_string(plan_.camera.width) + "x" + std::to_string(plan_.camera.height));
     if (depth_ != 0 && frame.bit_depth != depth_)
         refuse("bit depth " + std::to_string(frame.bit_depth) + " differs from the first frame's " +
                std::to_string(depth_));
 }
 
-void DecodeEngine::set_depth(const Frame& first) {
+void DecodeEngine::set_depth(const FrameView& first) {
     depth_ = first.bit_depth;
     // The bits in use, not the container's: a 12-bit camera in 16-bit frames
     // saturates at 4095 and its modulation floor scales with 4095.
@@ -692,7 +689,7 @@ int DecodeEngine::spans_per_task() const {
     return std::max(1, span_count() / (8 * pool_.size()));
 }
 
-void DecodeEngine::push(const Frame& frame) {
+void DecodeEngine::push(const FrameView& frame) {
     if (mode_ != Mode::streaming)
         throw std::logic_error("push() on a batch decoder");
     if (finished_)
@@ -713,8 +710,7 @@ void DecodeEngine::push(const Frame& frame) {
         }
     }
     const int t = received_;
-    const void* data = frame.bit_depth == 8 ? static_cast<const void*>(frame.u8.data())
-                                            : static_cast<const void*>(frame.u16.data());
+    const void* data = frame.data;
     frame_base_[static_cast<std::size_t>(t)] = data;
     const int slot = plan_.frame_slot[static_cast<std::size_t>(t)];
     void* slot_data = slot >= 0 ? slots_[static_cast<std::size_t>(slot)].get() : nullptr;
@@ -762,7 +758,7 @@ DecodeResult DecodeEngine::finish() {
     return std::move(result_);
 }
 
-DecodeResult DecodeEngine::run_batch(const std::vector<Frame>& frames) {
+DecodeResult DecodeEngine::run_batch(std::span<const FrameView> frames) {
     if (mode_ != Mode::batch)
         throw std::logic_error("run_batch() on a streaming decoder");
     if (finished_)
@@ -775,8 +771,7 @@ DecodeResult DecodeEngine::run_batch(const std::vector<Frame>& frames) {
         check_frame(frames[f], static_cast<int>(f));
         if (depth_ == 0)
             set_depth(frames[f]);
-        frame_base_[f] = frames[f].bit_depth == 8 ? static_cast<const void*>(frames[f].u8.data())
-                                                  : static_cast<const void*>(frames[f].u16.data());
+        frame_base_[f] = frames[f].data;
     }
     // Each span goes through every frame and the unwrapping while in cache.
     for_spans(spans_per_task(), [&](std::size_t offset, int n, int worker) {

@@ -22,6 +22,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace fpp::detail {
@@ -57,11 +58,11 @@ public:
     int frames_received() const { return received_; }
     int frames_expected() const { return plan_.frame_count; }
 
-    void push(const Frame& frame);
+    void push(const FrameView& frame);
     DecodeResult finish();
     // Streaming: back to the first frame, keeping the state planes and slots.
     void restart(DecodeResult* recycled);
-    DecodeResult run_batch(const std::vector<Frame>& frames);
+    DecodeResult run_batch(std::span<const FrameView> frames);
 
 private:
     struct PhaseState {
@@ -103,8 +104,8 @@ private:
     void bind_report_planes();
     void build_batch_groups();
     void build_streaming_work();
-    void check_frame(const Frame& frame, int index) const;
-    void set_depth(const Frame& first);
+    void check_frame(const FrameView& frame, int index) const;
+    void set_depth(const FrameView& first);
     template <class T>
     void run_step(const Step& step, std::size_t offset, int n, std::byte* local,
                   float* scratch) const;

@@ -8,9 +8,11 @@
 
 #include <cmath>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace fpp {
 
@@ -39,8 +41,8 @@ namespace {
 
 // The manifest a capture's errors name: its capture.yaml ("capture.yaml"
 // for a set that was never read from a folder).
-std::filesystem::path manifest_of(const CaptureSet& capture) {
-    return capture.folder / "capture.yaml";
+std::filesystem::path manifest_of(const std::filesystem::path& folder) {
+    return folder / "capture.yaml";
 }
 
 const DecodeOptions& validated(const DecodeOptions& options) {
@@ -107,6 +109,10 @@ StreamingDecoder::StreamingDecoder(StreamingDecoder&&) noexcept = default;
 StreamingDecoder& StreamingDecoder::operator=(StreamingDecoder&&) noexcept = default;
 
 void StreamingDecoder::push(const Frame& frame) {
+    push(FrameView(frame));
+}
+
+void StreamingDecoder::push(const FrameView& frame) {
     if (!impl_)
         throw std::logic_error("StreamingDecoder: use after move");
     impl_->engine.push(frame);
@@ -134,26 +140,42 @@ DecodeResult StreamingDecoder::finish() {
     return result;
 }
 
-DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options) {
+namespace {
+
+// The batch decode of `frames` described by `manifest` (errors naming
+// folder / capture.yaml), into `recycled`'s images when given.
+DecodeResult decode_frames(const CaptureManifest& manifest, const std::filesystem::path& folder,
+                           std::span<const FrameView> frames, const DecodeOptions& options,
+                           DecodeResult* recycled) {
     options.validate();
-    detail::Plan plan = detail::make_plan(capture.manifest.sequence, capture.manifest.camera,
-                                          capture.manifest.projector, manifest_of(capture));
+    detail::Plan plan = detail::make_plan(manifest.sequence, manifest.camera, manifest.projector,
+                                          manifest_of(folder));
     const FinestBlocks finest(plan);
-    detail::DecodeEngine engine(std::move(plan), options, detail::DecodeEngine::Mode::batch);
-    DecodeResult result = engine.run_batch(capture.frames);
+    detail::DecodeEngine engine(std::move(plan), options, detail::DecodeEngine::Mode::batch,
+                                recycled);
+    DecodeResult result = engine.run_batch(frames);
     correct_phase_errors(result, finest, options);
     return result;
 }
 
+std::vector<FrameView> views_of(const std::vector<Frame>& frames) {
+    return {frames.begin(), frames.end()};
+}
+
+} // namespace
+
+DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options) {
+    return decode_frames(capture.manifest, capture.folder, views_of(capture.frames), options,
+                         nullptr);
+}
+
 void decode(const CaptureSet& capture, DecodeResult& result, const DecodeOptions& options) {
-    options.validate();
-    detail::Plan plan = detail::make_plan(capture.manifest.sequence, capture.manifest.camera,
-                                          capture.manifest.projector, manifest_of(capture));
-    const FinestBlocks finest(plan);
-    detail::DecodeEngine engine(std::move(plan), options, detail::DecodeEngine::Mode::batch,
-                                &result);
-    result = engine.run_batch(capture.frames);
-    correct_phase_errors(result, finest, options);
+    result =
+        decode_frames(capture.manifest, capture.folder, views_of(capture.frames), options, &result);
+}
+
+DecodeResult decode(const CaptureView& capture, const DecodeOptions& options) {
+    return decode_frames(capture.manifest, capture.folder, capture.frames, options, nullptr);
 }
 
 } // namespace fpp

@@ -135,6 +135,26 @@ void write_capture_set(const std::filesystem::path& folder, const CaptureManifes
 CaptureSet make_capture_set(const std::filesystem::path& folder, CaptureManifest manifest,
                             std::vector<Frame> frames);
 
+// A capture set whose frames are borrowed, not owned (FrameView: samples the
+// caller keeps alive and unchanged while the view is used), for a program
+// that holds its frames elsewhere (fpp.decode on NumPy arrays). Decoded,
+// judged and diagnosed exactly as the CaptureSet holding the same samples.
+struct CaptureView {
+    std::filesystem::path folder;
+    CaptureManifest manifest;
+    std::vector<FrameView> frames; // same order as manifest.frames
+    int bits_in_use = 0;           // as CaptureSet's (also in each view's significant_bits)
+    BitsInUseSource bits_source = BitsInUseSource::container;
+};
+
+// A view of `set` (its manifest copied, its frames borrowed).
+CaptureView view_of(const CaptureSet& set);
+
+// make_capture_set's checks and bits in use on borrowed frames: the same
+// refusals and messages; no sample is copied.
+CaptureView make_capture_view(const std::filesystem::path& folder, CaptureManifest manifest,
+                              std::vector<FrameView> frames);
+
 // Reads a pattern sequence alone from a YAML file holding a `sequence:` list in
 // the manifest's syntax (used for named scan sequences and board configs).
 // Other top-level keys of that file are ignored. Every fpp-capture/2 block

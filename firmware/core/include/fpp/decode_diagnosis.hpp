@@ -62,4 +62,9 @@ DecodeDiagnosis diagnose_decode(const CaptureSet& capture, const DecodeResult& r
 // in 16 bits leave the top of 65535 empty. 255 without frames.
 double frames_full_scale(const CaptureSet& capture);
 
+// The same on borrowed frames (make_capture_view): the same figures.
+DecodeDiagnosis diagnose_decode(const CaptureView& capture, const DecodeResult& result,
+                                const DecodeStatistics& stats, const DecodeOptions& options);
+double frames_full_scale(const CaptureView& capture);
+
 } // namespace fpp

@@ -189,6 +189,8 @@ public:
     // has. The frame is not referenced after push() returns (frames needed
     // later are copied).
     void push(const Frame& frame);
+    // Same, from borrowed samples (read during the call only).
+    void push(const FrameView& frame);
     int frames_received() const;
     int frames_expected() const;
     // Completes decoding; throws std::logic_error if frames are missing or
@@ -219,5 +221,9 @@ DecodeResult decode(const CaptureSet& capture, const DecodeOptions& options = {}
 // of fresh images, about an eighth of the decoding time at 1600x1200).
 // If it throws, `result` is left empty or partly moved from.
 void decode(const CaptureSet& capture, DecodeResult& result, const DecodeOptions& options = {});
+// Same, on borrowed frames (a CaptureView: make_capture_view, view_of): the
+// same result, bit for bit, as the CaptureSet holding the same samples; no
+// sample copied.
+DecodeResult decode(const CaptureView& capture, const DecodeOptions& options = {});
 
 } // namespace fpp

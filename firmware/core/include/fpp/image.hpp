@@ -1,5 +1,6 @@
 #pragma once
 // A small owning image: contiguous rows, interleaved channels, no padding.
+// (FrameView below borrows a frame's samples instead.)
 // Pixel (x, y) has its centre at integer coordinates (x, y).
 
 #include <cassert>
@@ -86,6 +87,38 @@ struct Frame {
     // Bits in use, LSB-aligned (a 12-bit camera stored in 16 bits: 12); 0 =
     // the container's. Full scale (saturation, modulation floors) follows it.
     int significant_bits = 0;
+    int max_value() const {
+        const int bits = significant_bits > 0 ? significant_bits : bit_depth;
+        return (1 << bits) - 1;
+    }
+};
+
+// A camera frame's samples borrowed, not owned (the decoder's input): memory
+// the caller keeps alive and unchanged while the view is used, rows
+// contiguous, no padding. Made from a Frame (implicitly: its pixels, no copy)
+// or from any such buffer (a NumPy array from Python).
+struct FrameView {
+    int bit_depth = 8;          // 8: data holds std::uint8_t, 16: std::uint16_t
+    Size size;                  // width x height samples
+    int channels = 1;           // interleaved samples per pixel (a frame has 1)
+    const void* data = nullptr; // null when there are no samples
+    int significant_bits = 0;   // as Frame::significant_bits
+
+    FrameView() = default;
+    FrameView(const Frame& frame) // NOLINT(google-explicit-constructor): a view of it
+        : bit_depth(frame.bit_depth), size(frame.size()),
+          channels(frame.bit_depth == 8 ? frame.u8.channels() : frame.u16.channels()),
+          significant_bits(frame.significant_bits) {
+        const bool eight = frame.bit_depth == 8;
+        if (!(eight ? frame.u8.empty() : frame.u16.empty()))
+            data = eight ? static_cast<const void*>(frame.u8.data())
+                         : static_cast<const void*>(frame.u16.data());
+    }
+
+    bool empty() const { return data == nullptr; }
+    const std::uint8_t* u8() const { return static_cast<const std::uint8_t*>(data); }
+    const std::uint16_t* u16() const { return static_cast<const std::uint16_t*>(data); }
+    std::size_t sample_count() const { return size.area() * std::size_t(channels); }
     int max_value() const {
         const int bits = significant_bits > 0 ? significant_bits : bit_depth;
         return (1 << bits) - 1;
