@@ -95,6 +95,9 @@ test_packages=(
   # the Python package fpp (calib/python, FPP_BUILD_PYTHON: presets ci and
   # dev) and its tests (tests/python, pytest); Open3D for to_open3d is above
   pybind11-dev python3-dev python3-numpy python3-pytest
+  # the README's example script, run by tests/python/test_readme_example.py
+  # (matplotlib's headless Agg backend draws its depth map)
+  python3-matplotlib
   # packet loss on the GigE link in a test's network namespace
   # (iptables-legacy's statistic match)
   iptables
