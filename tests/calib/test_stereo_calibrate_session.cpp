@@ -137,6 +137,7 @@ TEST(SimSession, WritesBoardAndOneCaptureSetPerPose) {
         EXPECT_TRUE(fs::exists(pose / m.truth->projector));
         // The true board pose is recorded in the metadata, exactly.
         const YAML::Node meta = YAML::Load(m.metadata_yaml);
+        EXPECT_EQ(meta["session_pose"].as<int>(), k + 1);
         for (int c = 0; c < 3; ++c)
             EXPECT_EQ(meta["board_pose"]["centre_mm"][c].as<double>(),
                       poses[static_cast<std::size_t>(k)].centre[static_cast<std::size_t>(c)]);
@@ -155,6 +156,28 @@ TEST(SimSession, WritesBoardAndOneCaptureSetPerPose) {
                                     standard_sequence("gray-xy", rig.projector_size), options),
                  std::invalid_argument);
     EXPECT_FALSE(fs::exists(dir / "other"));
+}
+
+TEST(SimSession, BoardFileAndPoseMetadataReadBackExactly) {
+    sim::SessionOptions options;
+    options.board.inner_columns = 9;
+    options.board.inner_rows = 6;
+    options.board.square_size = 1.0 / 3.0; // not a short decimal
+    const BoardDescription board = parse_board(sim::session_board_yaml(options), "board.yaml");
+    EXPECT_EQ(board.kind, BoardDescription::Kind::checkerboard);
+    EXPECT_EQ(board.inner_columns, 9);
+    EXPECT_EQ(board.inner_rows, 6);
+    EXPECT_EQ(board.square_size, 1.0 / 3.0);
+
+    const sim::Pose pose{{0.1, -2.0 / 3.0, 480.0}, rotation_from_euler_deg(1.5, -20.25, 7.0)};
+    const YAML::Node meta = YAML::Load(sim::session_pose_metadata_yaml(11, pose));
+    EXPECT_EQ(meta["session_pose"].as<int>(), 12);
+    ASSERT_EQ(meta["board_pose"]["centre_mm"].size(), 3u);
+    ASSERT_EQ(meta["board_pose"]["rotation"].size(), 9u);
+    for (std::size_t c = 0; c < 3; ++c)
+        EXPECT_EQ(meta["board_pose"]["centre_mm"][c].as<double>(), pose.centre[c]);
+    for (std::size_t c = 0; c < 9; ++c)
+        EXPECT_EQ(meta["board_pose"]["rotation"][c].as<double>(), pose.R[c]);
 }
 
 TEST(SimSession, PlaneSessionBoardFile) {

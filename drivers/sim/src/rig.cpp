@@ -2,15 +2,15 @@
 
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"
+#include "yaml_emit.hpp"
 
 #include <cmath>
-#include <sstream>
+#include <initializer_list>
+#include <utility>
 
 namespace fpp::sim {
 
 using yaml_fields::child;
-using yaml_fields::format_real;
-using yaml_fields::format_string;
 using yaml_fields::item;
 using yaml_fields::Reader;
 
@@ -97,31 +97,41 @@ Mat3 read_rotation(const Reader& in, const YAML::Node& ext) {
 
 // ---- writing -------------------------------------------------------------
 
-std::string pair(double a, double b) {
-    return "[" + format_real(a) + ", " + format_real(b) + "]";
-}
-std::string triple(double a, double b, double c) {
-    return "[" + format_real(a) + ", " + format_real(b) + ", " + format_real(c) + "]";
-}
-
-void write_lens(std::ostringstream& out, const char* name, Size size, const LensModel& l) {
-    out << name << ":\n"
-        << "  width: " << size.width << "\n"
-        << "  height: " << size.height << "\n"
-        << "  focal_px: " << pair(l.fu, l.fv) << "\n"
-        << "  principal_px: " << pair(l.cu, l.cv) << "\n"
-        << "  skew: " << format_real(l.skew) << "\n"
-        << "  distortion: {k1: " << format_real(l.k1) << ", k2: " << format_real(l.k2)
-        << ", k3: " << format_real(l.k3) << ", p1: " << format_real(l.p1)
-        << ", p2: " << format_real(l.p2) << "}\n";
+void write_lens(YAML::Emitter& out, const char* name, Size size, const LensModel& l) {
+    using yaml_emit::real;
+    out << YAML::Key << name << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "width" << YAML::Value << size.width;
+    out << YAML::Key << "height" << YAML::Value << size.height;
+    out << YAML::Key << "focal_px" << YAML::Value;
+    yaml_emit::flow_reals(out, {l.fu, l.fv});
+    out << YAML::Key << "principal_px" << YAML::Value;
+    yaml_emit::flow_reals(out, {l.cu, l.cv});
+    out << YAML::Key << "skew" << YAML::Value;
+    real(out, l.skew);
+    auto flow_map = [&](const char* key,
+                        std::initializer_list<std::pair<const char*, double>> terms) {
+        out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
+        for (const auto& [term, value] : terms) {
+            out << YAML::Key << term << YAML::Value;
+            real(out, value);
+        }
+        out << YAML::EndMap;
+    };
+    flow_map("distortion", {{"k1", l.k1}, {"k2", l.k2}, {"k3", l.k3}, {"p1", l.p1}, {"p2", l.p2}});
     // Also when only the decentred element's centre is set, so that it survives a round trip.
     if (l.has_unmodelled_terms() || l.dc_x != 0 || l.dc_y != 0)
-        out << "  unmodelled_distortion: {k4: " << format_real(l.k4)
-            << ", s1: " << format_real(l.s1) << ", s2: " << format_real(l.s2)
-            << ", s3: " << format_real(l.s3) << ", s4: " << format_real(l.s4)
-            << ", t1: " << format_real(l.t1) << ", t2: " << format_real(l.t2)
-            << ", dc_k1: " << format_real(l.dc_k1) << ", dc_k2: " << format_real(l.dc_k2)
-            << ", dc_x: " << format_real(l.dc_x) << ", dc_y: " << format_real(l.dc_y) << "}\n";
+        flow_map("unmodelled_distortion", {{"k4", l.k4},
+                                           {"s1", l.s1},
+                                           {"s2", l.s2},
+                                           {"s3", l.s3},
+                                           {"s4", l.s4},
+                                           {"t1", l.t1},
+                                           {"t2", l.t2},
+                                           {"dc_k1", l.dc_k1},
+                                           {"dc_k2", l.dc_k2},
+                                           {"dc_x", l.dc_x},
+                                           {"dc_y", l.dc_y}});
+    out << YAML::EndMap;
 }
 
 void check_lens(const std::filesystem::path& origin, const std::string& field, Size size,
@@ -301,33 +311,51 @@ Rig load_rig(const std::filesystem::path& path) {
 }
 
 std::string rig_to_yaml(const Rig& rig) {
-    std::ostringstream out;
-    out << "format: " << kRigFormat << "\n";
-    out << "name: " << format_string(rig.name) << "\n";
+    using yaml_emit::real;
+    YAML::Emitter out;
+    out << YAML::BeginMap;
+    out << YAML::Key << "format" << YAML::Value << kRigFormat;
+    out << YAML::Key << "name" << YAML::Value << rig.name;
     write_lens(out, "camera", rig.camera_size, rig.camera);
     write_lens(out, "projector", rig.projector_size, rig.projector);
-    const Mat3& R = rig.R;
-    out << "extrinsics:\n"
-        << "  rotation:\n"
-        << "    - " << triple(R[0], R[1], R[2]) << "\n"
-        << "    - " << triple(R[3], R[4], R[5]) << "\n"
-        << "    - " << triple(R[6], R[7], R[8]) << "\n"
-        << "  translation_mm: " << triple(rig.t[0], rig.t[1], rig.t[2]) << "\n";
+
+    out << YAML::Key << "extrinsics" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "rotation" << YAML::Value << YAML::BeginSeq;
+    for (std::size_t row = 0; row < 3; ++row)
+        yaml_emit::flow_reals(out, rig.R.data() + 3 * row, 3);
+    out << YAML::EndSeq;
+    out << YAML::Key << "translation_mm" << YAML::Value;
+    yaml_emit::flow_reals(out, rig.t.data(), 3);
+    out << YAML::EndMap;
+
     const SensorModel& s = rig.sensor;
-    out << "sensor:\n"
-        << "  bit_depth: " << s.bit_depth << "\n"
-        << "  white_level: " << format_real(s.white_level) << "\n"
-        << "  ambient: " << format_real(s.ambient) << "\n"
-        << "  read_noise_dn: " << format_real(s.read_noise_dn) << "\n"
-        << "  gain_e_per_dn: " << format_real(s.gain_e_per_dn) << "\n"
-        << "  defocus_sigma_px: " << format_real(s.defocus_sigma_px) << "\n"
-        << "  reference_distance_mm: " << format_real(s.reference_distance_mm) << "\n";
+    out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "bit_depth" << YAML::Value << s.bit_depth;
+    const std::pair<const char*, double> sensor_reals[] = {
+        {"white_level", s.white_level},
+        {"ambient", s.ambient},
+        {"read_noise_dn", s.read_noise_dn},
+        {"gain_e_per_dn", s.gain_e_per_dn},
+        {"defocus_sigma_px", s.defocus_sigma_px},
+        {"reference_distance_mm", s.reference_distance_mm}};
+    for (const auto& [key, value] : sensor_reals) {
+        out << YAML::Key << key << YAML::Value;
+        real(out, value);
+    }
+    out << YAML::EndMap;
+
     const ProjectorOptics& p = rig.projector_optics;
-    out << "projector_optics:\n"
-        << "  gamma: " << format_real(p.gamma) << "\n"
-        << "  black_level: " << format_real(p.black_level) << "\n"
-        << "  defocus_sigma_px: " << format_real(p.defocus_sigma_px) << "\n";
-    return out.str();
+    out << YAML::Key << "projector_optics" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "gamma" << YAML::Value;
+    real(out, p.gamma);
+    out << YAML::Key << "black_level" << YAML::Value;
+    real(out, p.black_level);
+    out << YAML::Key << "defocus_sigma_px" << YAML::Value;
+    real(out, p.defocus_sigma_px);
+    out << YAML::EndMap;
+
+    out << YAML::EndMap;
+    return yaml_emit::document(out);
 }
 
 std::filesystem::path default_rig_path() {

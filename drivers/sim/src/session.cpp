@@ -8,6 +8,7 @@
 #include "fpp/sim/renderer.hpp"
 #include "fpp/yaml_fields.hpp"
 #include "vec_math.hpp"
+#include "yaml_emit.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -175,16 +176,6 @@ std::vector<Pose> plane_poses(const Rig& rig, const SessionOptions& o) {
     return poses;
 }
 
-std::string format_reals(const double* v, int count) {
-    std::string s = "[";
-    for (int i = 0; i < count; ++i) {
-        if (i)
-            s += ", ";
-        s += yaml_fields::format_real(v[i]);
-    }
-    return s + "]";
-}
-
 } // namespace
 
 double checkerboard_margin_px(const Rig& rig, const SessionOptions& options) {
@@ -280,31 +271,50 @@ Scene session_scene(const SessionOptions& options, const Pose& pose) {
 }
 
 std::string session_board_yaml(const SessionOptions& options) {
-    std::string y;
+    YAML::Emitter out;
+    char comment[512];
     if (options.kind == SessionKind::checkerboard) {
         const CheckerboardSpec& b = options.board;
-        char comment[512];
         std::snprintf(comment, sizeof comment,
-                      "# Simulated calibration session: printed checkerboard of %d x %d squares\n"
-                      "# (%d x %d inner corners, %g mm), %g mm white margin; the square\n"
-                      "# diagonally outside inner corner (0, 0) is black.\n",
+                      "Simulated calibration session: printed checkerboard of %d x %d squares\n"
+                      "(%d x %d inner corners, %g mm), %g mm white margin; the square\n"
+                      "diagonally outside inner corner (0, 0) is black.",
                       b.inner_columns + 1, b.inner_rows + 1, b.inner_columns, b.inner_rows,
                       b.square_size, b.margin);
-        y += comment;
-        y += "format: fpp-board/1\nkind: checkerboard\n";
-        y += "inner_corners: [" + std::to_string(b.inner_columns) + ", " +
-             std::to_string(b.inner_rows) + "]\n";
-        y += "square_size: " + yaml_fields::format_real(b.square_size) + "\n";
     } else {
-        char comment[256];
         std::snprintf(comment, sizeof comment,
-                      "# Simulated session: flat white board of %g x %g mm filling the camera "
-                      "field.\n",
+                      "Simulated session: flat white board of %g x %g mm filling the camera field.",
                       options.plane_width_mm, options.plane_height_mm);
-        y += comment;
-        y += "format: fpp-board/1\nkind: plane\n";
     }
-    return y;
+    out << YAML::Comment(comment);
+    out << YAML::BeginMap;
+    out << YAML::Key << "format" << YAML::Value << "fpp-board/1";
+    if (options.kind == SessionKind::checkerboard) {
+        const CheckerboardSpec& b = options.board;
+        out << YAML::Key << "kind" << YAML::Value << "checkerboard";
+        out << YAML::Key << "inner_corners" << YAML::Value << YAML::Flow << YAML::BeginSeq
+            << b.inner_columns << b.inner_rows << YAML::EndSeq;
+        out << YAML::Key << "square_size" << YAML::Value;
+        yaml_emit::real(out, b.square_size);
+    } else {
+        out << YAML::Key << "kind" << YAML::Value << "plane";
+    }
+    out << YAML::EndMap;
+    return yaml_emit::document(out);
+}
+
+// The capture's metadata for pose k (0-based): where the board was.
+std::string session_pose_metadata_yaml(int k, const Pose& pose) {
+    YAML::Emitter out;
+    out << YAML::BeginMap;
+    out << YAML::Key << "session_pose" << YAML::Value << k + 1;
+    out << YAML::Key << "board_pose" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "centre_mm" << YAML::Value;
+    yaml_emit::flow_reals(out, pose.centre.data(), pose.centre.size());
+    out << YAML::Key << "rotation" << YAML::Value;
+    yaml_emit::flow_reals(out, pose.R.data(), pose.R.size());
+    out << YAML::EndMap << YAML::EndMap;
+    return yaml_emit::document(out);
 }
 
 std::string session_pose_name(int k, int count) {
@@ -329,10 +339,7 @@ void write_session(const std::filesystem::path& folder, const Rig& rig, const Se
             // Every pose gets its own noise.
             const std::uint64_t seed = options.seed * 1000003ULL + static_cast<std::uint64_t>(k);
             SimulatedCapture capture = simulate(rig, scene, sequence, seed);
-            capture.manifest.metadata_yaml +=
-                "session_pose: " + std::to_string(k + 1) +
-                "\nboard_pose:\n  centre_mm: " + format_reals(pose.centre.data(), 3) +
-                "\n  rotation: " + format_reals(pose.R.data(), 9) + "\n";
+            capture.manifest.metadata_yaml += session_pose_metadata_yaml(k, pose);
             write_simulated_capture(temp / session_pose_name(k, count), capture);
             if (progress)
                 progress(k + 1, count);

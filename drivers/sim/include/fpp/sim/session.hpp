@@ -88,6 +88,10 @@ Scene session_scene(const SessionOptions& options, const Pose& pose);
 // board.yaml text for these options (fpp-board/1, with comments describing the board).
 std::string session_board_yaml(const SessionOptions& options);
 
+// The metadata recorded in pose k's capture (0-based): session_pose (k + 1)
+// and board_pose (centre_mm, rotation row-major), YAML text.
+std::string session_pose_metadata_yaml(int k, const Pose& pose);
+
 // Folder name of pose k (0-based): "pose-01", "pose-02", ...
 std::string session_pose_name(int k, int count);
 
