@@ -77,3 +77,34 @@ def test_bad_calibration_files_and_arguments(tmp_root, slstudio):
     with pytest.raises(fpp.InputError) as e:
         fpp.StereoCalibration.load(calib).reconstruct(decoded, axes="z")
     assert e.value.field == "axes"
+
+
+def test_raw_arrays_reconstruct_as_the_decode_result(slstudio):
+    _, calib, decoded = slstudio
+    s = fpp.StereoCalibration.load(calib)
+    ref = s.reconstruct(decoded)
+    proj_x = np.array(decoded.proj_x)
+    for args, kwargs in [((proj_x,), {}), ((proj_x,), {"mask": decoded.mask}),
+                         ((proj_x.astype(np.float64),), {"mask": decoded.flags & 1}),
+                         ((np.asfortranarray(proj_x),), {"projector": decoded.projector})]:
+        cloud = s.reconstruct(*args, **kwargs)
+        assert np.array_equal(cloud.xyz, ref.xyz, equal_nan=True)
+        assert cloud.stats == ref.stats
+    # a mask drops pixels as the decode's own would: the left half here
+    half = decoded.mask.copy()
+    half[:, half.shape[1] // 2:] = False
+    cloud = s.reconstruct(proj_x, mask=half)
+    left = half.shape[1] // 2
+    assert np.array_equal(cloud.xyz[:, :left], ref.xyz[:, :left], equal_nan=True)
+    assert np.isnan(cloud.xyz[:, left:]).all()
+    assert 0 < cloud.count_points() < ref.count_points()
+    assert np.array_equal(proj_x, decoded.proj_x, equal_nan=True)  # the caller's array untouched
+    # bad arrays: TypeError naming the argument
+    with pytest.raises(TypeError, match="mask"):
+        s.reconstruct(proj_x, mask=half[:-1])
+    with pytest.raises(TypeError, match="proj_y"):
+        s.reconstruct(proj_x, proj_x[:, :-1])
+    with pytest.raises(TypeError, match="proj_x"):
+        s.reconstruct(proj_x.astype(str))
+    with pytest.raises(TypeError, match="proj_y"):
+        s.reconstruct(decoded, proj_x)

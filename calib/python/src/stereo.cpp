@@ -11,6 +11,7 @@
 
 #include <pybind11/stl/filesystem.h>
 
+#include <limits>
 #include <memory>
 #include <mutex>
 
@@ -59,8 +60,63 @@ void settle(Size& size, Size decoded, const Stereo& s, const char* key, const ch
     }
 }
 
-py::object reconstruct(Stereo& s, const DecodeOutput& decoded, const std::string& axes_name,
-                       int threads) {
+// A decode given as arrays (StereoCalibration.reconstruct(proj_x, proj_y=,
+// mask=)): proj_x and proj_y copied as float32, NaN where `mask` is False.
+DecodeResult decode_of_arrays(py::handle proj_x, py::handle proj_y, py::handle mask) {
+    DecodeResult r;
+    r.proj_x = float_image(proj_x, "proj_x", 1);
+    r.camera = r.proj_x.size();
+    if (!proj_y.is_none())
+        r.proj_y = float_image(proj_y, "proj_y", 1, r.camera);
+    if (mask.is_none())
+        return r;
+    const std::string want =
+        "mask: expected an (H, W) array of booleans (H, W = " + std::to_string(r.camera.height) +
+        ", " + std::to_string(r.camera.width) + ")";
+    py::array m = py::module_::import("numpy").attr("asarray")(mask);
+    const char kind = m.dtype().kind();
+    if (kind != 'b' && kind != 'u' && kind != 'i')
+        throw py::type_error(want + ", got dtype " + py::str(m.dtype()).cast<std::string>());
+    if (m.ndim() != 2 || m.shape(0) != r.camera.height || m.shape(1) != r.camera.width)
+        throw py::type_error(want + ", got " + std::to_string(m.ndim()) + " dimensions of " +
+                             py::str(m.attr("shape")).cast<std::string>());
+    // Non-zero = valid, as booleans (contiguous; a view when it already is).
+    const auto valid = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(
+        m.attr("astype")("bool"));
+    if (!valid)
+        throw py::type_error(want);
+    const bool* v = valid.data();
+    float* x = r.proj_x.data();
+    float* y = r.proj_y.empty() ? nullptr : r.proj_y.data();
+    constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+    for (std::size_t i = 0, n = r.camera.area(); i < n; ++i) {
+        if (!v[i]) {
+            x[i] = nan;
+            if (y)
+                y[i] = nan;
+        }
+    }
+    return r;
+}
+
+py::object reconstruct(Stereo& s, py::handle source, py::handle proj_y, py::handle mask,
+                       py::handle projector, const std::string& axes_name, int threads) {
+    // The decode: an fpp.DecodeResult (its arrays read in place) or arrays.
+    std::shared_ptr<const DecodeResult> result;
+    Size projector_size;
+    if (py::isinstance<DecodeOutput>(source)) {
+        if (!proj_y.is_none() || !mask.is_none() || !projector.is_none())
+            throw py::type_error("StereoCalibration.reconstruct: a DecodeResult carries its own "
+                                 "proj_y, mask and projector size; give proj_y=, mask= and "
+                                 "projector= only with a proj_x array");
+        const auto& decoded = source.cast<const DecodeOutput&>();
+        result = decoded.result;
+        projector_size = decoded.projector;
+    } else {
+        result = std::make_shared<const DecodeResult>(decode_of_arrays(source, proj_y, mask));
+        if (!projector.is_none())
+            projector_size = size_from(projector, "projector");
+    }
     calib::ReconstructAxes axes;
     try {
         axes = calib::parse_axes(axes_name);
@@ -78,9 +134,14 @@ py::object reconstruct(Stereo& s, const DecodeOutput& decoded, const std::string
         std::shared_ptr<const calib::SvReconstructor> reconstructor;
         {
             const std::lock_guard lock(s.mutex);
-            settle(s.calibration.camera_size, decoded.result->camera, s, "camera_size", "camera");
-            settle(s.calibration.projector_size, decoded.projector, s, "projector_size",
-                   "projector");
+            settle(s.calibration.camera_size, result->camera, s, "camera_size", "camera");
+            if (projector_size.area() > 0)
+                settle(s.calibration.projector_size, projector_size, s, "projector_size",
+                       "projector");
+            else if (s.calibration.projector_size.area() == 0)
+                throw InputError(s.path, "projector_size",
+                                 "the calibration does not record the projector's size: give "
+                                 "projector=(width, height) with proj_x arrays");
             if (!s.reconstructor || s.reconstructor_threads != threads) {
                 calib::SvOptions options;
                 options.threads = threads;
@@ -90,7 +151,7 @@ py::object reconstruct(Stereo& s, const DecodeOutput& decoded, const std::string
             }
             reconstructor = s.reconstructor;
         }
-        stats = reconstructor->reconstruct(*decoded.result, axes, cloud);
+        stats = reconstructor->reconstruct(*result, axes, cloud);
     }
     py::object cloud_type = py::module_::import("fpp.cloud").attr("Cloud");
     py::object made = cloud_type(py::arg("xyz") = take_array(std::move(cloud.xyz)),
@@ -141,13 +202,22 @@ void bind_stereo(py::module_& m) {
             "('fpp', 'slstudio', 'slmaster').\n\n"
             "Raises fpp.InputError naming the file and the missing or malformed key (a\n"
             "camera-camera file: what it is and what it allows).")
-        .def("reconstruct", &reconstruct, py::arg("result"), py::kw_only(),
+        .def("reconstruct", &reconstruct, py::arg("result"), py::arg("proj_y") = py::none(),
+             py::kw_only(), py::arg("mask") = py::none(), py::arg("projector") = py::none(),
              py::arg("axes") = "auto", py::arg("threads") = 0,
              "Stereo-vision reconstruction of a decode: per camera pixel, the point whose\n"
              "projection gives the decoded projector coordinate(s) (the paper's SV model,\n"
              "both lenses' distortion compensated).\n\n"
              "result: an fpp.DecodeResult of this camera (sizes the file did not record are\n"
-             "  taken from it; ones it did must agree: fpp.InputError otherwise).\n"
+             "  taken from it; ones it did must agree: fpp.InputError otherwise), or a\n"
+             "  proj_x array: (H, W) projector x per camera pixel (any real dtype, copied as\n"
+             "  float32; NaN = not decoded), with optionally\n"
+             "proj_y: the same for the projector row (H, W), and\n"
+             "mask: (H, W) booleans (or integers, non-zero = valid): False drops the pixel\n"
+             "  (as a DecodeResult's mask), and\n"
+             "projector: (width, height), needed when the file does not record it.\n"
+             "  The same arrays give the same cloud, bit for bit, as their DecodeResult.\n"
+             "  Wrong dtypes or shapes: TypeError naming the argument.\n"
              "axes: 'x' (projector column), 'xy' (column and row: the midpoint of the rays'\n"
              "  common perpendicular), 'auto' (xy when both are decoded).\n"
              "threads: worker threads, 0 = all cores.\n\n"
