@@ -18,18 +18,6 @@ Sequence sequence_from_argument(const std::string& name_or_path, Size projector)
     return standard_sequence(name_or_path, projector);
 }
 
-sim::Rig rig_from_options(const std::string& path, bool no_effects, double read_noise,
-                          int binning) {
-    sim::Rig rig = sim::load_rig(path);
-    if (no_effects)
-        rig = rig.without_effects();
-    if (read_noise >= 0)
-        rig.sensor.read_noise_dn = read_noise;
-    if (binning > 1)
-        rig = rig.binned_camera(binning);
-    return rig;
-}
-
 void check_output_path(const std::filesystem::path& path, const char* option) {
     const std::filesystem::path folder = path.parent_path();
     if (!folder.empty() && !std::filesystem::is_directory(folder))

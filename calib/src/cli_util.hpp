@@ -7,7 +7,6 @@
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
 #include "fpp/point_cloud.hpp"
-#include "fpp/sim/rig.hpp"
 
 #include <chrono>
 #include <filesystem>
@@ -33,10 +32,6 @@ Command<Args> add_command(CLI::App& app, std::string name, std::string descripti
     CLI::App* cmd = app.add_subcommand(std::move(name), std::move(description));
     return {cmd, args, [args, run] { return run(*args); }};
 }
-
-// The rig of `path` with the simulate commands' options applied: without its
-// effects, another read noise (DN, when >= 0), the camera binned (when > 1).
-sim::Rig rig_from_options(const std::string& path, bool no_effects, double read_noise, int binning);
 
 // An output file `option` names: its folder must exist and it must not be a
 // folder (InputError naming the path and the option).

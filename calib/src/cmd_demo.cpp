@@ -5,6 +5,7 @@
 #include "cli_util.hpp"
 #include "commands.hpp"
 #include "decode_outputs.hpp"
+#include "simulated_rig_options.hpp"
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"

@@ -2,6 +2,7 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
+#include "simulated_rig_options.hpp"
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/projector_response.hpp"

@@ -5,7 +5,7 @@
 #include "test_support.hpp"
 
 #include "fpp/calib/camera_pair.hpp"
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/error.hpp"
 #include "fpp/sim/rig.hpp"

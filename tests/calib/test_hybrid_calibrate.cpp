@@ -17,8 +17,8 @@
 #include "test_support.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
-#include "fpp/calib/rig_calibration.hpp"
 #include "fpp/calib/shape_fit.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"

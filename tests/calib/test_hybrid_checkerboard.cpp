@@ -27,7 +27,7 @@
 #include "test_support.hpp"
 
 #include "fpp/calib/hybrid_calibrate.hpp"
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/capture_set.hpp"

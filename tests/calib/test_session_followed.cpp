@@ -2,7 +2,7 @@
 // next poses, session_check.hpp) until the default target is met, judged
 // against the truth: a long run (tens of calibrations).
 
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibrate.hpp"
 #include "fpp/calib/trueness.hpp"
 #include "stereo_observations.hpp"

@@ -2,7 +2,7 @@
 // paper rig's corners projected exactly (or with known noise) through the
 // model, so that every recovered parameter can be compared with the truth.
 
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibrate.hpp"
 #include "fpp/calib/trueness.hpp"
 #include "stereo_observations.hpp"

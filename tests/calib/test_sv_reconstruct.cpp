@@ -11,7 +11,7 @@
 
 #include "test_support.hpp"
 
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/decoder.hpp"

@@ -2,7 +2,7 @@
 // calibration's covariance carried to lengths must say how far a length
 // measured with it is from the true one, over many sessions.
 
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibrate.hpp"
 #include "fpp/calib/trueness.hpp"
 #include "stereo_observations.hpp"

@@ -13,6 +13,7 @@
 // hybrid table's (the rig's exact rational table, rig_truth_table.hpp) on
 // the same scene, capture and first camera.
 
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/two_camera.hpp"
 
 #include "fpp/capture_set.hpp"

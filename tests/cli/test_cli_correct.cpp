@@ -10,7 +10,7 @@
 #include "rig_truth_table.hpp"
 #include "test_support.hpp"
 
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/sim/rig.hpp"

@@ -5,7 +5,7 @@
 #include "calib_run.hpp"
 #include "test_support.hpp"
 
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/image_io.hpp"

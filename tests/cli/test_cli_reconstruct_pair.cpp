@@ -9,6 +9,7 @@
 #include "calib_run.hpp"
 #include "test_support.hpp"
 
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/two_camera.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/sequences.hpp"

@@ -50,10 +50,6 @@
 #include <cstddef>
 #include <string>
 
-namespace fpp::sim {
-struct CameraPairRig;
-}
-
 namespace fpp::calib {
 
 struct TwoCameraOptions {
@@ -119,9 +115,5 @@ private:
     Image<float> first_rectified_; // 2 channels per camera-1 pixel: (x1, y1), NaN if none
     Image<float> second_source_;   // 2 channels per rectified cell: camera-2 pixel, NaN if none
 };
-
-// The true camera-camera calibration of a simulated pair (lenses with every
-// term, sizes, R, T; origin "virtual scanner").
-CameraPairCalibration true_camera_pair(const sim::CameraPairRig& rig);
 
 } // namespace fpp::calib

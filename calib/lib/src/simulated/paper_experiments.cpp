@@ -5,7 +5,7 @@
 // report and the targets in paper_report.cpp.
 
 #include "fpp/calib/paper_experiments.hpp"
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/calib/calibration_report.hpp"
