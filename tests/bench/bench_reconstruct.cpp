@@ -9,7 +9,7 @@
 // (xyz, quality, intensity: 20 bytes per pixel). Prints points per second
 // and the paper's figure for comparison (SV: 683,047 points in 1.04 s).
 
-#include "fpp/calib/rig_calibration.hpp"
+#include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/point_cloud.hpp"
