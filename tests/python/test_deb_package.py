@@ -46,6 +46,7 @@ def test_the_deb_imports_from_its_extracted_files_alone(tmp_root, sim_capture):
     module, compiled, figures, path = r.stdout.splitlines()
     assert module.startswith(dist + os.sep) and compiled.startswith(dist + os.sep)
     built = os.path.join(build, "python")  # the build folder's package
-    assert built not in ast.literal_eval(path) and os.path.realpath(built) not in ast.literal_eval(path)
+    on_path = ast.literal_eval(path)
+    assert built not in on_path and os.path.realpath(built) not in on_path
     here = fpp.decode(fpp.read_capture(sim_capture))
     assert figures == f"{here.decoded} {here.method_x}" and here.decoded > 0
