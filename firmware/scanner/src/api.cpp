@@ -31,49 +31,6 @@ namespace {
 constexpr std::uint64_t kMaxJsonBody = 64 * 1024;
 constexpr auto kKeepAlive = std::chrono::seconds(10);
 
-std::vector<std::string> split_path(const std::string& path) {
-    std::vector<std::string> parts;
-    std::size_t i = 0;
-    while (i < path.size()) {
-        const std::size_t j = path.find('/', i);
-        const std::size_t end = j == std::string::npos ? path.size() : j;
-        if (end > i)
-            parts.push_back(path.substr(i, end - i));
-        i = end + 1;
-    }
-    return parts;
-}
-
-bool is_digits(std::string_view s, std::size_t min, std::size_t max) {
-    return s.size() >= min && s.size() <= max &&
-           std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
-
-// scan-YYYYMMDD-HHMMSS-mmm[-N] (scan_store.cpp's names).
-bool is_scan_id(const std::string& s) {
-    constexpr std::string_view prefix = "scan-";
-    if (!s.starts_with(prefix) || s.size() < 24 || s[13] != '-' || s[20] != '-')
-        return false;
-    const std::string_view v = s;
-    return is_digits(v.substr(5, 8), 8, 8) && is_digits(v.substr(14, 6), 6, 6) &&
-           is_digits(v.substr(21, 3), 3, 3) &&
-           (s.size() == 24 || (s[24] == '-' && is_digits(v.substr(25), 1, 6)));
-}
-
-// 1 to `max` of A-Z a-z 0-9 . _ -, not starting with '.' (so never "." or
-// "..", nor a hidden file).
-bool is_plain_name(std::string_view s, std::size_t max) {
-    const auto allowed = [](char c) {
-        return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
-               c == '.' || c == '_' || c == '-';
-    };
-    return !s.empty() && s.size() <= max && s[0] != '.' && std::all_of(s.begin(), s.end(), allowed);
-}
-
-bool is_session_name(const std::string& s) {
-    return is_plain_name(s, 64);
-}
-
 // A path segment of a static file.
 bool is_plain_segment(const std::string& s) {
     return is_plain_name(s, 128);
@@ -106,12 +63,6 @@ HttpResponse file_response(const fs::path& file, const std::string& type,
     if (!download_name.empty())
         r.headers.emplace_back("Content-Disposition",
                                "attachment; filename=\"" + download_name + "\"");
-    return r;
-}
-
-HttpResponse method_not_allowed(const std::string& allowed) {
-    HttpResponse r = HttpResponse::error(405, "method not allowed here (allowed: " + allowed + ")");
-    r.headers.emplace_back("Allow", allowed);
     return r;
 }
 
@@ -283,77 +234,50 @@ HttpResponse Api::handle(HttpRequest& request) {
     }
 }
 
-HttpResponse Api::route(HttpRequest& request, const std::vector<std::string>& parts) {
-    const std::string& m = request.method;
-    const std::string what = parts.size() > 2 ? parts[2] : "";
-    if (what == "scans")
-        return scans(request, parts);
-    if (what == "sessions")
-        return sessions(request, parts);
-    if (parts.size() != 3)
-        return HttpResponse::error(404, "no such path");
-    if (what == "status")
-        return m == "GET" ? HttpResponse::json(200, api_json::status(service_.status()).dump())
-                          : method_not_allowed("GET");
-    if (what == "events")
-        return m == "GET" ? events() : method_not_allowed("GET");
-    if (what == "preview.png")
-        return m == "GET" ? preview() : method_not_allowed("GET");
-    if (what == "settings")
-        return settings(request);
-    if (what == "table")
-        return table(request);
-    return HttpResponse::error(404, "no such path");
+HttpResponse Api::get_status(HttpRequest&, const RouteParams&) {
+    return HttpResponse::json(200, api_json::status(service_.status()).dump());
 }
 
-HttpResponse Api::scans(HttpRequest& request, const std::vector<std::string>& parts) {
-    const std::string& m = request.method;
-    if (parts.size() == 3) {
-        if (m == "POST") {
-            const json body = parse_body(request);
-            expect_keys(body, {"mode"});
-            const ScanMode mode = mode_of(string_field(body, "mode", "scan"));
-            const std::string id = service_.start_scan(mode);
-            HttpResponse r = HttpResponse::json(
-                202,
-                json{{"id", id}, {"mode", mode == ScanMode::scan ? "scan" : "capture"}}.dump());
-            r.headers.emplace_back("Location", "/api/v1/scans/" + id);
-            return r;
-        }
-        if (m != "GET")
-            return method_not_allowed("GET, POST");
-        auto folders = list_scans(service_.store());
-        std::reverse(folders.begin(), folders.end()); // newest first
-        json list = json::array();
-        for (const auto& f : folders) {
-            json entry = scan_summary(f);
-            std::error_code ec;
-            if (fs::is_directory(f, ec)) // not deleted or pruned meanwhile
-                list.push_back(std::move(entry));
-        }
-        return HttpResponse::json(200, json{{"scans", list}}.dump());
+HttpResponse Api::scan_list(HttpRequest&, const RouteParams&) {
+    auto folders = list_scans(service_.store());
+    std::reverse(folders.begin(), folders.end()); // newest first
+    json list = json::array();
+    for (const auto& f : folders) {
+        json entry = scan_summary(f);
+        std::error_code ec;
+        if (fs::is_directory(f, ec)) // not deleted or pruned meanwhile
+            list.push_back(std::move(entry));
     }
-    if (!is_scan_id(parts[3]))
-        return HttpResponse::error(404, "no scan '" + parts[3] + "'");
-    const fs::path folder = service_.store() / parts[3];
-    if (!fs::is_directory(folder))
-        return HttpResponse::error(404, "no scan '" + parts[3] + "'");
-    if (parts.size() == 4) {
-        if (m == "DELETE") {
-            remove_folder(folder);
-            log_.info("http: scan " + parts[3] + " deleted");
-            events_.publish("deleted", json{{"id", parts[3]}, {"session", nullptr}}.dump());
-            return HttpResponse::no_content();
-        }
-        return m == "GET" ? file_response(folder / "scan.json", "application/json")
-                          : method_not_allowed("GET, DELETE");
-    }
-    if (parts.size() == 5 && m == "GET")
-        return scan_file(folder, parts[4]);
-    return parts.size() == 5 ? method_not_allowed("GET") : HttpResponse::error(404, "no such path");
+    return HttpResponse::json(200, json{{"scans", list}}.dump());
 }
 
-HttpResponse Api::scan_file(const fs::path& folder, const std::string& file) {
+HttpResponse Api::start_scan(HttpRequest& request, const RouteParams&) {
+    const json body = parse_body(request);
+    expect_keys(body, {"mode"});
+    const ScanMode mode = mode_of(string_field(body, "mode", "scan"));
+    const std::string id = service_.start_scan(mode);
+    HttpResponse r = HttpResponse::json(
+        202, json{{"id", id}, {"mode", mode == ScanMode::scan ? "scan" : "capture"}}.dump());
+    r.headers.emplace_back("Location", "/api/v1/scans/" + id);
+    return r;
+}
+
+// A scan's or a pose's scan.json.
+HttpResponse Api::get_scan_json(HttpRequest&, const RouteParams& params) {
+    return file_response(params.folder / "scan.json", "application/json");
+}
+
+HttpResponse Api::delete_scan(HttpRequest&, const RouteParams& params) {
+    remove_folder(params.folder);
+    log_.info("http: scan " + params.id + " deleted");
+    events_.publish("deleted", json{{"id", params.id}, {"session", nullptr}}.dump());
+    return HttpResponse::no_content();
+}
+
+// cloud.ply, capture.tar or texture.png of a scan or a pose.
+HttpResponse Api::get_scan_file(HttpRequest&, const RouteParams& params) {
+    const fs::path& folder = params.folder;
+    const std::string& file = params.last_segment;
     const std::string id = folder.filename().string();
     if (file == "cloud.ply")
         return file_response(folder / "cloud.ply", "application/octet-stream", id + "-cloud.ply");
@@ -375,116 +299,95 @@ HttpResponse Api::scan_file(const fs::path& folder, const std::string& file) {
     return HttpResponse::error(404, "no such file");
 }
 
-HttpResponse Api::sessions(HttpRequest& request, const std::vector<std::string>& parts) {
-    const std::string& m = request.method;
-    const fs::path root = service_.sessions_dir();
-    if (parts.size() == 3) {
-        if (m == "POST") {
-            const json body = parse_body(request);
-            expect_keys(body, {"name", "board_yaml"});
-            const std::string name = string_field(body, "name", "");
-            if (!is_session_name(name))
-                throw ApiError(400, "name: 1 to 64 of A-Z a-z 0-9 . _ -, not starting with .");
-            std::string board = string_field(body, "board_yaml", service_.session_board_yaml());
-            if (board.empty())
-                throw ApiError(400, "board_yaml: needed (the calibration board, format " +
-                                        std::string(kBoardFormat) + ")");
-            try {
-                (void)parse_board(board, "board_yaml");
-            } catch (const InputError& e) {
-                throw ApiError(400, e.what());
-            }
-            const fs::path folder = root / name;
-            if (fs::exists(folder))
-                throw ApiError(409, "session '" + name + "' exists");
-            fs::create_directories(root);
-            write_folder_atomically(folder, [&](const fs::path& temp) {
-                write_file_synced(temp / "board.yaml", board);
-            });
-            log_.info("http: session " + name + " created");
-            return HttpResponse::json(201, json{{"name", name}, {"poses", 0}}.dump());
-        }
-        if (m != "GET")
-            return method_not_allowed("GET, POST");
-        json list = json::array();
-        std::error_code ec;
-        std::vector<fs::path> folders;
-        for (const auto& e : fs::directory_iterator(root, ec))
-            if (e.is_directory() && is_session_name(e.path().filename().string()))
-                folders.push_back(e.path());
-        std::sort(folders.begin(), folders.end());
-        for (const auto& f : folders)
-            list.push_back({{"name", f.filename().string()},
-                            {"poses", list_scans(f).size()},
-                            {"created_utc", session_created_utc(f)}});
-        return HttpResponse::json(200, json{{"sessions", list}}.dump());
-    }
-    const std::string& name = parts[3];
-    const fs::path folder = root / name;
-    if (!is_session_name(name) || !fs::is_directory(folder))
-        return HttpResponse::error(404, "no session '" + name + "'");
-    if (parts.size() == 4) {
-        if (m == "DELETE") {
-            remove_folder(folder);
-            log_.info("http: session " + name + " deleted");
-            events_.publish("deleted", json{{"id", nullptr}, {"session", name}}.dump());
-            return HttpResponse::no_content();
-        }
-        if (m != "GET")
-            return method_not_allowed("GET, DELETE");
-        json poses = json::array();
-        for (const auto& f : list_scans(folder))
-            poses.push_back(scan_summary(f));
-        std::string board;
-        try {
-            board = yaml_fields::read_text_file(folder / "board.yaml");
-        } catch (const std::exception&) {
-        }
-        return HttpResponse::json(
-            200, json{{"name", name}, {"board_yaml", board}, {"poses", poses}}.dump());
-    }
-    if (parts[4] == "session.tar" && parts.size() == 5) {
-        if (m != "GET")
-            return method_not_allowed("GET");
-        HttpResponse r;
-        r.content_type = "application/x-tar";
-        r.stream = std::make_shared<TarStream>(tar_entries_of(folder, name + "/"));
-        r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + name + ".tar\"");
-        return r;
-    }
-    if (parts[4] == "response" && parts.size() == 5) {
-        if (m != "POST")
-            return method_not_allowed("POST");
-        return HttpResponse::json(201, api_json::response(service_.record_response(name)).dump());
-    }
-    if (parts[4] != "poses")
-        return HttpResponse::error(404, "no such path");
-    if (parts.size() == 5) {
-        if (m != "POST")
-            return method_not_allowed("POST");
-        const std::string id = service_.start_scan(ScanMode::capture, name);
-        HttpResponse r = HttpResponse::json(202, json{{"id", id}, {"session", name}}.dump());
-        r.headers.emplace_back("Location", "/api/v1/sessions/" + name + "/poses/" + id);
-        return r;
-    }
-    if (!is_scan_id(parts[5]) || !fs::is_directory(folder / parts[5]))
-        return HttpResponse::error(404, "no pose '" + parts[5] + "' in session '" + name + "'");
-    const fs::path pose = folder / parts[5];
-    if (parts.size() == 6) {
-        if (m == "DELETE") {
-            remove_folder(pose);
-            events_.publish("deleted", json{{"id", parts[5]}, {"session", name}}.dump());
-            return HttpResponse::no_content();
-        }
-        return m == "GET" ? file_response(pose / "scan.json", "application/json")
-                          : method_not_allowed("GET, DELETE");
-    }
-    if (parts.size() == 7 && m == "GET")
-        return scan_file(pose, parts[6]);
-    return HttpResponse::error(404, "no such path");
+HttpResponse Api::session_list(HttpRequest&, const RouteParams&) {
+    json list = json::array();
+    std::error_code ec;
+    std::vector<fs::path> folders;
+    for (const auto& e : fs::directory_iterator(service_.sessions_dir(), ec))
+        if (e.is_directory() && is_session_name(e.path().filename().string()))
+            folders.push_back(e.path());
+    std::sort(folders.begin(), folders.end());
+    for (const auto& f : folders)
+        list.push_back({{"name", f.filename().string()},
+                        {"poses", list_scans(f).size()},
+                        {"created_utc", session_created_utc(f)}});
+    return HttpResponse::json(200, json{{"sessions", list}}.dump());
 }
 
-HttpResponse Api::events() {
+HttpResponse Api::create_session(HttpRequest& request, const RouteParams&) {
+    const json body = parse_body(request);
+    expect_keys(body, {"name", "board_yaml"});
+    const std::string name = string_field(body, "name", "");
+    if (!is_session_name(name))
+        throw ApiError(400, "name: 1 to 64 of A-Z a-z 0-9 . _ -, not starting with .");
+    std::string board = string_field(body, "board_yaml", service_.session_board_yaml());
+    if (board.empty())
+        throw ApiError(400, "board_yaml: needed (the calibration board, format " +
+                                std::string(kBoardFormat) + ")");
+    try {
+        (void)parse_board(board, "board_yaml");
+    } catch (const InputError& e) {
+        throw ApiError(400, e.what());
+    }
+    const fs::path root = service_.sessions_dir();
+    const fs::path folder = root / name;
+    if (fs::exists(folder))
+        throw ApiError(409, "session '" + name + "' exists");
+    fs::create_directories(root);
+    write_folder_atomically(
+        folder, [&](const fs::path& temp) { write_file_synced(temp / "board.yaml", board); });
+    log_.info("http: session " + name + " created");
+    return HttpResponse::json(201, json{{"name", name}, {"poses", 0}}.dump());
+}
+
+HttpResponse Api::get_session(HttpRequest&, const RouteParams& params) {
+    json poses = json::array();
+    for (const auto& f : list_scans(params.folder))
+        poses.push_back(scan_summary(f));
+    std::string board;
+    try {
+        board = yaml_fields::read_text_file(params.folder / "board.yaml");
+    } catch (const std::exception&) {
+    }
+    return HttpResponse::json(
+        200, json{{"name", params.name}, {"board_yaml", board}, {"poses", poses}}.dump());
+}
+
+HttpResponse Api::delete_session(HttpRequest&, const RouteParams& params) {
+    remove_folder(params.folder);
+    log_.info("http: session " + params.name + " deleted");
+    events_.publish("deleted", json{{"id", nullptr}, {"session", params.name}}.dump());
+    return HttpResponse::no_content();
+}
+
+HttpResponse Api::get_session_tar(HttpRequest&, const RouteParams& params) {
+    HttpResponse r;
+    r.content_type = "application/x-tar";
+    r.stream = std::make_shared<TarStream>(tar_entries_of(params.folder, params.name + "/"));
+    r.headers.emplace_back("Content-Disposition",
+                           "attachment; filename=\"" + params.name + ".tar\"");
+    return r;
+}
+
+HttpResponse Api::record_response(HttpRequest&, const RouteParams& params) {
+    return HttpResponse::json(201,
+                              api_json::response(service_.record_response(params.name)).dump());
+}
+
+HttpResponse Api::start_pose(HttpRequest&, const RouteParams& params) {
+    const std::string id = service_.start_scan(ScanMode::capture, params.name);
+    HttpResponse r = HttpResponse::json(202, json{{"id", id}, {"session", params.name}}.dump());
+    r.headers.emplace_back("Location", "/api/v1/sessions/" + params.name + "/poses/" + id);
+    return r;
+}
+
+HttpResponse Api::delete_pose(HttpRequest&, const RouteParams& params) {
+    remove_folder(params.folder);
+    events_.publish("deleted", json{{"id", params.id}, {"session", params.name}}.dump());
+    return HttpResponse::no_content();
+}
+
+HttpResponse Api::get_events(HttpRequest&, const RouteParams&) {
     HttpResponse r;
     r.content_type = "text/event-stream";
     r.headers.emplace_back("Cache-Control", "no-store");
@@ -493,7 +396,7 @@ HttpResponse Api::events() {
     return r;
 }
 
-HttpResponse Api::preview() {
+HttpResponse Api::get_preview(HttpRequest&, const RouteParams&) {
     const Preview p = service_.preview();
     HttpResponse r;
     r.content_type = "image/png";
@@ -503,35 +406,34 @@ HttpResponse Api::preview() {
     return r;
 }
 
-HttpResponse Api::settings(HttpRequest& request) {
-    if (request.method == "PUT") {
-        const json body = parse_body(request);
-        expect_keys(body, {"exposure_us"});
-        if (!body.contains("exposure_us") || !body["exposure_us"].is_number())
-            throw ApiError(400, "exposure_us: a number is needed");
-        service_.set_exposure_us(body["exposure_us"].get<double>());
-    } else if (request.method != "GET") {
-        return method_not_allowed("GET, PUT");
-    }
+HttpResponse Api::get_settings(HttpRequest&, const RouteParams&) {
     return HttpResponse::json(200, json{{"exposure_us", service_.exposure_us()}}.dump());
 }
 
-HttpResponse Api::table(HttpRequest& request) {
-    if (request.method == "PUT") {
-        if (request.body_file.empty() || request.body_bytes == 0)
-            throw ApiError(400, "the body must be the .fpt file");
-        const TableDescription t = service_.install_table(request.body_file);
-        request.body_file.clear(); // renamed into place
-        log_.info(std::string("http: table installed (") + to_string(t.info.model) + ", hash " +
-                  hex64(t.file_hash) + ")");
-        return HttpResponse::json(200, api_json::table(t).dump());
-    }
-    if (request.method != "GET")
-        return method_not_allowed("GET, PUT");
+HttpResponse Api::put_settings(HttpRequest& request, const RouteParams& params) {
+    const json body = parse_body(request);
+    expect_keys(body, {"exposure_us"});
+    if (!body.contains("exposure_us") || !body["exposure_us"].is_number())
+        throw ApiError(400, "exposure_us: a number is needed");
+    service_.set_exposure_us(body["exposure_us"].get<double>());
+    return get_settings(request, params);
+}
+
+HttpResponse Api::get_table(HttpRequest&, const RouteParams&) {
     const std::optional<TableDescription> t = service_.table();
     if (!t)
         return HttpResponse::error(404, "no table is installed");
     return file_response(t->path, "application/octet-stream", "table.fpt");
+}
+
+HttpResponse Api::put_table(HttpRequest& request, const RouteParams&) {
+    if (request.body_file.empty() || request.body_bytes == 0)
+        throw ApiError(400, "the body must be the .fpt file");
+    const TableDescription t = service_.install_table(request.body_file);
+    request.body_file.clear(); // renamed into place
+    log_.info(std::string("http: table installed (") + to_string(t.info.model) + ", hash " +
+              hex64(t.file_hash) + ")");
+    return HttpResponse::json(200, api_json::table(t).dump());
 }
 
 // Page files are revalidated on every load, three.js (from its Debian

@@ -5,9 +5,11 @@
 // scanner's work is the ScannerService's; the store is read here.
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
+#include <fpp/scanner/api_routes.hpp>
 #include <fpp/scanner/event_hub.hpp>
 #include <fpp/scanner/http_server.hpp>
 #include <fpp/scanner/scanner_service.hpp>
@@ -28,15 +30,37 @@ public:
     std::optional<HttpResponse> begin(const HttpRequest& request, BodyPolicy& policy) override;
     HttpResponse handle(HttpRequest& request) override;
 
+    // The routes of http-api.md, one table (api_routes.cpp).
+    static std::span<const ApiRoute> routes();
+
 private:
+    // Finds the route of a path under /api/v1: 404 when no pattern matches or
+    // a scan, session or pose it names does not exist, 405 with Allow when
+    // the path is known but the method is not.
     HttpResponse route(HttpRequest& request, const std::vector<std::string>& parts);
-    HttpResponse scans(HttpRequest& request, const std::vector<std::string>& parts);
-    HttpResponse sessions(HttpRequest& request, const std::vector<std::string>& parts);
-    HttpResponse scan_file(const std::filesystem::path& folder, const std::string& file);
-    HttpResponse events();
-    HttpResponse preview();
-    HttpResponse settings(HttpRequest& request);
-    HttpResponse table(HttpRequest& request);
+
+    // The handlers of the table.
+    HttpResponse get_status(HttpRequest& request, const RouteParams& params);
+    HttpResponse scan_list(HttpRequest& request, const RouteParams& params);
+    HttpResponse start_scan(HttpRequest& request, const RouteParams& params);
+    HttpResponse get_scan_json(HttpRequest& request, const RouteParams& params);
+    HttpResponse delete_scan(HttpRequest& request, const RouteParams& params);
+    HttpResponse get_scan_file(HttpRequest& request, const RouteParams& params);
+    HttpResponse get_events(HttpRequest& request, const RouteParams& params);
+    HttpResponse get_preview(HttpRequest& request, const RouteParams& params);
+    HttpResponse get_settings(HttpRequest& request, const RouteParams& params);
+    HttpResponse put_settings(HttpRequest& request, const RouteParams& params);
+    HttpResponse get_table(HttpRequest& request, const RouteParams& params);
+    HttpResponse put_table(HttpRequest& request, const RouteParams& params);
+    HttpResponse session_list(HttpRequest& request, const RouteParams& params);
+    HttpResponse create_session(HttpRequest& request, const RouteParams& params);
+    HttpResponse get_session(HttpRequest& request, const RouteParams& params);
+    HttpResponse delete_session(HttpRequest& request, const RouteParams& params);
+    HttpResponse get_session_tar(HttpRequest& request, const RouteParams& params);
+    HttpResponse record_response(HttpRequest& request, const RouteParams& params);
+    HttpResponse start_pose(HttpRequest& request, const RouteParams& params);
+    HttpResponse delete_pose(HttpRequest& request, const RouteParams& params);
+
     HttpResponse static_file(const HttpRequest& request);
 
     ScannerService& service_;
