@@ -7,6 +7,7 @@
 #include "fpp/calib/plots.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/error.hpp"
+#include "fpp/fnv1a.hpp"
 #include "fpp/image_io.hpp"
 
 #include <nlohmann/json.hpp>

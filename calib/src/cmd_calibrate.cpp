@@ -19,6 +19,7 @@
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/coefficient_table.hpp"
+#include "fpp/fnv1a.hpp"
 #include "fpp/yaml_fields.hpp"
 
 #include <iostream>

@@ -34,6 +34,7 @@
 #include "fpp/calib/verification.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
+#include "fpp/fnv1a.hpp"
 
 #include <cmath>
 #include <fstream>

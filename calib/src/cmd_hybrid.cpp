@@ -10,6 +10,7 @@
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
+#include "fpp/fnv1a.hpp"
 #include "fpp/yaml_fields.hpp"
 
 #include <iostream>

@@ -5,6 +5,7 @@
 #include "scanner_connection.hpp"
 
 #include "fpp/coefficient_table.hpp"
+#include "fpp/fnv1a.hpp"
 #include "fpp/yaml_fields.hpp"
 
 #include <cstdio>

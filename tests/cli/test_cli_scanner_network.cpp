@@ -11,6 +11,7 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
+#include "fpp/fnv1a.hpp"
 #include "fpp/sim/rig.hpp"
 
 #include <gtest/gtest.h>

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "fpp/coefficient_table.hpp"
+#include "fpp/fnv1a.hpp"
 #include "fpp/scanner/api_error.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/yaml_fields.hpp"

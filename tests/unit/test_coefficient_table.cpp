@@ -4,6 +4,7 @@
 
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
+#include "fpp/fnv1a.hpp"
 
 #include "../../firmware/core/src/crc32.hpp"
 #include "test_support.hpp"

@@ -358,16 +358,6 @@ int table_planes(TableModel model) {
                                 std::to_string(static_cast<std::uint32_t>(model)));
 }
 
-std::uint64_t fnv1a64(const void* data, std::size_t size) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    std::uint64_t h = 0xcbf29ce484222325ull; // offset basis
-    for (std::size_t i = 0; i < size; ++i) {
-        h ^= p[i];
-        h *= 0x100000001b3ull; // FNV prime
-    }
-    return h;
-}
-
 void CoefficientTable::AlignedFree::operator()(float* p) const noexcept {
     ::operator delete[](p, std::align_val_t{kBlockAlignment});
 }

@@ -6,6 +6,7 @@
 #include "fpp/drivers/device_error.hpp"
 #include "fpp/drivers/gige_frame_ids.hpp"
 #include "fpp/error.hpp"
+#include "fpp/fnv1a.hpp"
 #include "fpp/patterns.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/projector_response.hpp"

@@ -16,6 +16,7 @@
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
+#include "fpp/fnv1a.hpp"
 #include "fpp/sequences.hpp"
 #include "fpp/sim/session.hpp"
 #include "paper_stages.hpp"

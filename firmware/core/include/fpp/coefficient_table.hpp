@@ -96,9 +96,6 @@ struct TableInfo {
     int tile_pixels() const { return tile_width * tile_height; }
 };
 
-// FNV-1a 64 of a byte string (the calibration file's bytes for calibration_hash).
-std::uint64_t fnv1a64(const void* data, std::size_t size);
-
 class CoefficientTable {
 public:
     CoefficientTable() = default;
