@@ -10,9 +10,9 @@
 #include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/decoder.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <iostream>
 #include <memory>

@@ -4,9 +4,9 @@
 #include "commands.hpp"
 #include "simulated_rig_options.hpp"
 
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <iostream>
 #include <memory>

@@ -6,9 +6,9 @@
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/projector_response.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/session.hpp"
 #include "fpp/yaml_fields.hpp"
 
 #include <iostream>

@@ -1,7 +1,7 @@
 #pragma once
 // The simulate commands' rig (simulate, simulate-session, demo): the only
 // command files that use the simulator (fpp_calib_sim, drivers/simulator).
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <string>
 

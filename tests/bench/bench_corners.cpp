@@ -14,7 +14,7 @@
 #include "corner_poses.hpp"
 
 #include "fpp/calib/corners.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include "best_time_reporter.hpp"
 

@@ -8,9 +8,9 @@
 
 #include "fpp/decoder.hpp"
 #include "fpp/patterns.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include "best_time_reporter.hpp"
 

@@ -34,8 +34,8 @@
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "fpp/table_kernel.hpp"
 
 #include "best_time_reporter.hpp"

@@ -3,9 +3,9 @@
 // one thread. A plain copy of one output frame is the baseline.
 
 #include "fpp/patterns.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <benchmark/benchmark.h>
 

@@ -6,8 +6,8 @@
 #include "stereo/bundle_adjustment.hpp"
 #include "trueness/calibration_covariance.hpp"
 
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/session.hpp"
 
 #include <gtest/gtest.h>
 

@@ -8,7 +8,7 @@
 #include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/error.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>

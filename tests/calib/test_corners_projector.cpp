@@ -13,8 +13,8 @@
 #include "fpp/calib/corners.hpp"
 #include "fpp/decoder.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/session.hpp"
 
 #include <gtest/gtest.h>
 

@@ -19,8 +19,8 @@
 #include "test_support.hpp"
 
 #include "fpp/calib/corners.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <gtest/gtest.h>
 

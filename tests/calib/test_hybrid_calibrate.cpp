@@ -26,10 +26,10 @@
 #include "fpp/decoder.hpp"
 #include "fpp/error.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
+#include "fpp/simulator/session.hpp"
 #include "fpp/table_kernel.hpp"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Simulated calibration sessions (fpp/sim/session.hpp): where the board poses
+// Simulated calibration sessions (fpp/simulator/session.hpp): where the board poses
 // go, and what a session folder holds.
 
 #include "test_support.hpp"
@@ -6,7 +6,7 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/error.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/session.hpp"
 
 #include <gtest/gtest.h>
 

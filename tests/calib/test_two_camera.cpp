@@ -4,7 +4,7 @@
 //
 // Rig: paper-rig-effects (gamma 2.2, 0.5 % black level, projector and camera
 // defocus, shot and read noise, 8 bits, unmodelled projector distortion)
-// with a second camera (fpp/sim/camera_pair_rig.hpp), both 4 x 4 binned
+// with a second camera (fpp/simulator/camera_pair_rig.hpp), both 4 x 4 binned
 // (400 x 300). Scene: "composite" (relief and sphere over a plane, with
 // occlusions and projector shadows). Truth: camera 1's truth_xyz.
 //
@@ -20,10 +20,10 @@
 #include "fpp/decoder.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/camera_pair_rig.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/camera_pair_rig.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 #include "fpp/table_kernel.hpp"
 
 #include "rig_truth_table.hpp"

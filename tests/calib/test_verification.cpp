@@ -13,9 +13,9 @@
 #include "fpp/calib/artefact_search.hpp"
 #include "fpp/calib/verification.hpp"
 #include "fpp/error.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <gtest/gtest.h>
 

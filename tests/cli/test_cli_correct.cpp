@@ -13,7 +13,7 @@
 #include "fpp/calib/simulated_rig.hpp"
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/coefficient_table.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <gtest/gtest.h>
 

@@ -17,7 +17,7 @@
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/coefficient_table.hpp"
 #include "fpp/image_io.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "rig_truth_table.hpp"
 
 #include <gtest/gtest.h>

@@ -6,7 +6,7 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/decode_accuracy.hpp"
 #include "fpp/image_io.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <gtest/gtest.h>
 

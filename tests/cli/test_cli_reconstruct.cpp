@@ -10,7 +10,7 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/image_io.hpp"
 #include "fpp/point_cloud.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "fpp/yaml_fields.hpp"
 
 #include <gtest/gtest.h>

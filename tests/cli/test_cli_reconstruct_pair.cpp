@@ -13,10 +13,10 @@
 #include "fpp/calib/two_camera.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/camera_pair_rig.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/camera_pair_rig.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <opencv2/core.hpp>
 

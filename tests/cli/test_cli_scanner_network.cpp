@@ -12,7 +12,7 @@
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"
 #include "fpp/fnv1a.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <gtest/gtest.h>
 

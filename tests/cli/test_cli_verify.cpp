@@ -12,7 +12,7 @@
 #include "test_support.hpp"
 
 #include "fpp/coefficient_table.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -17,7 +17,7 @@
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/scanner_service.hpp"
 #include "fpp/scanner/sim_board.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "fuzz_support.hpp"
 #include "rig_truth_table.hpp"
 #include "sim_board_yaml.hpp"

@@ -1,5 +1,5 @@
 // A simulated rig's YAML (board/sim/*.yaml): lenses, poses, sensor, noise.
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -1,5 +1,5 @@
 // A simulated scene's YAML (list of shapes and materials).
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/scene.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -21,9 +21,9 @@
 #include "fpp/error.hpp"
 #include "fpp/patterns.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 #include "network_isolation.hpp"
 
 #include <chrono>

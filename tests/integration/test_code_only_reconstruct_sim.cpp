@@ -18,9 +18,9 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/decoder.hpp"
 #include "fpp/point_cloud.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 #include "fpp/table_kernel.hpp"
 
 #include "pattern_blocks.hpp"

@@ -5,9 +5,9 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/decoder.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include "test_support.hpp"
 

@@ -28,9 +28,9 @@
 #include "fpp/pattern_block.hpp"
 #include "fpp/phase_error_correction.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <gtest/gtest.h>
 

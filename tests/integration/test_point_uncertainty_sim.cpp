@@ -29,9 +29,9 @@
 #include "fpp/phase_noise.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 #include "fpp/table_kernel.hpp"
 
 #include "rig_truth_table.hpp"

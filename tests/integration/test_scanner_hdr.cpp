@@ -10,7 +10,7 @@
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
-#include "fpp/sim/renderer.hpp"
+#include "fpp/simulator/renderer.hpp"
 #include "rig_truth_table.hpp"
 #include "sim_board_yaml.hpp"
 #include "test_support.hpp"

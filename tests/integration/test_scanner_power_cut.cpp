@@ -8,7 +8,7 @@
 
 #include "fpp/coefficient_table.hpp"
 #include "fpp/point_cloud.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "loopback_http.hpp"
 #include "rig_truth_table.hpp"
 #include "sim_board_yaml.hpp"

@@ -11,7 +11,7 @@
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "sim_board_yaml.hpp"
 #include "test_support.hpp"
 

@@ -3,9 +3,9 @@
 // hardest: strongly tilted, pushed into the image's corners (shared by the
 // corner tests and bench_corners). Header only.
 
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <algorithm>
 #include <cmath>

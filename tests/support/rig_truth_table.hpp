@@ -7,7 +7,7 @@
 // Header-only: it needs fpp_sim, which the support library does not link.
 #include "fpp/coefficient_table.hpp"
 #include "fpp/lens_model.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <algorithm>
 #include <array>

@@ -19,7 +19,7 @@
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "loopback_http.hpp"
 #include "rig_truth_table.hpp"
 #include "sim_board_yaml.hpp"

@@ -5,7 +5,7 @@
 // laid out one way only, so that tests can replace a piece of text (e.g.
 // "clock: virtual", "trigger: line", "seed: 3}") to make a variant.
 // Header-only: it needs fpp_sim, which the support library does not link.
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <filesystem>
 #include <string>

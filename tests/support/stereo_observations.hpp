@@ -5,8 +5,8 @@
 
 #include "fpp/calib/stereo_calibrate.hpp"
 #include "fpp/calib/stereo_session.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/session.hpp"
 
 #include <cstdint>
 #include <random>

@@ -7,7 +7,7 @@
 // where the blur is the identity: they are set to 0, which skips it.
 // Pixel centres on integers: c' = (c + 0.5) / k - 0.5. For tests of many
 // scans (stress, soak, power cuts). Header-only: it needs fpp_sim.
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "test_support.hpp"
 
 namespace fpp::test {

@@ -3,7 +3,7 @@
 // binned BINNING x BINNING, so that tests outside C++ (tests/api) get a valid
 // table for a sim board without a calibration session.
 #include "fpp/coefficient_table.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "rig_truth_table.hpp"
 
 #include <cstdio>

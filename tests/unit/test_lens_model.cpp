@@ -4,7 +4,7 @@
 // Euler-angle convention.
 
 #include "fpp/lens_model.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <gtest/gtest.h>
 

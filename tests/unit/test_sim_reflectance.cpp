@@ -5,7 +5,7 @@
 // "hdr-parts" (white part near 200 DN, dark part a few DN, highlight clipping
 // at the nominal exposure and not at 1/8 of it).
 
-#include "fpp/sim/renderer.hpp"
+#include "fpp/simulator/renderer.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>

@@ -5,7 +5,7 @@
 
 #include "fpp/capture_set.hpp"
 #include "fpp/image_io.hpp"
-#include "fpp/sim/renderer.hpp"
+#include "fpp/simulator/renderer.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>

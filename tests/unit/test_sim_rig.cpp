@@ -3,7 +3,7 @@
 // the rig reader.
 
 #include "fpp/error.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>

@@ -3,8 +3,8 @@
 // scenes and scene YAML files.
 
 #include "fpp/error.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>

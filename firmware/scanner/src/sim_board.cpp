@@ -6,9 +6,9 @@
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
 #include "fpp/sim/sim_clock.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <charconv>
 #include <filesystem>
@@ -22,7 +22,7 @@ namespace {
 constexpr std::string_view kSessionPrefix = "session:";
 
 // "session:checkerboard:N" or "session:plane:N": the calibration board of a
-// simulated session (fpp/sim/session.hpp) at its N poses.
+// simulated session (fpp/simulator/session.hpp) at its N poses.
 sim::SessionOptions parse_session_scene(const std::string& text) {
     const std::string rest = text.substr(kSessionPrefix.size());
     const auto colon = rest.find(':');

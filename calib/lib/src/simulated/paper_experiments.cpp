@@ -18,7 +18,7 @@
 #include "fpp/error.hpp"
 #include "fpp/fnv1a.hpp"
 #include "fpp/sequences.hpp"
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/session.hpp"
 #include "paper_stages.hpp"
 
 #include <algorithm>

@@ -9,7 +9,7 @@
 #include "fpp/calib/paper_experiments.hpp"
 #include "fpp/calib/sv_reconstruct.hpp"
 #include "fpp/coefficient_table.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include <cstddef>
 #include <limits>

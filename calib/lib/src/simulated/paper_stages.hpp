@@ -10,9 +10,9 @@
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/pattern_block.hpp"
 #include "fpp/point_cloud.hpp"
-#include "fpp/sim/renderer.hpp"
-#include "fpp/sim/scene.hpp"
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/renderer.hpp"
+#include "fpp/simulator/scene.hpp"
+#include "fpp/simulator/session.hpp"
 #include "paper_run.hpp"
 
 #include <chrono>

@@ -7,8 +7,8 @@
 // it without the rest.
 #include "fpp/calib/stereo_calibration.hpp"
 #include "fpp/calib/two_camera.hpp"
-#include "fpp/sim/camera_pair_rig.hpp"
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/camera_pair_rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 namespace fpp::calib {
 

@@ -15,8 +15,8 @@
 #include <fpp/drivers/camera.hpp>
 #include <fpp/drivers/clock.hpp>
 #include <fpp/sim/record_log.hpp>
-#include <fpp/sim/renderer.hpp>
 #include <fpp/sim/screen.hpp>
+#include <fpp/simulator/renderer.hpp>
 
 namespace fpp::sim {
 

@@ -7,7 +7,7 @@
 // driver.
 //
 // sim.scene "session:checkerboard:N" or "session:plane:N" holds a calibration
-// board (fpp/sim/session.hpp) at the N poses of a simulated session, moved on
+// board (fpp/simulator/session.hpp) at the N poses of a simulated session, moved on
 // to the next pose at every scan, as a person would between button presses;
 // the board's description is written to the store as board.yaml (unless one
 // is there), so that capture-mode scans make a session folder for fpp-calib.
@@ -25,11 +25,11 @@
 #include <fpp/scanner/hardware_board.hpp>
 #include <fpp/scanner/scanner.hpp>
 #include <fpp/sim/observed_display.hpp>
-#include <fpp/sim/renderer.hpp>
-#include <fpp/sim/session.hpp>
 #include <fpp/sim/sim_camera.hpp>
 #include <fpp/sim/sim_display.hpp>
 #include <fpp/sim/sim_gpio.hpp>
+#include <fpp/simulator/renderer.hpp>
+#include <fpp/simulator/session.hpp>
 
 namespace fpp::scanner {
 

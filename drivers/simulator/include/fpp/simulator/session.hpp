@@ -17,8 +17,8 @@
 
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <cstdint>
 #include <filesystem>

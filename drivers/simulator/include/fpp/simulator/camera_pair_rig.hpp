@@ -11,8 +11,8 @@
 
 #include "fpp/image.hpp"
 #include "fpp/lens_model.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <memory>
 

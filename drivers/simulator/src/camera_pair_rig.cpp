@@ -1,6 +1,6 @@
-// A second camera for the virtual scanner (fpp/sim/camera_pair_rig.hpp).
+// A second camera for the virtual scanner (fpp/simulator/camera_pair_rig.hpp).
 
-#include "fpp/sim/camera_pair_rig.hpp"
+#include "fpp/simulator/camera_pair_rig.hpp"
 
 #include "vec_math.hpp"
 

@@ -1,11 +1,11 @@
 // Simulated calibration sessions: board poses spread through the calibration
 // volume, one rendered capture set per pose.
 
-#include "fpp/sim/session.hpp"
+#include "fpp/simulator/session.hpp"
 
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
-#include "fpp/sim/renderer.hpp"
+#include "fpp/simulator/renderer.hpp"
 #include "fpp/yaml_fields.hpp"
 #include "vec_math.hpp"
 #include "yaml_emit.hpp"

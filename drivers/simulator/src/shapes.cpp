@@ -1,6 +1,6 @@
 // Ray intersection of the simulator's shapes (camera frame, mm).
 
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include "vec_math.hpp"
 

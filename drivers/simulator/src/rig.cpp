@@ -1,4 +1,4 @@
-#include "fpp/sim/rig.hpp"
+#include "fpp/simulator/rig.hpp"
 
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"

@@ -1,7 +1,7 @@
 // Whole simulated captures: every frame of a sequence plus ground truth.
 
 #include "fpp/patterns.hpp"
-#include "fpp/sim/renderer.hpp"
+#include "fpp/simulator/renderer.hpp"
 #include "fpp/yaml_fields.hpp"
 
 #include <cstdio>

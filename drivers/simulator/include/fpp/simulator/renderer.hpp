@@ -21,8 +21,8 @@
 #include "fpp/capture_set.hpp"
 #include "fpp/image.hpp"
 #include "fpp/parallel.hpp"
-#include "fpp/sim/rig.hpp"
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/rig.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include <cstdint>
 #include <filesystem>

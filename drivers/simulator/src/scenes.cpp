@@ -1,6 +1,6 @@
 // Built-in scenes and scene YAML files (format fpp-scene/1).
 
-#include "fpp/sim/scene.hpp"
+#include "fpp/simulator/scene.hpp"
 
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"

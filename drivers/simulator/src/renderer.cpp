@@ -1,4 +1,4 @@
-#include "fpp/sim/renderer.hpp"
+#include "fpp/simulator/renderer.hpp"
 
 #include "blur.hpp"
 #include "noise.hpp"
