@@ -139,30 +139,44 @@ struct PatchLink {
     }
 };
 
-} // namespace
+// A merge two patches' boundary links agree on: q shifted by k periods
+// continues p, backed by `support` smooth links.
+struct MergeCandidate {
+    std::int32_t p, q, k, support;
+};
 
-void unwrap_centerline(Size size, const float* fraction, const float* other,
-                       const float* modulation, const std::uint8_t* sat, const std::uint8_t* line,
-                       const CenterlineParams& params, std::int32_t* state, std::int32_t* next,
-                       float* out, std::uint8_t* mask) {
-    const int w = size.width;
-    const int h = size.height;
-    const std::int32_t count = static_cast<std::int32_t>(size.area());
-    const float period = params.period;
-    const float inv = 1.0f / period;
-    constexpr std::int32_t kInvalid = -2, kUnvisited = -1;
+// Each group's (forest root's) absolute fringe-order shift, or the reason it
+// has none.
+struct FringeOrders {
+    std::vector<std::int32_t> shift;
+    std::vector<std::uint8_t> flag;
+};
 
-    for (std::int32_t i = 0; i < count; ++i) {
-        const bool ok = modulation[i] >= params.min_modulation && (sat[i] & params.sat_bit) == 0;
-        state[i] = ok ? kUnvisited : kInvalid;
-    }
+constexpr std::int32_t kInvalid = -2, kUnvisited = -1;
+
+// The inputs and per-pixel state the stages of unwrap_centerline share:
+// `state` holds kInvalid, kUnvisited or the pixel's patch, `out` the value
+// unwrapped within its patch (absolute after the last stage).
+struct CenterlineUnwrap {
+    int w;
+    int h;
+    std::int32_t count;
+    const float* fraction;
+    const float* other;
+    const std::uint8_t* line;
+    const CenterlineParams& params;
+    float period;
+    float inv;
+    std::int32_t* state;
+    float* out;
+
     // Wrapped difference f[j] - f[i], in periods, in [-0.5, 0.5].
-    auto wrapped_in = [](const float* f, std::int32_t i, std::int32_t j) {
+    static float wrapped_in(const float* f, std::int32_t i, std::int32_t j) {
         const float d = f[j] - f[i];
         return d - round_fast(d);
-    };
+    }
     // Neighbour of i one step in direction dir (0 left, 1 right, 2 up, 3 down), -1 outside.
-    auto step = [&](std::int32_t i, int dir) -> std::int32_t {
+    std::int32_t step(std::int32_t i, int dir) const {
         const int x = i % w, y = i / w;
         switch (dir) {
         case 0:
@@ -174,11 +188,11 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
         default:
             return y + 1 < h ? i + w : -1;
         }
-    };
-    auto usable = [&](std::int32_t i) { return i >= 0 && state[i] != kInvalid; };
+    }
+    bool usable(std::int32_t i) const { return i >= 0 && state[i] != kInvalid; }
     // Second difference of the link a -> b (direction dir) in f: how much the
     // step d differs from the steps just before and after it; -1 if neither exists.
-    auto curvature_of = [&](const float* f, std::int32_t a, std::int32_t b, int dir, float d) {
+    float curvature_of(const float* f, std::int32_t a, std::int32_t b, int dir, float d) const {
         float c = -1.0f;
         const std::int32_t before = step(a, dir ^ 1);
         if (usable(before))
@@ -187,10 +201,10 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
         if (usable(after))
             c = std::max(c, abs_fast(wrapped_in(f, b, after) - d));
         return c;
-    };
+    }
     // A link is smooth if the wrapped step is small and steady in this axis's
     // phase and in the other axis's (a depth step moves both coordinates).
-    auto smooth = [&](std::int32_t a, std::int32_t b, int dir, float gate, float& d) {
+    bool smooth(std::int32_t a, std::int32_t b, int dir, float gate, float& d) const {
         d = wrapped_in(fraction, a, b);
         if (abs_fast(d) > params.jump_gate)
             return false;
@@ -203,66 +217,151 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
                 return false;
         }
         return true;
-    };
+    }
+
+    void mark_usable(const float* modulation, const std::uint8_t* sat) {
+        for (std::int32_t i = 0; i < count; ++i) {
+            const bool ok =
+                modulation[i] >= params.min_modulation && (sat[i] & params.sat_bit) == 0;
+            state[i] = ok ? kUnvisited : kInvalid;
+        }
+    }
 
     // 1. Patches: pixels joined by strictly smooth links, unwrapped relative
-    //    to their first pixel (breadth first; `next` is the queue).
-    std::int32_t patches = 0;
-    for (std::int32_t seed = 0; seed < count; ++seed) {
-        if (state[seed] != kUnvisited)
-            continue;
-        const std::int32_t id = patches++;
-        state[seed] = id;
-        out[seed] = fraction[seed] * period;
-        std::int32_t head = 0, tail = 0;
-        next[tail++] = seed;
-        while (head < tail) {
-            const std::int32_t a = next[head++];
-            for (int dir = 0; dir < 4; ++dir) {
-                const std::int32_t b = step(a, dir);
-                float d = 0;
-                if (b < 0 || state[b] != kUnvisited || !smooth(a, b, dir, params.patch_gate, d))
-                    continue;
-                state[b] = id;
-                const float pw = fraction[b] * period;
-                out[b] = pw + round_fast((out[a] - pw) * inv) * period;
-                next[tail++] = b;
+    //    to their first pixel (breadth first; `queue` is one int per pixel).
+    //    Returns the number of patches.
+    std::int32_t grow_patches(std::int32_t* queue) {
+        std::int32_t patches = 0;
+        for (std::int32_t seed = 0; seed < count; ++seed) {
+            if (state[seed] != kUnvisited)
+                continue;
+            const std::int32_t id = patches++;
+            state[seed] = id;
+            out[seed] = fraction[seed] * period;
+            std::int32_t head = 0, tail = 0;
+            queue[tail++] = seed;
+            while (head < tail) {
+                const std::int32_t a = queue[head++];
+                for (int dir = 0; dir < 4; ++dir) {
+                    const std::int32_t b = step(a, dir);
+                    float d = 0;
+                    if (b < 0 || state[b] != kUnvisited || !smooth(a, b, dir, params.patch_gate, d))
+                        continue;
+                    state[b] = id;
+                    const float pw = fraction[b] * period;
+                    out[b] = pw + round_fast((out[a] - pw) * inv) * period;
+                    queue[tail++] = b;
+                }
             }
         }
+        return patches;
     }
 
-    // 2. Links between patches. Two patches of one surface (split where the
-    //    phase is noisy or curves) share a boundary whose links are mostly
-    //    smooth and agree on the offset; at an occlusion edge most links jump
-    //    and only a few look smooth by chance.
-    std::vector<PatchLink> links;
-    for (std::int32_t a = 0; a < count; ++a) {
-        if (state[a] < 0)
-            continue;
-        for (int dir : {1, 3}) {
-            const std::int32_t b = step(a, dir);
-            if (b < 0 || state[b] < 0 || state[b] == state[a])
+    // 2a. Every link (right and down) between two patches, with whether it is
+    //     smooth under the merge gate and the offset it implies; sorted so
+    //     that each pair's links are adjacent.
+    std::vector<PatchLink> boundary_links() const {
+        std::vector<PatchLink> links;
+        for (std::int32_t a = 0; a < count; ++a) {
+            if (state[a] < 0)
                 continue;
-            PatchLink link;
-            float d = 0;
-            link.pass = smooth(a, b, dir, params.merge_gate, d);
-            // q shifted by k continues p at this link.
-            const float k = round_fast((out[a] + d * period - out[b]) * inv);
-            link.p = state[a];
-            link.q = state[b];
-            link.k = static_cast<std::int32_t>(k);
-            if (link.p > link.q) {
-                std::swap(link.p, link.q);
-                link.k = -link.k;
+            for (int dir : {1, 3}) {
+                const std::int32_t b = step(a, dir);
+                if (b < 0 || state[b] < 0 || state[b] == state[a])
+                    continue;
+                PatchLink link;
+                float d = 0;
+                link.pass = smooth(a, b, dir, params.merge_gate, d);
+                // q shifted by k continues p at this link.
+                const float k = round_fast((out[a] + d * period - out[b]) * inv);
+                link.p = state[a];
+                link.q = state[b];
+                link.k = static_cast<std::int32_t>(k);
+                if (link.p > link.q) {
+                    std::swap(link.p, link.q);
+                    link.k = -link.k;
+                }
+                links.push_back(link);
             }
-            links.push_back(link);
+        }
+        std::sort(links.begin(), links.end());
+        return links;
+    }
+
+    // 3. Seeds: pixels lit by the centerline whose wrapped position matches
+    //    the line.
+    bool on_line(std::int32_t i) const {
+        if (line[i] == 0 || state[i] < 0)
+            return false;
+        const double position = params.position;
+        const double period_d = static_cast<double>(period);
+        const double reach = params.half_width + 1.0;
+        double offset = static_cast<double>(fraction[i]) * period_d - position;
+        offset -= period_d * std::floor(offset / period_d + 0.5);
+        return std::abs(offset) <= reach;
+    }
+    // Seeds in runs (at least two such 8-neighbours), so that a stray bright
+    // pixel cannot vote; each votes for its group's fringe order. Sorted
+    // (root, fringe-order shift) pairs.
+    std::vector<std::pair<std::int32_t, std::int32_t>> line_votes(OffsetForest& forest) const {
+        const double position = params.position;
+        const double period_d = static_cast<double>(period);
+        std::vector<std::pair<std::int32_t, std::int32_t>> votes;
+        for (std::int32_t i = 0; i < count; ++i) {
+            if (!on_line(i))
+                continue;
+            const int x = i % w, y = i / w;
+            int neighbours = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    if ((dx == 0 && dy == 0) || x + dx < 0 || x + dx >= w || y + dy < 0 ||
+                        y + dy >= h)
+                        continue;
+                    neighbours += on_line(i + dy * w + dx) ? 1 : 0;
+                }
+            if (neighbours < 2)
+                continue;
+            const auto [root, offset] = forest.find(state[i]);
+            const double value = static_cast<double>(out[i]) + offset * period_d;
+            votes.emplace_back(
+                root, static_cast<std::int32_t>(std::lround((position - value) / period_d)));
+        }
+        std::sort(votes.begin(), votes.end());
+        return votes;
+    }
+
+    // 4. Absolute coordinates for groups with a centerline; the rest has no cue.
+    void apply_orders(OffsetForest& forest, const FringeOrders& orders, std::uint8_t* mask) {
+        for (std::int32_t i = 0; i < count; ++i) {
+            if (state[i] < 0) {
+                out[i] = kNaN; // flagged already (low modulation or saturated)
+                continue;
+            }
+            const auto [root, offset] = forest.find(state[i]);
+            const std::uint8_t f = orders.flag[static_cast<std::size_t>(root)];
+            if (f != 0) {
+                out[i] = kNaN;
+                mask[i] = static_cast<std::uint8_t>(mask[i] | f);
+            } else {
+                out[i] +=
+                    static_cast<float>(offset + orders.shift[static_cast<std::size_t>(root)]) *
+                    period;
+                if (out[i] < -1.5f || out[i] > params.highest) {
+                    out[i] = kNaN;
+                    mask[i] = static_cast<std::uint8_t>(mask[i] | kDecodeOutOfRange);
+                }
+            }
         }
     }
-    std::sort(links.begin(), links.end());
-    struct Candidate {
-        std::int32_t p, q, k, support;
-    };
-    std::vector<Candidate> candidates;
+};
+
+// 2b. Two patches of one surface (split where the phase is noisy or curves)
+//     share a boundary whose links are mostly smooth and agree on the offset;
+//     at an occlusion edge most links jump and only a few look smooth by
+//     chance. The pairs that pass, best supported first.
+std::vector<MergeCandidate> agreed_merges(const std::vector<PatchLink>& links,
+                                          const CenterlineParams& params) {
+    std::vector<MergeCandidate> candidates;
     for (std::size_t s = 0; s < links.size();) {
         std::size_t e = s;
         int total = 0, passing = 0, best = 0;
@@ -287,47 +386,19 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
             candidates.push_back({links[s].p, links[s].q, best_k, best});
         s = e;
     }
-    std::stable_sort(candidates.begin(), candidates.end(),
-                     [](const Candidate& x, const Candidate& y) { return x.support > y.support; });
-    OffsetForest forest(patches);
-    for (const Candidate& c : candidates)
-        forest.join(c.p, c.q, c.k);
+    std::stable_sort(
+        candidates.begin(), candidates.end(),
+        [](const MergeCandidate& x, const MergeCandidate& y) { return x.support > y.support; });
+    return candidates;
+}
 
-    // 3. Seeds: pixels lit by the centerline whose wrapped position matches
-    //    the line, in runs (at least two such 8-neighbours) so that a stray
-    //    bright pixel cannot vote. Each votes for its group's fringe order.
-    const double position = params.position;
-    const double period_d = static_cast<double>(period);
-    const double reach = params.half_width + 1.0;
-    auto on_line = [&](std::int32_t i) {
-        if (line[i] == 0 || state[i] < 0)
-            return false;
-        double offset = static_cast<double>(fraction[i]) * period_d - position;
-        offset -= period_d * std::floor(offset / period_d + 0.5);
-        return std::abs(offset) <= reach;
-    };
-    std::vector<std::pair<std::int32_t, std::int32_t>> votes; // (root, fringe-order shift)
-    for (std::int32_t i = 0; i < count; ++i) {
-        if (!on_line(i))
-            continue;
-        const int x = i % w, y = i / w;
-        int neighbours = 0;
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                if ((dx == 0 && dy == 0) || x + dx < 0 || x + dx >= w || y + dy < 0 || y + dy >= h)
-                    continue;
-                neighbours += on_line(i + dy * w + dx) ? 1 : 0;
-            }
-        if (neighbours < 2)
-            continue;
-        const auto [root, offset] = forest.find(state[i]);
-        const double value = static_cast<double>(out[i]) + offset * period_d;
-        votes.emplace_back(root,
-                           static_cast<std::int32_t>(std::lround((position - value) / period_d)));
-    }
-    std::sort(votes.begin(), votes.end());
-    std::vector<std::int32_t> shift(static_cast<std::size_t>(patches), 0);
-    std::vector<std::uint8_t> flag(static_cast<std::size_t>(patches), kDecodeNoCue);
+// 3b. Each group's fringe order from its sorted votes: the most common one
+//     when it has `min_votes` and a 2/3 majority; disputed when enough votes
+//     disagree; no cue without votes.
+FringeOrders count_votes(const std::vector<std::pair<std::int32_t, std::int32_t>>& votes,
+                         std::int32_t patches, const CenterlineParams& params) {
+    FringeOrders orders{std::vector<std::int32_t>(static_cast<std::size_t>(patches), 0),
+                        std::vector<std::uint8_t>(static_cast<std::size_t>(patches), kDecodeNoCue)};
     for (std::size_t s = 0; s < votes.size();) {
         const std::int32_t root = votes[s].first;
         std::size_t e = s;
@@ -346,33 +417,40 @@ void unwrap_centerline(Size size, const float* fraction, const float* other,
             e = f;
         }
         if (best >= params.min_votes && 3 * best >= 2 * total) {
-            shift[static_cast<std::size_t>(root)] = best_k;
-            flag[static_cast<std::size_t>(root)] = 0;
+            orders.shift[static_cast<std::size_t>(root)] = best_k;
+            orders.flag[static_cast<std::size_t>(root)] = 0;
         } else if (total >= params.min_votes) {
-            flag[static_cast<std::size_t>(root)] = kDecodeUnwrapInconsistent;
+            orders.flag[static_cast<std::size_t>(root)] = kDecodeUnwrapInconsistent;
         }
         s = e;
     }
+    return orders;
+}
 
-    // 4. Absolute coordinates for groups with a centerline; the rest has no cue.
-    for (std::int32_t i = 0; i < count; ++i) {
-        if (state[i] < 0) {
-            out[i] = kNaN; // flagged already (low modulation or saturated)
-            continue;
-        }
-        const auto [root, offset] = forest.find(state[i]);
-        const std::uint8_t f = flag[static_cast<std::size_t>(root)];
-        if (f != 0) {
-            out[i] = kNaN;
-            mask[i] = static_cast<std::uint8_t>(mask[i] | f);
-        } else {
-            out[i] += static_cast<float>(offset + shift[static_cast<std::size_t>(root)]) * period;
-            if (out[i] < -1.5f || out[i] > params.highest) {
-                out[i] = kNaN;
-                mask[i] = static_cast<std::uint8_t>(mask[i] | kDecodeOutOfRange);
-            }
-        }
-    }
+} // namespace
+
+void unwrap_centerline(Size size, const float* fraction, const float* other,
+                       const float* modulation, const std::uint8_t* sat, const std::uint8_t* line,
+                       const CenterlineParams& params, std::int32_t* state, std::int32_t* next,
+                       float* out, std::uint8_t* mask) {
+    CenterlineUnwrap u{size.width,
+                       size.height,
+                       static_cast<std::int32_t>(size.area()),
+                       fraction,
+                       other,
+                       line,
+                       params,
+                       params.period,
+                       1.0f / params.period,
+                       state,
+                       out};
+    u.mark_usable(modulation, sat);
+    const std::int32_t patches = u.grow_patches(next);
+    OffsetForest forest(patches);
+    for (const MergeCandidate& c : agreed_merges(u.boundary_links(), params))
+        forest.join(c.p, c.q, c.k);
+    const FringeOrders orders = count_votes(u.line_votes(forest), patches, params);
+    u.apply_orders(forest, orders, mask);
 }
 
 } // namespace fpp::detail
