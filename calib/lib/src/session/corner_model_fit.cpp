@@ -33,27 +33,22 @@ struct CornerPrior {
     double ku = 0, kv = 0, gx = 0, gy = 0;
 };
 
-// One corner: Levenberg-Marquardt on the blurred checker corner model.
-// Parameters: cx, cy (relative to the start), edge angles tu, tv, blur s,
-// shading a0, ax, ay (per window radius) and contrast b; the contrast's
-// slope is given (a fitted one trades with the corner's position in a small
-// window: at 400 x 300 it tripled the spread of the focal lengths).
-bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, double tv,
-                      const CornerPrior& prior, double radius, Vec2& out, double& sigma,
-                      double& contrast_out) {
-    const double ku = prior.ku, kv = prior.kv;
+// Per sample of a corner's window: offset from the start (px), shading
+// coordinates (per window radius), the contrast's tilt, and the value.
+struct CornerSample {
+    double dx, dy, sx, sy, tilt, value;
+};
+
+// The finite pixels within `radius` of the start; false when the window
+// leaves the image.
+bool window_samples(const Image<float>& image, const Vec2& start, double radius,
+                    const CornerPrior& prior, std::vector<CornerSample>& samples) {
     const int x0 = static_cast<int>(std::ceil(start[0] - radius));
     const int x1 = static_cast<int>(std::floor(start[0] + radius));
     const int y0 = static_cast<int>(std::ceil(start[1] - radius));
     const int y1 = static_cast<int>(std::floor(start[1] + radius));
     if (x0 < 0 || y0 < 0 || x1 >= image.width() || y1 >= image.height())
         return false;
-    // Per sample: offset from the start (px), shading coordinates (per
-    // window radius), the contrast's tilt, and the value.
-    struct Sample {
-        double dx, dy, sx, sy, tilt, value;
-    };
-    std::vector<Sample> samples;
     const double inv_r = 1.0 / radius;
     for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) {
@@ -65,30 +60,39 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
             samples.push_back({dx, dy, dx * inv_r, dy * inv_r, 1 + prior.gx * dx + prior.gy * dy,
                                static_cast<double>(v)});
         }
-    if (samples.size() < 30)
-        return false;
-    constexpr int kParams = 9;
-    constexpr int kLinear = 4; // a0, ax, ay, b
-    using Vec = Eigen::Matrix<double, kParams, 1>;
-    using Mat = Eigen::Matrix<double, kParams, kParams>;
-    Vec p;
-    p << 0, 0, tu, tv, 1.0, 0, 0, 0, 0;
-    const double k = 1.0 / std::sqrt(2.0);
-    const double two_over_sqrt_pi = 2.0 / std::sqrt(3.14159265358979323846);
+    return true;
+}
+
+constexpr int kCornerParams = 9;
+constexpr int kCornerLinear = 4; // a0, ax, ay, b
+using CornerVec = Eigen::Matrix<double, kCornerParams, 1>;
+using CornerMat = Eigen::Matrix<double, kCornerParams, kCornerParams>;
+
+// The blurred checker corner model over one window's samples, with the
+// edges' given bends. `rows` holds the Jacobian and `res` the residuals,
+// allocated once per corner.
+struct CornerModel {
+    CornerModel(const std::vector<CornerSample>& s, double ku_, double kv_)
+        : samples(s), ku(ku_), kv(kv_), rows(static_cast<Eigen::Index>(s.size()), kCornerParams),
+          res(static_cast<Eigen::Index>(s.size())) {}
+
+    const std::vector<CornerSample>& samples;
+    double ku, kv;
+    Eigen::Matrix<double, Eigen::Dynamic, kCornerParams> rows;
+    Eigen::VectorXd res;
+
     // Cost (sum of squared residuals, model - value) at q and, when A is
-    // given, the normal equations J^T J (A) and J^T r (g). `rows` holds
-    // the Jacobian and `res` the residuals, allocated once per corner.
-    using Rows = Eigen::Matrix<double, Eigen::Dynamic, kParams>;
-    const Eigen::Index n = static_cast<Eigen::Index>(samples.size());
-    Rows rows(n, kParams);
-    Eigen::VectorXd res(n);
-    auto evaluate = [&](const Vec& q, Mat* A, Vec* g) {
+    // given, the normal equations J^T J (A) and J^T r (g).
+    double evaluate(const CornerVec& q, CornerMat* A, CornerVec* g) {
+        const double k = 1.0 / std::sqrt(2.0);
+        const double two_over_sqrt_pi = 2.0 / std::sqrt(3.14159265358979323846);
+        const Eigen::Index n = static_cast<Eigen::Index>(samples.size());
         const double su = std::sin(q(2)), cu = std::cos(q(2)), sv = std::sin(q(3)),
                      cv = std::cos(q(3));
         const double s = q(4);
         double cost = 0;
         for (Eigen::Index i = 0; i < n; ++i) {
-            const Sample& o = samples[static_cast<std::size_t>(i)];
+            const CornerSample& o = samples[static_cast<std::size_t>(i)];
             const double ex = o.dx - q(0), ey = o.dy - q(1);
             // Signed distances across the edges along u and v; lens distortion
             // bends the edges (a straight-edge model moves corners far from the
@@ -128,40 +132,48 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
             g->noalias() = rows.transpose() * res;
         }
         return cost;
-    };
-    Mat A;
-    Vec g;
-    // Shading and contrast first, linear for the starting geometry. NB: this
-    // start is their best fit with its sign turned (g = J^T r and r = -value
-    // at zero), which LM's first step undoes; the corner model's accuracy
-    // was measured from this start. From the unturned fit the corners at
-    // full size agree to 1e-5 px, but a joint calibration at 400 x 300 moves
-    // by 0.008 mm of depth (HybridCalibrate tests), not yet understood.
-    evaluate(p, &A, &g);
-    {
-        const Eigen::Matrix<double, kLinear, 1> lin =
-            A.bottomRightCorner<kLinear, kLinear>().ldlt().solve(g.tail<kLinear>());
-        if (!lin.allFinite())
-            return false;
-        p.tail<kLinear>() += lin;
     }
-    double cost = evaluate(p, &A, &g);
+};
+
+// Shading and contrast first, linear for the starting geometry. NB: this
+// start is their best fit with its sign turned (g = J^T r and r = -value
+// at zero), which LM's first step undoes; the corner model's accuracy
+// was measured from this start. From the unturned fit the corners at
+// full size agree to 1e-5 px, but a joint calibration at 400 x 300 moves
+// by 0.008 mm of depth (HybridCalibrate tests), not yet understood.
+bool start_shading_and_contrast(CornerModel& model, CornerVec& p) {
+    CornerMat A;
+    CornerVec g;
+    model.evaluate(p, &A, &g);
+    const Eigen::Matrix<double, kCornerLinear, 1> lin =
+        A.bottomRightCorner<kCornerLinear, kCornerLinear>().ldlt().solve(g.tail<kCornerLinear>());
+    if (!lin.allFinite())
+        return false;
+    p.tail<kCornerLinear>() += lin;
+    return true;
+}
+
+// Levenberg-Marquardt from p, keeping the blur in (0.05, radius].
+void refine_levenberg_marquardt(CornerModel& model, double radius, CornerVec& p) {
+    CornerMat A;
+    CornerVec g;
+    double cost = model.evaluate(p, &A, &g);
     double lambda = 1e-3;
-    Mat trial_A;
-    Vec trial_g;
+    CornerMat trial_A;
+    CornerVec trial_g;
     for (int it = 0; it < 40; ++it) {
         bool accepted = false;
         for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {
-            Mat M = A;
+            CornerMat M = A;
             M.diagonal() += lambda * A.diagonal();
-            const Vec step = -M.ldlt().solve(g);
-            const Vec trial = p + step;
+            const CornerVec step = -M.ldlt().solve(g);
+            const CornerVec trial = p + step;
             if (!trial.allFinite() || !(trial(4) > 0.05) || trial(4) > radius) {
                 lambda *= 10;
                 continue;
             }
             // With its normal equations: most trials are accepted.
-            const double c = evaluate(trial, &trial_A, &trial_g);
+            const double c = model.evaluate(trial, &trial_A, &trial_g);
             if (c < cost) {
                 const double decrease = (cost - c) / cost;
                 p = trial;
@@ -179,6 +191,25 @@ bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, d
         if (!accepted)
             break;
     }
+}
+
+// One corner: Levenberg-Marquardt on the blurred checker corner model.
+// Parameters: cx, cy (relative to the start), edge angles tu, tv, blur s,
+// shading a0, ax, ay (per window radius) and contrast b; the contrast's
+// slope is given (a fitted one trades with the corner's position in a small
+// window: at 400 x 300 it tripled the spread of the focal lengths).
+bool fit_corner_model(const Image<float>& image, const Vec2& start, double tu, double tv,
+                      const CornerPrior& prior, double radius, Vec2& out, double& sigma,
+                      double& contrast_out) {
+    std::vector<CornerSample> samples;
+    if (!window_samples(image, start, radius, prior, samples) || samples.size() < 30)
+        return false;
+    CornerModel model(samples, prior.ku, prior.kv);
+    CornerVec p;
+    p << 0, 0, tu, tv, 1.0, 0, 0, 0, 0;
+    if (!start_shading_and_contrast(model, p))
+        return false;
+    refine_levenberg_marquardt(model, radius, p);
     out = {start[0] + p(0), start[1] + p(1)};
     sigma = p(4);
     contrast_out = p(8);
