@@ -9,7 +9,7 @@
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/hardware_board.hpp"
 #include "fpp/scanner/log.hpp"
-#include "fpp/scanner/network_face.hpp"
+#include "fpp/scanner/networked_scanner.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/scanner_service.hpp"
@@ -199,10 +199,10 @@ int run(const Options& o, const fpp::scanner::Logger& log) {
             const ServiceOptions options{table_path, board.settings_file, session_board_yaml,
                                          board.sim.has_value()};
             if (serving) {
-                NetworkFace face(board, scanner, devices, log, options);
-                face.run(mode, g_stop);
+                NetworkedScanner networked(board, scanner, devices, log, options);
+                networked.run(mode, g_stop);
             } else {
-                EventHub events; // nobody listens without a network face
+                EventHub events; // nobody listens without the network
                 ApiEvents rendered(events);
                 ScannerService service(board, scanner, devices, rendered, log, options);
                 service.run(mode, g_stop);

@@ -39,7 +39,6 @@ TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
     fpp::test::Journal journal;
     RunningService rs(journal.sink());
 
-    Scanner& scanner = *rs.scanner;
     ScannerService& service = *rs.service;
     SimBoard& sim = rs.sim;
     const auto& stream = rs.stream;
@@ -123,7 +122,7 @@ TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
     EXPECT_EQ(journal.count("button pressed while a scan is queued: ignored") +
                   journal.count("during the scan: ignored"),
               api_won);
-    EXPECT_EQ(scanner.scans_completed(), kRounds);
+    EXPECT_EQ(service.status().scans_completed, kRounds);
     EXPECT_EQ(list_scans(store).size(), static_cast<std::size_t>(kRounds));
 
     // Events: started, frames, decoded, written; never a start inside a scan.
@@ -162,7 +161,6 @@ TEST(ScannerService, ButtonAndApiAtTheSameMomentStartOneScan) {
 // page, fpp-calib's session recorder) must not be refused as busy.
 TEST(ScannerService, ScanRequestedOnWrittenIsTaken) {
     RunningService rs;
-    Scanner& scanner = *rs.scanner;
     ScannerService& service = *rs.service;
     const auto& stream = rs.stream;
     const fs::path store = rs.store();
@@ -191,11 +189,11 @@ TEST(ScannerService, ScanRequestedOnWrittenIsTaken) {
         }
     }
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (scanner.scans_completed() < kScans && std::chrono::steady_clock::now() < deadline)
+    while (service.status().scans_completed < kScans && std::chrono::steady_clock::now() < deadline)
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
     rs.stop_loop();
     EXPECT_EQ(refused, 0);
-    EXPECT_EQ(scanner.scans_completed(), kScans);
+    EXPECT_EQ(service.status().scans_completed, kScans);
     EXPECT_EQ(list_scans(store).size(), static_cast<std::size_t>(kScans));
 }
 

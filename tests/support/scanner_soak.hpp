@@ -2,7 +2,7 @@
 // A soak of the scanner as it runs in a cell: many scans on one process, the
 // sim board's button and the HTTP API (a real socket on loopback) taking
 // turns, the store pruned to a small limit. The scanner is the network
-// daemon's own parts (NetworkFace: service, API, HTTP server) on a tiny
+// daemon's own parts (NetworkedScanner: service, API, HTTP server) on a tiny
 // virtual scanner (the paper rig with its effects, camera binned 16 x 16 to
 // 100 x 75, projector 8 x 8 to 160 x 100, virtual clock), so that 10,000
 // scans take minutes. Resident memory and open descriptors are sampled after
@@ -15,7 +15,7 @@
 #include "fpp/error.hpp"
 #include "fpp/scanner/board_config.hpp"
 #include "fpp/scanner/log.hpp"
-#include "fpp/scanner/network_face.hpp"
+#include "fpp/scanner/networked_scanner.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/scanner/scanner.hpp"
 #include "fpp/scanner/sim_board.hpp"
@@ -167,11 +167,12 @@ inline SoakFigures run_soak(const SoakOptions& o, const std::filesystem::path& d
             f.first_failure = message;
     });
     scanner::Scanner scanner(board, sim.devices(), log);
-    scanner::NetworkFace face(board, scanner, sim.devices(), log,
-                              scanner::ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
-    const int port = face.port();
+    scanner::NetworkedScanner networked(
+        board, scanner, sim.devices(), log,
+        scanner::ServiceOptions{dir / "table.fpt", std::nullopt, "", true});
+    const int port = networked.port();
     std::atomic<bool> stop{false};
-    std::thread loop([&] { face.run(scanner::ScanMode::scan, stop); });
+    std::thread loop([&] { networked.run(scanner::ScanMode::scan, stop); });
 
     std::vector<long> rss, fds;
     rss.reserve(static_cast<std::size_t>(o.scans));

@@ -28,21 +28,11 @@ using fpp::Vec2;
 using fpp::Vec3;
 using namespace fpp::sim;
 
-Vec3 sub(const Vec3& a, const Vec3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-Vec3 add(const Vec3& a, const Vec3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-Vec3 scale(const Vec3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
-double dot(const Vec3& a, const Vec3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-Vec3 unit(const Vec3& a) {
-    return scale(a, 1 / std::sqrt(dot(a, a)));
-}
+using fpp::vec::add;
+using fpp::vec::dot;
+using fpp::vec::normalised;
+using fpp::vec::scale;
+using fpp::vec::sub;
 
 Image<std::uint8_t> uniform(Size size, int level) {
     return Image<std::uint8_t>(size, 1, static_cast<std::uint8_t>(level));
@@ -71,10 +61,10 @@ Peak brightest(const Image<float>& image) {
 // half vector of the directions to the projector centre and to the camera
 // centre (the mirror point of the projector centre seen from the camera).
 Vec3 mirror_point(const Vec3& c, double r, const Vec3& projector) {
-    Vec3 n = unit(scale(c, -1.0));
+    Vec3 n = normalised(scale(c, -1.0));
     for (int i = 0; i < 200; ++i) {
         const Vec3 p = add(c, scale(n, r));
-        n = unit(add(unit(sub(projector, p)), unit(scale(p, -1.0))));
+        n = normalised(add(normalised(sub(projector, p)), normalised(scale(p, -1.0))));
     }
     return add(c, scale(n, r));
 }
@@ -100,8 +90,8 @@ TEST(SimReflectance, HighlightSitsWhereTheSphereNormalIsTheHalfVector) {
     const Peak diffuse = brightest(white_m);
     const double diffuse_off = std::hypot(diffuse.x - expected[0], diffuse.y - expected[1]);
     // Peak radiance: white level x cos(incidence) x (albedo + ks (n + 8) / 8) at the mirror point.
-    const Vec3 normal = unit(sub(p, centre));
-    const double cos_inc = dot(normal, unit(sub(projector, p)));
+    const Vec3 normal = normalised(sub(p, centre));
+    const double cos_inc = dot(normal, normalised(sub(projector, p)));
     const double peak =
         rig.sensor.white_level * cos_inc * (albedo + lobe.specular * (lobe.shininess + 8) / 8);
     std::printf("highlight: brightest pixel (%d, %d), mirror point projects to (%.2f, %.2f): "
@@ -343,7 +333,7 @@ TEST(SimReflectance, HdrPartsFileIsTheBuiltInScene) {
     for (double y = -0.22; y <= 0.22; y += 0.011)
         for (double x = -0.29; x <= 0.29; x += 0.013) {
             Hit a, b;
-            const Vec3 d = unit({x, y, 1});
+            const Vec3 d = normalised({x, y, 1});
             ASSERT_EQ(file.intersect({0, 0, 0}, d, a), builtin.intersect({0, 0, 0}, d, b));
             EXPECT_EQ(a.object, b.object);
             EXPECT_EQ(a.t, b.t);

@@ -2,7 +2,7 @@
 
 #include "fpp/simulator/camera_pair_rig.hpp"
 
-#include "vec_math.hpp"
+#include "fpp/vec3.hpp"
 
 #include <stdexcept>
 #include <string>

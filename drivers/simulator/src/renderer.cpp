@@ -1,8 +1,8 @@
 #include "fpp/simulator/renderer.hpp"
 
 #include "blur.hpp"
+#include "fpp/vec3.hpp"
 #include "noise.hpp"
-#include "vec_math.hpp"
 
 #include <algorithm>
 #include <cmath>

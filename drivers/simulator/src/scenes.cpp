@@ -3,8 +3,8 @@
 #include "fpp/simulator/scene.hpp"
 
 #include "fpp/error.hpp"
+#include "fpp/vec3.hpp"
 #include "fpp/yaml_fields.hpp"
-#include "vec_math.hpp"
 
 #include <algorithm>
 #include <stdexcept>

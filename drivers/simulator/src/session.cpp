@@ -6,8 +6,8 @@
 #include "fpp/atomic_file.hpp"
 #include "fpp/error.hpp"
 #include "fpp/simulator/renderer.hpp"
+#include "fpp/vec3.hpp"
 #include "fpp/yaml_fields.hpp"
-#include "vec_math.hpp"
 #include "yaml_emit.hpp"
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 
 #include "fpp/simulator/scene.hpp"
 
-#include "vec_math.hpp"
+#include "fpp/vec3.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "exposure_plan.hpp"
+#include "fpp/scanner/exposure_plan.hpp"
 
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"

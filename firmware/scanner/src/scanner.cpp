@@ -1,6 +1,5 @@
 #include "fpp/scanner/scanner.hpp"
 
-#include "exposure_plan.hpp"
 #include "fpp/atomic_file.hpp"
 #include "fpp/capture_set.hpp"
 #include "fpp/drivers/device_error.hpp"
@@ -10,6 +9,7 @@
 #include "fpp/patterns.hpp"
 #include "fpp/point_cloud.hpp"
 #include "fpp/projector_response.hpp"
+#include "fpp/scanner/exposure_plan.hpp"
 #include "fpp/scanner/scan_store.hpp"
 #include "fpp/table_kernel.hpp"
 #include "fpp/yaml_fields.hpp"
@@ -240,7 +240,6 @@ ScanOutcome Scanner::scan(ScanMode mode, const std::atomic<bool>* stop, fs::path
         try {
             ScanOutcome outcome = attempt(mode, stop, folder);
             outcome.attempts = attempt_no;
-            ++scans_completed_;
             dev_.led.set(LedState::ready);
             if (observer_)
                 observer_->written(outcome);

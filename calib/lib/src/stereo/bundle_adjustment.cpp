@@ -12,13 +12,8 @@ namespace fpp::calib::detail {
 
 namespace {
 
-Vec3 cross(const Vec3& a, const Vec3& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
-Vec3 add(const Vec3& a, const Vec3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
+using vec::add;
+using vec::cross;
 
 // Adds an increment in the order of kLensParameters.
 void add_lens_parameters(LensModel& l, const double* delta) {

@@ -25,9 +25,7 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-Vec3 add(const Vec3& a, const Vec3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
+using vec::add;
 
 bool projector_valid(const PoseObservations& o, std::size_t k) {
     return std::isfinite(o.projector[k][0]) && std::isfinite(o.projector[k][1]);

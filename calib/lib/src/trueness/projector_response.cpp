@@ -10,13 +10,8 @@ namespace fpp::calib::detail {
 
 namespace {
 
-Vec3 cross(const Vec3& a, const Vec3& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
-double dot(const Vec3& a, const Vec3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
+using vec::cross;
+using vec::dot;
 
 // One derivative of a residual pair: its column in a stage, d r_u, d r_v.
 struct Entry {

@@ -36,14 +36,9 @@
 // Rotations: R = Rz(c) Ry(b) Rx(a) for Euler angles (a, b, c) in degrees, i.e.
 // rotate about x first, then y, then z (fixed axes). X_p = R X_c + t.
 
-#include <array>
+#include "fpp/vec3.hpp"
 
 namespace fpp {
-
-using Vec2 = std::array<double, 2>;
-using Vec3 = std::array<double, 3>;
-using Mat3 = std::array<double, 9>; // row-major
-using Mat2 = std::array<double, 4>; // row-major
 
 struct LensModel {
     double fu = 1, fv = 1, cu = 0, cv = 0, skew = 0;

@@ -160,7 +160,6 @@ public:
     const CoefficientTable& table() const { return table_; }
     std::uint64_t table_file_hash() const { return table_file_hash_; }
     const std::filesystem::path& table_path() const { return table_path_; }
-    int scans_completed() const { return scans_completed_; }
 
 private:
     struct Captured;
@@ -224,7 +223,6 @@ private:
     DecodeResult fused_;               // HDR
     Image<float> sigma_;               // predicted coordinate sigma (projector px)
     PointCloud cloud_;
-    std::atomic<int> scans_completed_{0};
 };
 
 } // namespace fpp::scanner

@@ -1,11 +1,18 @@
 #pragma once
-// Small 3-vector helpers for the simulator (internal).
-
-#include "fpp/lens_model.hpp"
-
+// Small fixed-size vectors and 3 x 3 matrices (row-major) of doubles, and the
+// 3-vector arithmetic the simulator and the calibration share. Frames and
+// units are the caller's (camera frame, mm, everywhere in fpp).
+#include <array>
 #include <cmath>
 
-namespace fpp::sim::vec {
+namespace fpp {
+
+using Vec2 = std::array<double, 2>;
+using Vec3 = std::array<double, 3>;
+using Mat3 = std::array<double, 9>; // row-major
+using Mat2 = std::array<double, 4>; // row-major
+
+namespace vec {
 
 inline Vec3 add(const Vec3& a, const Vec3& b) {
     return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
@@ -33,4 +40,6 @@ inline Vec3 column(const Mat3& m, int j) {
     return {m[j], m[3 + j], m[6 + j]};
 }
 
-} // namespace fpp::sim::vec
+} // namespace vec
+
+} // namespace fpp

@@ -15,16 +15,16 @@
 
 namespace fpp::scanner {
 
-class NetworkFace {
+class NetworkedScanner {
 public:
     // Reads the token, finds the page and starts listening (logged as
     // "http: listening on ADDRESS:PORT"). Throws InputError for a bad token
     // file, IoError when it cannot listen.
-    NetworkFace(const BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
-                ServiceOptions options);
-    ~NetworkFace();
-    NetworkFace(const NetworkFace&) = delete;
-    NetworkFace& operator=(const NetworkFace&) = delete;
+    NetworkedScanner(const BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
+                     ServiceOptions options);
+    ~NetworkedScanner();
+    NetworkedScanner(const NetworkedScanner&) = delete;
+    NetworkedScanner& operator=(const NetworkedScanner&) = delete;
 
     // Button presses (scans in `button_mode`) and requests until `stop`.
     void run(ScanMode button_mode, const std::atomic<bool>& stop);
@@ -32,8 +32,8 @@ public:
     int port() const;
 
 private:
-    struct Parts;
-    std::unique_ptr<Parts> parts_;
+    struct Stack;
+    std::unique_ptr<Stack> stack_;
 };
 
 // Where the page's files are: the board's (or --web-root), else installed

@@ -1,4 +1,4 @@
-#include "fpp/scanner/network_face.hpp"
+#include "fpp/scanner/networked_scanner.hpp"
 
 #include "fpp/error.hpp"
 #include "fpp/scanner/access_token.hpp"
@@ -30,20 +30,22 @@ fs::path find_web_root(const std::optional<fs::path>& configured) {
     return FPP_SOURCE_WEB_ROOT;
 }
 
-struct NetworkFace::Parts {
+// The service and what serves it, in construction order (destroyed in
+// reverse: the server stops first).
+struct NetworkedScanner::Stack {
     EventHub events;
     ApiEvents rendered{events};
     ScannerService service;
     Api api;
     HttpServer server; // last: stopped first
-    Parts(const BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
+    Stack(const BoardConfig& board, Scanner& scanner, Devices devices, const Logger& log,
           ServiceOptions service_options, ApiOptions api_options, HttpServerOptions http)
         : service(board, scanner, devices, rendered, log, std::move(service_options)),
           api(service, events, log, std::move(api_options)), server(http, api, log) {}
 };
 
-NetworkFace::NetworkFace(const BoardConfig& board, Scanner& scanner, Devices devices,
-                         const Logger& log, ServiceOptions options) {
+NetworkedScanner::NetworkedScanner(const BoardConfig& board, Scanner& scanner, Devices devices,
+                                   const Logger& log, ServiceOptions options) {
     const HttpConfig& h = *board.http;
     ApiOptions api;
     api.token = read_token_file(h.token_file);
@@ -65,25 +67,25 @@ NetworkFace::NetworkFace(const BoardConfig& board, Scanner& scanner, Devices dev
     http.port = where.port;
     http.max_connections = h.max_connections;
     http.timeout = h.timeout;
-    parts_ = std::make_unique<Parts>(board, scanner, devices, log, std::move(options),
+    stack_ = std::make_unique<Stack>(board, scanner, devices, log, std::move(options),
                                      std::move(api), http);
-    log.info("http: listening on " + parts_->server.address() + " (page from " + web_root.string() +
+    log.info("http: listening on " + stack_->server.address() + " (page from " + web_root.string() +
              ")");
 }
 
-NetworkFace::~NetworkFace() {
+NetworkedScanner::~NetworkedScanner() {
     // Open event streams end first, so that the server's threads can finish.
-    if (parts_)
-        parts_->events.close();
+    if (stack_)
+        stack_->events.close();
 }
 
-void NetworkFace::run(ScanMode button_mode, const std::atomic<bool>& stop) {
-    parts_->service.run(button_mode, stop);
-    parts_->events.close();
+void NetworkedScanner::run(ScanMode button_mode, const std::atomic<bool>& stop) {
+    stack_->service.run(button_mode, stop);
+    stack_->events.close();
 }
 
-int NetworkFace::port() const {
-    return parts_->server.port();
+int NetworkedScanner::port() const {
+    return stack_->server.port();
 }
 
 } // namespace fpp::scanner
