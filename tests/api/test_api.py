@@ -8,7 +8,7 @@ bad requests are test_api_refusals.py).
         --tmp SCRATCH [EveryEndpoint | Class.test_name ...]
 
 The sim board's button cannot be pressed from outside the daemon: the race
-of a press and a request is tests/integration/test_scanner_service.cpp.
+of a press and a request is tests/integration/scanner/test_scanner_service.cpp.
 """
 
 import hashlib

@@ -8,7 +8,7 @@ daemon on the simulated board, on loopback: the refusals (401/404/405/409/
         --tmp SCRATCH [Refusals | BadRequests | Class.test_name ...]
 
 The sim board's button cannot be pressed from outside the daemon: the race
-of a press and a request is tests/integration/test_scanner_service.cpp.
+of a press and a request is tests/integration/scanner/test_scanner_service.cpp.
 """
 
 import json

@@ -69,7 +69,7 @@ protected:
             << "sequence:\n  - pattern: white\n  - pattern: black\n  - pattern: gray\n"
                "    axis: x\n    period: 1.25\n    bits: 10\n";
         // Micro phase shifting alone: 5 periods of 16 to 20.4 px (beats
-        // 1400 / j px, j = 1, 11, 16, 19: tests/integration/test_decode_families.cpp).
+        // 1400 / j px, j = 1, 11, 16, 19: tests/integration/core/test_decode_families.cpp).
         std::ofstream(*dir_ / "micro.yaml")
             << "sequence:\n  - pattern: micro_phase\n    axis: x\n"
                "    periods: [16.0, 16.184971, 18.300654, 19.58042, 20.437956]\n";
@@ -190,7 +190,7 @@ TEST_F(CliReconstruct, XOnlyCaptureUsesTheIterativeSolve) {
 // A capture with no phase block reconstructs from its code alone, each pixel
 // at its code step's centre: the error is that step's quantisation (about
 // 0.43 projector px RMS here, 0.4 mm), not a refusal.
-// (tests/integration/test_code_only_reconstruct_sim.cpp holds it to the
+// (tests/integration/core/test_code_only_reconstruct_sim.cpp holds it to the
 // quantisation floor at full resolution.)
 TEST_F(CliReconstruct, CodeOnlyCaptureReconstructsAtItsCodeStep) {
     TempDir out;

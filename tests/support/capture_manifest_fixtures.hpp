@@ -1,6 +1,6 @@
 #pragma once
 // A valid capture manifest and the checks of a named rejection, shared by the
-// capture-set tests (tests/unit/test_capture_set*.cpp,
+// capture-set tests (tests/unit/core/test_capture_set*.cpp,
 // test_capture_manifest_rejects.cpp).
 
 #include "fpp/capture_set.hpp"

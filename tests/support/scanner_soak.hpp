@@ -9,7 +9,7 @@
 // every scan, once the scanner is idle again.
 //
 // Used by the benchmark (tests/bench/bench_soak.cpp, 10,000 scans) and by its
-// short form in CI (tests/integration/test_scanner_soak.cpp). Header-only: it
+// short form in CI (tests/integration/scanner/test_scanner_soak.cpp). Header-only: it
 // needs fpp_scanner and fpp_sim, which the support library does not link.
 #include "fpp/coefficient_table.hpp"
 #include "fpp/error.hpp"

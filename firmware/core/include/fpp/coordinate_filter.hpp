@@ -33,7 +33,7 @@
 // smallest step worth keeping. By default it is 5 times the noise estimated
 // from the image itself (estimate_coordinate_noise).
 //
-// Measured (tests/unit/test_coordinate_filter.cpp): a 5 x 5 window takes
+// Measured (tests/unit/core/test_coordinate_filter.cpp): a 5 x 5 window takes
 // white noise on a ramp to 0.20 of its RMS; on a simulated scan (paper rig,
 // 1 DN read noise) the median error on smooth surfaces drops 3.6x and the
 // error within 2 px of depth edges does not grow. On the SLMaster relief

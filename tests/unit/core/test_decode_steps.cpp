@@ -7,7 +7,7 @@
 #include "fpp/decoder.hpp"
 #include "fpp/sequences.hpp"
 
-#include "../../firmware/core/src/decode_plan.hpp"
+#include "../../../firmware/core/src/decode_plan.hpp"
 
 #include <gtest/gtest.h>
 

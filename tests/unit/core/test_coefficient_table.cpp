@@ -6,7 +6,7 @@
 #include "fpp/error.hpp"
 #include "fpp/fnv1a.hpp"
 
-#include "../../firmware/core/src/crc32.hpp"
+#include "../../../firmware/core/src/crc32.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>

@@ -248,7 +248,7 @@ TEST(CaptureSetV2, BrokenManifestsNameTheirField) {
                   4),
          "sequence[0].levels", "white and a black block"},
         // ... nor a phase block of its period to scale it (SLMaster's interzone
-        // code has one: tests/integration/test_decode_families.cpp).
+        // code has one: tests/integration/core/test_decode_families.cpp).
         {manifest("  - {pattern: phase, axis: x, period: 16.0, steps: 3}\n"
                   "  - {pattern: gray, axis: x, period: 8.0, bits: 2, levels: 4}\n",
                   5),
