@@ -16,16 +16,8 @@
 # FPP_VM_KERNEL_PACKAGE=linux-image-6.1.0-NN-arm64 picks another.
 set -euo pipefail
 
-cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
-force=0
-while [ $# -gt 0 ]; do
-  case "$1" in
-    --cache) cache="$2"; shift 2 ;;
-    --force) force=1; shift ;;
-    -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
-    *) echo "fetch-deps: unknown argument '$1'" >&2; exit 2 ;;
-  esac
-done
+. "$(dirname "$0")/cache_options.sh"
+parse_cache_options fetch-deps "$@"
 
 # What the harness takes from the cache besides the kernel release's files.
 cached_files=(bin/busybox usr/bin/gpiodetect usr/bin/arv-fake-gv-camera-0.8)

@@ -18,16 +18,8 @@
 # FPP_LIBGPIOD2_SUITE=bookworm-backports takes 2.1.3 from there instead.
 set -euo pipefail
 
-cache="${FPP_VM_CACHE:-/var/cache/fpp-vm}"
-force=0
-while [ $# -gt 0 ]; do
-  case "$1" in
-    --cache) cache="$2"; shift 2 ;;
-    --force) force=1; shift ;;
-    -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
-    *) echo "fetch-libgpiod2: unknown argument '$1'" >&2; exit 2 ;;
-  esac
-done
+. "$(dirname "$0")/cache_options.sh"
+parse_cache_options fetch-libgpiod2 "$@"
 suite="${FPP_LIBGPIOD2_SUITE:-trixie}"
 mirror=http://deb.debian.org/debian
 keyring=/usr/share/keyrings/debian-archive-keyring.gpg
