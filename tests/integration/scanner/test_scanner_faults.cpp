@@ -220,7 +220,7 @@ TEST(ScannerFaults, DisplayDisconnectedFailsTheScanAndItsReturnEndsTheError) {
 TEST(ScannerFaults, GpioChipGoneIsAnErrorUntilItReturnsThenTheButtonScans) {
     fpp::test::Journal journal;
     RunningService rs(journal.sink());
-    const auto state = [&] { return to_string(rs.service->status().state.state); };
+    const auto state = [&] { return std::string(to_string(rs.service->status().state.state)); };
     const auto wait_for_state = [&](const std::string& wanted) {
         for (int i = 0; i < 100 && state() != wanted; ++i)
             std::this_thread::sleep_for(std::chrono::milliseconds(30));
