@@ -442,6 +442,13 @@ def check_scale_bar(driver, canvas):
     mantissa = mm / 10 ** math.floor(math.log10(mm))
     check(any(abs(mantissa - m) < 1e-6 for m in (1, 2, 5)), f"the scale bar's {mm} mm is not 1, 2 or 5 x 10^k")
     check(140 / 2.5 - 1 <= px <= 140 + 1, f"the scale bar is {px:.0f} px long for {mm} mm (56..140 px expected)")
+    # The viewer publishes what it drew on every frame, writing only what
+    # changed: zooming redraws, and only the frame figures may be rewritten.
+    driver.execute_script("""
+        const viewer = document.getElementById('viewer');
+        window.viewerWrites = [];
+        new MutationObserver(records => records.forEach(r => window.viewerWrites.push(r.attributeName)))
+          .observe(viewer, {attributes: true});""")
     driver.execute_script("""
         for (let i = 0; i < 5; ++i)
           arguments[0].dispatchEvent(new WheelEvent('wheel', {deltaY: -100, bubbles: true, cancelable: true}));""",
@@ -450,6 +457,11 @@ def check_scale_bar(driver, canvas):
         lambda bar: bar if bar[1] / bar[0] > 1.2 * px / mm else None)(scale_bar(d)), timeout=10)
     log(f"scale bar: {mm:g} mm over {px:.0f} px; zoomed in, {zoomed_mm:g} mm over {zoomed_px:.0f} px "
         f"({zoomed_px / zoomed_mm / (px / mm):.2f}x the pixels per mm)")
+    writes = driver.execute_script("return window.viewerWrites")
+    frame_figures = {"data-full-frame-ms", "data-full-points", "data-moving-frame-ms", "data-moving-points"}
+    check(writes and set(writes) <= frame_figures,
+          f"zooming rewrote the viewer's {sorted(set(writes) - frame_figures)} (only frame figures change)")
+    log(f"zooming: {len(writes)} data-* writes, all frame figures")
 
 
 def check_phone_layout(driver, artifacts):

@@ -446,19 +446,25 @@ export const FppViewer = (function () {
       return values && mode !== 'intensity' ? { lo: lo, hi: hi, unit: info.unit, label: info.label } : null;
     }
 
-    // The drawn cloud and the last frame times on the container's data-*.
+    // The drawn cloud and the last frame times on the container's data-*;
+    // called every frame, so only a changed value is written (each write is
+    // a DOM mutation).
     function publish() {
       const d = container.dataset;
       if (!current) {
         for (const key of Object.keys(d)) delete d[key];
         return;
       }
-      Object.assign(d, {
+      const now = {
         scanId: current.scanId, points: current.points, total: current.total, colourBy: current.colourBy,
         normals: current.normals, clearColour: current.clearColour,
         fullFrameMs: lod.fullFrameMs.toFixed(1), fullPoints: lod.fullPoints,
         movingFrameMs: lod.movingFrameMs.toFixed(1), movingPoints: lod.movingPoints,
-      });
+      };
+      for (const [key, value] of Object.entries(now)) {
+        const text = String(value);
+        if (d[key] !== text) d[key] = text;
+      }
     }
 
     function describe(mode, range) {
