@@ -284,9 +284,59 @@ struct SecondPass {
     std::size_t pixels = 0;
 };
 
-// Column sums of one column over the rows of the box.
+// Sums over the rows of the box of one column's pixels: count, y, y^2, the
+// coordinate p and y p.
 struct ColumnSums {
     double n = 0, y = 0, yy = 0, p = 0, yp = 0;
+
+    void add(double yd, double p1, double sign) {
+        n += sign;
+        y += sign * yd;
+        yy += sign * yd * yd;
+        p += sign * p1;
+        yp += sign * yd * p1;
+    }
+};
+
+// Sums over the whole box in absolute coordinates X, Y, slid along a row
+// one column at a time.
+struct BoxSums {
+    double n = 0, sx = 0, sxx = 0, sy = 0, syy = 0, sxy = 0, sp = 0, sxp = 0, syp = 0;
+
+    void add(const ColumnSums& c, double xd, double sign) {
+        n += sign * c.n;
+        sx += sign * xd * c.n;
+        sxx += sign * xd * xd * c.n;
+        sy += sign * c.y;
+        syy += sign * c.yy;
+        sxy += sign * xd * c.y;
+        sp += sign * c.p;
+        sxp += sign * xd * c.p;
+        syp += sign * c.yp;
+    }
+
+    // The least-squares plane p ~ a + gx dx + gy dy centred on pixel
+    // (xd, yd); false when the box's pixels do not fix it (all on a line).
+    bool plane_at(double xd, double yd, double& a, double& gx, double& gy) const {
+        const double cx = sx - n * xd, cy = sy - n * yd;
+        const double cxx = sxx - 2 * xd * sx + n * xd * xd;
+        const double cyy = syy - 2 * yd * sy + n * yd * yd;
+        const double cxy = sxy - xd * sy - yd * sx + n * xd * yd;
+        const double cxp = sxp - xd * sp, cyp = syp - yd * sp;
+        // Cramer's rule on the 3 x 3 normal equations.
+        const double m00 = cxx * cyy - cxy * cxy;
+        const double det = n * m00 - cx * (cx * cyy - cxy * cy) + cy * (cx * cxy - cxx * cy);
+        if (!(det > 1e-9 * n * m00 && m00 > 0))
+            return false;
+        a = (sp * m00 - cx * (cxp * cyy - cxy * cyp) + cy * (cxp * cxy - cxx * cyp)) / det;
+        gx = (n * (cxp * cyy - cxy * cyp) - sp * (cx * cyy - cxy * cy) +
+              cy * (cx * cyp - cxp * cy)) /
+             det;
+        gy = (n * (cxx * cyp - cxp * cxy) - cx * (cx * cyp - cxp * cy) +
+              sp * (cx * cxy - cxx * cy)) /
+             det;
+        return true;
+    }
 };
 
 // Fixed bands of rows (not one per worker): sums kept per band and added in
@@ -300,8 +350,8 @@ int band_rows(int radius) {
 // of the least-squares plane through the box's coordinates (exact for a
 // linear p however the box is cut; for a whole box, its mean), and the
 // plane's slopes. visit(band, worker, x, y, a, gx, gy) is called once per
-// such pixel, the bands shared out over the pool. The box sums slide down
-// each band of rows (per column: count, sum y, y^2, p, y p) and along each row.
+// such pixel, the bands shared out over the pool. The column sums slide down
+// each band of rows and the box sums along each row.
 template <class Visit>
 void scan_stand_ins(const Image<float>& corrected, int radius, ThreadPool* pool, Visit&& visit) {
     const int w = corrected.width(), h = corrected.height();
@@ -315,18 +365,9 @@ void scan_stand_ins(const Image<float>& corrected, int radius, ThreadPool* pool,
             if (y < 0 || y >= h)
                 return;
             const float* row = corrected.row(y);
-            const double yd = y;
-            for (int x = 0; x < w; ++x) {
-                if (std::isnan(row[x]))
-                    continue;
-                const double p1 = row[x];
-                ColumnSums& c = cols[static_cast<std::size_t>(x)];
-                c.n += sign;
-                c.y += sign * yd;
-                c.yy += sign * yd * yd;
-                c.p += sign * p1;
-                c.yp += sign * yd * p1;
-            }
+            for (int x = 0; x < w; ++x)
+                if (!std::isnan(row[x]))
+                    cols[static_cast<std::size_t>(x)].add(y, row[x], sign);
         };
         for (int b = b0; b < b1; ++b) {
             const int y0 = b * band, y1 = std::min(h, y0 + band);
@@ -336,54 +377,18 @@ void scan_stand_ins(const Image<float>& corrected, int radius, ThreadPool* pool,
             for (int y = y0; y < y1; ++y) {
                 add_row(y + radius, 1);
                 const float* here = corrected.row(y);
-                // Box sums in absolute coordinates X, Y.
-                double n = 0, sx = 0, sxx = 0, sy = 0, syy = 0, sxy = 0, sp = 0, sxp = 0, syp = 0;
+                BoxSums box;
                 auto slide = [&](int x, double sign) {
-                    if (x < 0 || x >= w)
-                        return;
-                    const ColumnSums& c = cols[static_cast<std::size_t>(x)];
-                    const double xd = x;
-                    n += sign * c.n;
-                    sx += sign * xd * c.n;
-                    sxx += sign * xd * xd * c.n;
-                    sy += sign * c.y;
-                    syy += sign * c.yy;
-                    sxy += sign * xd * c.y;
-                    sp += sign * c.p;
-                    sxp += sign * xd * c.p;
-                    syp += sign * c.yp;
+                    if (x >= 0 && x < w)
+                        box.add(cols[static_cast<std::size_t>(x)], x, sign);
                 };
                 for (int x = -radius; x < radius; ++x)
                     slide(x, 1);
                 for (int x = 0; x < w; ++x) {
                     slide(x + radius, 1);
-                    if (n >= min_count && !std::isnan(here[x])) {
-                        // Centred on the pixel: p ~ a + gx dx + gy dy.
-                        const double xd = x, yd = y;
-                        const double cx = sx - n * xd, cy = sy - n * yd;
-                        const double cxx = sxx - 2 * xd * sx + n * xd * xd;
-                        const double cyy = syy - 2 * yd * sy + n * yd * yd;
-                        const double cxy = sxy - xd * sy - yd * sx + n * xd * yd;
-                        const double cxp = sxp - xd * sp, cyp = syp - yd * sp;
-                        // Cramer's rule on the 3 x 3 normal equations.
-                        const double m00 = cxx * cyy - cxy * cxy;
-                        const double det =
-                            n * m00 - cx * (cx * cyy - cxy * cy) + cy * (cx * cxy - cxx * cy);
-                        if (det > 1e-9 * n * m00 && m00 > 0) {
-                            const double a = (sp * m00 - cx * (cxp * cyy - cxy * cyp) +
-                                              cy * (cxp * cxy - cxx * cyp)) /
-                                             det;
-                            const double gx =
-                                (n * (cxp * cyy - cxy * cyp) - sp * (cx * cyy - cxy * cy) +
-                                 cy * (cx * cyp - cxp * cy)) /
-                                det;
-                            const double gy =
-                                (n * (cxx * cyp - cxp * cxy) - cx * (cx * cyp - cxp * cy) +
-                                 sp * (cx * cxy - cxx * cy)) /
-                                det;
-                            visit(b, worker, x, y, a, gx, gy);
-                        }
-                    }
+                    double a = 0, gx = 0, gy = 0;
+                    if (box.n >= min_count && !std::isnan(here[x]) && box.plane_at(x, y, a, gx, gy))
+                        visit(b, worker, x, y, a, gx, gy);
                     slide(x - radius, -1);
                 }
                 add_row(y - radius, -1);

@@ -97,19 +97,27 @@ void Run::setup_rig() {
         std::to_string(rig().projector_size.height));
     // The reference: the rig's own model, defects and all.
     exact_calibration_ = calibration_from_rig(rig());
-    Method exact;
-    exact.key = "exact";
-    exact.title = "SV with the rig's exact model (reference)";
-    exact.procedure = Procedure::reference;
-    exact.calibration = &exact_calibration_;
-    exact.sv = make_sv(exact_calibration_);
-    methods().push_back(std::move(exact));
+    add_sv_method("exact", "SV with the rig's exact model (reference)", Procedure::reference,
+                  exact_calibration_);
 }
 
-std::unique_ptr<SvReconstructor> Run::make_sv(const StereoCalibration& c) const {
-    SvOptions sv;
-    sv.threads = options().threads;
-    return std::make_unique<SvReconstructor>(c, sv);
+void Run::add_sv_method(std::string key, std::string title, Procedure procedure,
+                        const StereoCalibration& calibration) {
+    SvOptions options_sv;
+    options_sv.threads = options().threads;
+    Method sv;
+    sv.key = std::move(key);
+    sv.title = std::move(title);
+    sv.procedure = procedure;
+    sv.calibration = &calibration;
+    sv.sv = std::make_unique<SvReconstructor>(calibration, options_sv);
+    methods().push_back(std::move(sv));
+}
+
+FrameTurn Run::frame_turn(const StereoCalibration& calibration, const std::string& figure) {
+    const FrameTurn turn = camera_frame_turn(calibration, rig().camera);
+    add(figure, 1000 * turn.angle_rad, "mrad");
+    return turn;
 }
 
 void Run::write_session(const fs::path& folder, const sim::SessionOptions& session,
@@ -241,15 +249,8 @@ void Run::calibrate_paper_procedure() {
             calibrate_stereo(paper_board_session_, so, "stereo-report-paper", record_.paper_stereo);
     }
     const std::uint64_t hash = save(paper_calibration_, "calib-paper.yaml");
-    record_.paper_turn = camera_frame_turn(paper_calibration_, rig().camera);
-    add("calibration.paper.frame_turn_mrad", 1000 * record_.paper_turn.angle_rad, "mrad");
-    Method sv;
-    sv.key = "sv-paper";
-    sv.title = "SV, the paper's calibration";
-    sv.procedure = Procedure::paper;
-    sv.calibration = &paper_calibration_;
-    sv.sv = make_sv(paper_calibration_);
-    methods().push_back(std::move(sv));
+    record_.paper_turn = frame_turn(paper_calibration_, "calibration.paper.frame_turn_mrad");
+    add_sv_method("sv-paper", "SV, the paper's calibration", Procedure::paper, paper_calibration_);
     say("the paper's hybrid tables from the flat boards, every model");
     add_tables(calibrate_hybrid(plane_session_, paper_calibration_, hash, hybrid_options(),
                                 available_table_models()),
@@ -271,15 +272,8 @@ void Run::calibrate_our_procedures() {
     keep_board_views(board_session_, ho, so, views);
     our_calibration_ = calibrate_stereo(board_session_, so, "stereo-report", record_.our_stereo);
     const std::uint64_t hash = save(our_calibration_, "calib.yaml");
-    record_.our_turn = camera_frame_turn(our_calibration_, rig().camera);
-    add("calibration.boards.frame_turn_mrad", 1000 * record_.our_turn.angle_rad, "mrad");
-    Method sv;
-    sv.key = "sv";
-    sv.title = "SV, our calibration";
-    sv.procedure = Procedure::boards;
-    sv.calibration = &our_calibration_;
-    sv.sv = make_sv(our_calibration_);
-    methods().push_back(std::move(sv));
+    record_.our_turn = frame_turn(our_calibration_, "calibration.boards.frame_turn_mrad");
+    add_sv_method("sv", "SV, our calibration", Procedure::boards, our_calibration_);
 
     say("our hybrid tables from the same checkerboard session, every model");
     const auto hybrid_start = Clock::now();

@@ -71,7 +71,12 @@ private:
 
     // ---- setup (paper_experiments.cpp)
     void setup_rig();
-    std::unique_ptr<SvReconstructor> make_sv(const StereoCalibration& c) const;
+    // An SV method reconstructing with `calibration` (which the run keeps).
+    void add_sv_method(std::string key, std::string title, Procedure procedure,
+                       const StereoCalibration& calibration);
+    // How far `calibration`'s camera frame turned from the rig's; added as
+    // figure `figure` in mrad.
+    FrameTurn frame_turn(const StereoCalibration& calibration, const std::string& figure);
     void write_session(const std::filesystem::path& folder, const sim::SessionOptions& session,
                        const Sequence& sequence, const std::string& what);
     void simulate_sessions();

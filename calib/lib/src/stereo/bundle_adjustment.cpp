@@ -376,6 +376,7 @@ private:
                                     std::size_t end, Normal* normal) const {
         DataTerms out;
         Projection p;
+        Vec2 r; // residual, pixels: projected - observed
         JacobianRow row;
         const bool derivatives = normal != nullptr;
         for (std::size_t i = begin; i < std::min(end, corners_.size()); ++i) {
@@ -386,32 +387,23 @@ private:
             const Vec3 rotated = mul(pose.R, o.board);
             const Vec3 xc = add(rotated, pose.t);
             if (free_.camera_observations) {
-                if (!project_with_derivatives(s.camera, s.camera_grid, xc, p)) {
-                    out.behind = true;
+                if (!observe(s.camera, s.camera_grid, xc, o.camera, free_.camera_weight, p, r, out))
                     return out;
-                }
-                const double ru = p.pixel[0] - o.camera[0], rv = p.pixel[1] - o.camera[1];
-                out.cost += free_.camera_weight * (ru * ru + rv * rv);
-                out.rows += 2;
                 if (derivatives) {
                     row.clear();
                     add_device(row, layout, p, layout.camera_lens(), layout.camera_grid(),
                                free_.camera_grid);
                     add_rigid(row, layout, layout.pose(o.pose), p.d_point, rotated);
-                    normal->accumulate(row, ru, rv, free_.camera_weight);
+                    normal->accumulate(row, r[0], r[1], free_.camera_weight);
                 }
             }
             if (free_.projector_observations && std::isfinite(o.projector[0]) &&
                 std::isfinite(o.projector[1])) {
                 const Vec3 rc = mul(s.R, xc);
                 const Vec3 xp = add(rc, s.T);
-                if (!project_with_derivatives(s.projector, s.projector_grid, xp, p)) {
-                    out.behind = true;
+                if (!observe(s.projector, s.projector_grid, xp, o.projector, free_.projector_weight,
+                             p, r, out))
                     return out;
-                }
-                const double ru = p.pixel[0] - o.projector[0], rv = p.pixel[1] - o.projector[1];
-                out.cost += free_.projector_weight * (ru * ru + rv * rv);
-                out.rows += 2;
                 if (derivatives) {
                     row.clear();
                     add_device(row, layout, p, layout.projector_lens(), layout.projector_grid(),
@@ -421,7 +413,7 @@ private:
                     double dX[2][3];
                     chain_rotation(p.d_point, s.R, dX);
                     add_rigid(row, layout, layout.pose(o.pose), dX, rotated);
-                    normal->accumulate(row, ru, rv, free_.projector_weight);
+                    normal->accumulate(row, r[0], r[1], free_.projector_weight);
                 }
             }
         }
@@ -431,20 +423,15 @@ private:
                 continue;
             const Vec3 rc = mul(s.R, o.camera_point);
             const Vec3 xp = add(rc, s.T);
-            if (!project_with_derivatives(s.projector, s.projector_grid, xp, p)) {
-                out.behind = true;
-                return out;
-            }
-            const double ru = p.pixel[0] - o.projector[0], rv = p.pixel[1] - o.projector[1];
             const double weight = o.weight * free_.dense_weight;
-            out.cost += weight * (ru * ru + rv * rv);
-            out.rows += 2;
+            if (!observe(s.projector, s.projector_grid, xp, o.projector, weight, p, r, out))
+                return out;
             if (derivatives) {
                 row.clear();
                 add_device(row, layout, p, layout.projector_lens(), layout.projector_grid(),
                            free_.projector_grid);
                 add_stereo(row, layout, p, rc);
-                normal->accumulate(row, ru, rv, weight);
+                normal->accumulate(row, r[0], r[1], weight);
             }
         }
         if (normal)
@@ -453,6 +440,22 @@ private:
     }
 
 private:
+    // Projects `point` (device frame, mm) through a device into `p`, sets
+    // `residual` (projected - observed, pixels) and adds its weighted
+    // square to `out`; false, with out.behind set, for a point behind it.
+    static bool observe(const LensModel& lens, const CorrectionGrid& grid, const Vec3& point,
+                        const Vec2& observed, double weight, Projection& p, Vec2& residual,
+                        DataTerms& out) {
+        if (!project_with_derivatives(lens, grid, point, p)) {
+            out.behind = true;
+            return false;
+        }
+        residual = {p.pixel[0] - observed[0], p.pixel[1] - observed[1]};
+        out.cost += weight * (residual[0] * residual[0] + residual[1] * residual[1]);
+        out.rows += 2;
+        return true;
+    }
+
     static void chain_rotation(const double d[2][3], const Mat3& R, double out[2][3]) {
         for (int r = 0; r < 2; ++r)
             for (int c = 0; c < 3; ++c)
