@@ -1,11 +1,10 @@
 // Evaluation figures on synthetic clouds with known answers: errors against
 // the ground truth, cloud-to-cloud distances, guideline figures, the PLY to
-// point-set conversion, report figures.
+// point-set conversion. (The report figures' drawing: test_plots.cpp.)
 
 #include "test_support.hpp"
 
 #include "fpp/calib/evaluation.hpp"
-#include "fpp/calib/plots.hpp"
 #include "fpp/error.hpp"
 #include "fpp/lens_model.hpp"
 #include "fpp/point_cloud.hpp"
@@ -364,49 +363,6 @@ TEST(Evaluation, ProbingAndSpacingFigures) {
     EXPECT_NEAR(*b.size_error_first, 0.0, 0.006);
     EXPECT_NEAR(*b.size_error_second, 0.0, 0.006);
     EXPECT_EQ(b.cluster.size(), bar.size());
-}
-
-// ---------------------------------------------------------------- plots
-
-TEST(Plots, NumbersAndColours) {
-    EXPECT_DOUBLE_EQ(fpp::calib::nice_ceil(0.13), 0.2);
-    EXPECT_DOUBLE_EQ(fpp::calib::nice_ceil(0.2), 0.2);
-    EXPECT_DOUBLE_EQ(fpp::calib::nice_ceil(3.1), 5.0);
-    EXPECT_DOUBLE_EQ(fpp::calib::nice_ceil(7), 10.0);
-    std::vector<double> values(1000);
-    for (std::size_t i = 0; i < values.size(); ++i)
-        values[i] = (i % 2 ? 1.0 : -1.0) * 0.0001 * double(i); // |v| up to 0.0999
-    values[3] = 50;                                            // one spike
-    EXPECT_DOUBLE_EQ(fpp::calib::symmetric_limit(values, 0.99), 0.1);
-    EXPECT_DOUBLE_EQ(fpp::calib::symmetric_limit(std::vector<double>{}, 0.99, 0.5), 0.5);
-    const cv::Vec3b white = fpp::calib::diverging_colour(0);
-    EXPECT_GT(white[0], 240);
-    EXPECT_GT(white[2], 240);
-    const cv::Vec3b red = fpp::calib::diverging_colour(1), blue = fpp::calib::diverging_colour(-1);
-    EXPECT_GT(red[2], red[0]);                       // BGR: more red than blue
-    EXPECT_GT(blue[0], blue[2]);                     // more blue than red
-    EXPECT_EQ(fpp::calib::diverging_colour(5), red); // clamped
-}
-
-TEST(Plots, MapAndHistogramFigures) {
-    Image<float> values(40, 30, 1, 0.0f);
-    values.at(0, 0) = kNaN;
-    values.at(39, 29) = 0.2f;
-    const cv::Mat map = fpp::calib::signed_map_figure(values, 0.2, "test map");
-    // Enlarged to at least 480 px wide, plus the colour bar panel.
-    EXPECT_GE(map.cols, 480 + 100);
-    EXPECT_EQ(map.type(), CV_8UC3);
-    // The map's pixels: 12x enlargement, drawn at (10, 40).
-    const cv::Vec3b nan_pixel = map.at<cv::Vec3b>(40 + 5, 10 + 5);
-    EXPECT_EQ(nan_pixel, cv::Vec3b(90, 90, 90));
-    const cv::Vec3b top = map.at<cv::Vec3b>(40 + 29 * 12 + 5, 10 + 39 * 12 + 5);
-    EXPECT_EQ(top, fpp::calib::diverging_colour(1));
-
-    const std::vector<double> a = {-0.1, 0.0, 0.05, 0.3}, b = {0.01, 0.02};
-    const cv::Mat h = fpp::calib::histogram_figure({{"SV", a}, {"hybrid", b}}, -0.2, 0.2,
-                                                   "error (mm)", "two series");
-    EXPECT_EQ(h.type(), CV_8UC3);
-    EXPECT_GT(h.cols, 400);
 }
 
 } // namespace

@@ -93,23 +93,6 @@ std::size_t differing_pixels(const fpp::Image<float>& a, const fpp::Image<float>
     return differ;
 }
 
-TEST(GigeFrameIds, CountGapsAcrossThe16BitWrap) {
-    using fpp::drivers::gige_frames_missed;
-    using fpp::drivers::gige_next_frame_id;
-    EXPECT_EQ(gige_next_frame_id(41u), 42u);
-    EXPECT_EQ(gige_next_frame_id(65535u), 1u);     // 0 is reserved
-    EXPECT_EQ(gige_next_frame_id(65536u), 65537u); // extended 64-bit ids do not wrap
-    EXPECT_EQ(gige_frames_missed(41, 42), 0u);
-    EXPECT_EQ(gige_frames_missed(41, 44), 2u);
-    EXPECT_EQ(gige_frames_missed(65535, 1), 0u);
-    EXPECT_EQ(gige_frames_missed(65534, 1), 1u);
-    EXPECT_EQ(gige_frames_missed(65530, 3), 7u);
-    EXPECT_EQ(gige_frames_missed(42, 42), UINT64_MAX); // repeat
-    EXPECT_EQ(gige_frames_missed(42, 40), UINT64_MAX); // step back
-    EXPECT_EQ(gige_frames_missed(65535, 0), UINT64_MAX);
-    EXPECT_EQ(gige_frames_missed(70000, 70001), 0u);
-}
-
 TEST(AravisCamera, RejectsSettingsOutOfRange) {
     CameraSettings settings = software_triggered("RGB8");
     EXPECT_THROW(AravisCamera(kAddress, settings), fpp::InputError);

@@ -1,7 +1,7 @@
 // Decoder tests on synthesised frames (tests/support/synthetic_decode.hpp):
 // every unwrapping method recovers the projector coordinates, streaming and
 // batch agree, the phase, mask, noise, Gray repair and centerline behaviour.
-// The decoder's API contract is in test_decode_api.cpp.
+// The decoder's API contract is in test_decoder.cpp.
 
 #include "synthetic_decode.hpp"
 

@@ -1,5 +1,5 @@
-// Button debouncing, and the GPIO lines' failure without a chip. (Driving real
-// lines needs a gpiochip: the virtual board.)
+// The GPIO lines' failure without a chip. (Driving real lines needs a
+// gpiochip: the virtual board; the button's debouncing is test_debounce.cpp.)
 
 #include "test_support.hpp"
 
@@ -7,72 +7,18 @@
 
 #if __has_include(<fpp/drivers/gpiod_lines.hpp>)
 
-#include "fpp/drivers/debounce.hpp"
 #include "fpp/drivers/device_error.hpp"
 #include "fpp/drivers/gpiod_lines.hpp"
 
 #include <chrono>
-#include <cstdint>
 #include <functional>
 #include <string>
-#include <vector>
 
 namespace {
 
-using fpp::drivers::Debouncer;
 using fpp::drivers::DeviceError;
 using fpp::drivers::GpioLineConfig;
 using namespace std::chrono_literals;
-
-constexpr std::int64_t kMs = 1'000'000;
-
-struct TimedEdge {
-    std::int64_t t_ms;
-    bool press;
-};
-
-int presses(const std::vector<TimedEdge>& edges, std::chrono::milliseconds window = 20ms) {
-    Debouncer debouncer(window);
-    int count = 0;
-    for (const auto& e : edges)
-        count += debouncer.edge(e.t_ms * kMs, e.press) ? 1 : 0;
-    return count;
-}
-
-TEST(Debouncer, CleanPressesCountOnce) {
-    EXPECT_EQ(presses({{0, true}, {150, false}}), 1);
-    EXPECT_EQ(presses({{0, true}, {150, false}, {400, true}, {520, false}}), 2);
-}
-
-TEST(Debouncer, ContactBounceOnPressCountsOnce) {
-    // Press at 1000 ms with 4 ms of chatter, held, then released.
-    EXPECT_EQ(presses({{1000, true},
-                       {1001, false},
-                       {1002, true},
-                       {1003, false},
-                       {1004, true},
-                       {1300, false}}),
-              1);
-}
-
-TEST(Debouncer, ReleaseChatterIsNoPress) {
-    // The press is long done; releasing chatters into rising edges.
-    EXPECT_EQ(
-        presses({{0, true}, {500, false}, {502, true}, {503, false}, {506, true}, {507, false}}),
-        1);
-}
-
-TEST(Debouncer, WindowBoundary) {
-    // A press exactly one window after the last edge counts; one ns earlier not.
-    Debouncer debouncer(20ms);
-    EXPECT_TRUE(debouncer.edge(0, true));
-    EXPECT_FALSE(debouncer.edge(10 * kMs, false));
-    EXPECT_TRUE(debouncer.edge(30 * kMs, true));
-    EXPECT_FALSE(debouncer.edge(40 * kMs, false));
-    EXPECT_FALSE(debouncer.edge(60 * kMs - 1, true));
-    debouncer.reset();
-    EXPECT_TRUE(debouncer.edge(60 * kMs, true));
-}
 
 void expect_missing_chip(const std::function<void(const GpioLineConfig&)>& open) {
     GpioLineConfig config;

@@ -14,7 +14,7 @@
 //               projector coordinate fitted to every decoded pixel in a
 //               window around the corner, applied to the corner.
 // Default: poly, the most accurate on simulated ground truth (the figures are
-// in tests/calib/test_corners_projector.cpp).
+// in tests/calib/test_corner_projector.cpp).
 //
 // Coordinates: projector pixels, pixel centres on integers.
 
