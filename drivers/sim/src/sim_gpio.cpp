@@ -50,7 +50,10 @@ void SimButton::require_connected_locked() const {
 }
 
 void SimButton::take_press_locked() {
+    // The press's own edge always (with no debounce nothing else is within
+    // it), then its bounces.
     const auto first = edges_.front();
+    edges_.pop_front();
     while (!edges_.empty() && edges_.front() - first < debounce_)
         edges_.pop_front();
 }
