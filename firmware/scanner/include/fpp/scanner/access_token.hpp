@@ -8,7 +8,7 @@
 namespace fpp::scanner {
 
 // 16 to 256 printable ASCII characters without spaces; InputError naming the
-// file otherwise, IoError when it cannot be read.
+// file otherwise, and when it cannot be read (missing, a folder).
 std::string read_token_file(const std::filesystem::path& path);
 
 // Whether the Authorization header is "Bearer <token>" (the scheme in any
