@@ -85,12 +85,9 @@ BENCHMARK(BM_CornersPartlyLitNotFound)->Unit(benchmark::kMillisecond)->UseRealTi
 } // namespace
 
 int main(int argc, char** argv) {
-    benchmark::Initialize(&argc, argv);
-    if (benchmark::ReportUnrecognizedArguments(argc, argv))
-        return 1;
     fpp::bench::BestTimeReporter reporter;
-    benchmark::RunSpecifiedBenchmarks(&reporter);
-    benchmark::Shutdown();
+    if (!fpp::bench::run_benchmarks(argc, argv, reporter))
+        return 1;
 
     const Fixture& fx = Fixture::get();
     const double frontal = reporter.seconds("BM_CornersFrontal/real_time");

@@ -306,12 +306,9 @@ BENCHMARK(BM_OpenCV3StepPSP)->Unit(benchmark::kMillisecond)->UseRealTime();
 } // namespace
 
 int main(int argc, char** argv) {
-    benchmark::Initialize(&argc, argv);
-    if (benchmark::ReportUnrecognizedArguments(argc, argv))
-        return 1;
     fpp::bench::BestTimeReporter reporter;
-    benchmark::RunSpecifiedBenchmarks(&reporter);
-    benchmark::Shutdown();
+    if (!fpp::bench::run_benchmarks(argc, argv, reporter))
+        return 1;
 
     const double copy = reporter.seconds("BM_CopyInput");
     const double batch = reporter.seconds("BM_DecodeBatch");

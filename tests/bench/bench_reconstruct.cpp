@@ -156,12 +156,9 @@ BENCHMARK(BM_EncodePly)->Unit(benchmark::kMillisecond)->UseRealTime();
 } // namespace
 
 int main(int argc, char** argv) {
-    benchmark::Initialize(&argc, argv);
-    if (benchmark::ReportUnrecognizedArguments(argc, argv))
-        return 1;
     fpp::bench::BestTimeReporter reporter;
-    benchmark::RunSpecifiedBenchmarks(&reporter);
-    benchmark::Shutdown();
+    if (!fpp::bench::run_benchmarks(argc, argv, reporter))
+        return 1;
 
     const auto& fx = Fixture::get();
     const double copy = reporter.seconds("BM_MemcpyOutput/real_time");

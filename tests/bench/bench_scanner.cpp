@@ -553,105 +553,41 @@ void print_row(const char* label, const ScanRecord& r) {
                 r.rss_capture_growth / kMiB);
 }
 
-int run(int argc, char** argv) {
-    benchmark::Initialize(&argc, argv);
-    if (benchmark::ReportUnrecognizedArguments(argc, argv))
-        return 1;
+// Resident memory (bytes) at the steps of setting up, before any scan.
+struct SetupMemory {
+    double start = 0, with_sim = 0, with_scanner = 0, peak = 0;
+};
 
-    // The table is built and written before any measurement; its memory is
-    // freed and the peak reset below.
-    Context context;
-    g_context = &context;
-    {
-        const fpp::sim::Rig rig = fpp::sim::load_rig(context.board.config.sim->rig);
-        const fpp::CoefficientTable table = fpp::test::rig_truth_table(rig);
-        context.table_info = table.info();
-        fpp::write_table(context.board.table_file, table);
-    }
-    reset_peak_rss();
-    const double rss_start = current_rss_bytes();
-    context.sim = std::make_unique<fpp::scanner::SimBoard>(context.board.config);
-    const double rss_sim = current_rss_bytes();
-    context.scanner = std::make_unique<fpp::scanner::Scanner>(context.board.config,
-                                                              context.sim->devices(), context.log);
-    context.watch_capture();
-    const double rss_scanner = current_rss_bytes();
-    const double peak_setup = peak_rss_bytes();
-
-    // The first scan allocates the result images that later scans reuse.
-    const ScanRecord first = context.scan();
-    g_ply_bytes = first.ply_bytes;
-
-    benchmark::RegisterBenchmark("scan/1600x1200_gray-x", scan)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()
-        ->Iterations(3);
-    benchmark::RegisterBenchmark("baseline/memcpy_frame", memcpy_frame)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark("baseline/memcpy_write_fsync_ply_size", write_fsync_ply_size)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark("parts/push_per_frame", push_per_frame)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()
-        ->Iterations(20);
-    benchmark::RegisterBenchmark("parts/encode_ply", encode_ply_bytes)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark("parts/write_ply_synced", write_ply_file)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark("parts/apply_table/fresh_cloud_warm", apply_table_cloud,
-                                 CloudKind::fresh_warm)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark("parts/apply_table/fresh_cloud_from_os", apply_table_cloud,
-                                 CloudKind::fresh_from_os)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark("parts/apply_table/reused_cloud", apply_table_cloud,
-                                 CloudKind::reused)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark("scan_hdr/1600x1200_gray-x_4_exposures", scan_hdr)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()
+void register_benchmarks() {
+    const auto in_ms = [](benchmark::internal::Benchmark* b) {
+        return b->Unit(benchmark::kMillisecond)->UseRealTime();
+    };
+    in_ms(benchmark::RegisterBenchmark("scan/1600x1200_gray-x", scan))->Iterations(3);
+    in_ms(benchmark::RegisterBenchmark("baseline/memcpy_frame", memcpy_frame));
+    in_ms(
+        benchmark::RegisterBenchmark("baseline/memcpy_write_fsync_ply_size", write_fsync_ply_size));
+    in_ms(benchmark::RegisterBenchmark("parts/push_per_frame", push_per_frame))->Iterations(20);
+    in_ms(benchmark::RegisterBenchmark("parts/encode_ply", encode_ply_bytes));
+    in_ms(benchmark::RegisterBenchmark("parts/write_ply_synced", write_ply_file));
+    for (const auto& [name, kind] :
+         {std::pair{"parts/apply_table/fresh_cloud_warm", CloudKind::fresh_warm},
+          std::pair{"parts/apply_table/fresh_cloud_from_os", CloudKind::fresh_from_os},
+          std::pair{"parts/apply_table/reused_cloud", CloudKind::reused}})
+        in_ms(benchmark::RegisterBenchmark(name, apply_table_cloud, kind));
+    in_ms(benchmark::RegisterBenchmark("scan_hdr/1600x1200_gray-x_4_exposures", scan_hdr))
         ->Iterations(2);
-    fpp::bench::BestTimeReporter reporter;
-    benchmark::RunSpecifiedBenchmarks(&reporter);
-    benchmark::Shutdown();
+}
 
-    const fpp::Size camera = context.sim->camera().size();
-    const fpp::Size projector = context.sim->display().size();
-    const fpp::Sequence& sequence = context.scanner->sequence();
-    const double frame_bytes = static_cast<double>(camera.area()); // Mono8
-    const int held = frames_held(sequence);
-    const double table = static_cast<double>(table_bytes(context.table_info));
-    const DecoderHeap decoder = measure_decoder_heap(sequence, camera, projector);
-
-    std::printf("\nsummary (%dx%d Mono8 camera, %dx%d projector, %d frames, %d threads; "
-                "virtual clock)\n",
-                camera.width, camera.height, projector.width, projector.height,
-                context.scanner->frames_per_scan(), fpp::ThreadPool::resolve_threads(0));
-    std::printf("scans (ms; RSS before the scan, its peak growth, and its largest growth "
-                "sampled at the flips, i.e. during the capture):\n");
-    print_row("first", first);
-    for (std::size_t i = 0; i < context.scans.size(); ++i) {
-        char label[24];
-        std::snprintf(label, sizeof label, "#%zu", i + 1);
-        print_row(label, context.scans[i]);
-    }
-    if (context.scans.empty())
-        return 0;
-    double push_mean = 0, push_max = 0, to_disk_worst = 0, write = 0, to_disk = 0, growth = 0;
+// The timing targets over the warm scans (at least one), against the
+// baselines measured in the same run.
+void print_targets(Context& context, const fpp::bench::BestTimeReporter& reporter) {
+    double push_mean = 0, push_max = 0, to_disk_worst = 0, write = 0, to_disk = 0;
     for (const ScanRecord& r : context.scans) {
         push_mean += r.timings.push_mean_ms;
         push_max = std::max(push_max, r.timings.push_max_ms);
         write += r.timings.write_ms;
         to_disk += r.timings.last_frame_to_written_ms;
         to_disk_worst = std::max(to_disk_worst, r.timings.last_frame_to_written_ms);
-        growth = std::max(growth, r.rss_peak_growth);
     }
     const double n = static_cast<double>(context.scans.size());
     push_mean /= n;
@@ -711,18 +647,34 @@ int run(int argc, char** argv) {
                     hdr_push_max, hdr_push_max < 4.0 ? "met" : "NOT met", fuse, after, hdr, single,
                     single > 0 ? hdr / single : 0.0);
     }
-    g_hdr_context.reset();
     print_spread("baseline write", g_file_baseline_ms);
     std::printf("  apply_table alone: into a fresh cloud (as the scanner) %.1f ms when the "
                 "allocator hands back warm memory, %.1f ms from the OS; into a reused one "
                 "%.1f ms\n",
                 apply_warm, apply_os, apply_reused);
+}
+
+// Where the memory goes: setting up, the table and the frames held, the
+// decoder, the growth across a scan.
+void print_memory(Context& context, const SetupMemory& setup, const ScanRecord& first) {
+    const fpp::Size camera = context.sim->camera().size();
+    const fpp::Size projector = context.sim->display().size();
+    const fpp::Sequence& sequence = context.scanner->sequence();
+    const double frame_bytes = static_cast<double>(camera.area()); // Mono8
+    const int held = frames_held(sequence);
+    const double table = static_cast<double>(table_bytes(context.table_info));
+    const DecoderHeap decoder = measure_decoder_heap(sequence, camera, projector);
+
+    double growth = 0;
+    for (const ScanRecord& r : context.scans)
+        growth = std::max(growth, r.rss_peak_growth);
     std::printf("memory (MiB; peak RSS from getrusage%s):\n",
                 context.peak_reset ? ", reset before each scan" : ", NOT resettable here");
     std::printf("  RSS at start %.1f, with the sim board %.1f (+%.1f), with the scanner %.1f "
                 "(+%.1f: table mapped and checked, patterns), peak so far %.1f\n",
-                rss_start / kMiB, rss_sim / kMiB, (rss_sim - rss_start) / kMiB, rss_scanner / kMiB,
-                (rss_scanner - rss_sim) / kMiB, peak_setup / kMiB);
+                setup.start / kMiB, setup.with_sim / kMiB, (setup.with_sim - setup.start) / kMiB,
+                setup.with_scanner / kMiB, (setup.with_scanner - setup.with_sim) / kMiB,
+                setup.peak / kMiB);
     std::printf("  table %.1f; frames held by the streaming decoder: %d x %.2f = %.1f "
                 "(one phase block); table + frames = %.1f\n",
                 table / kMiB, held, frame_bytes / kMiB, held * frame_bytes / kMiB,
@@ -737,7 +689,64 @@ int run(int argc, char** argv) {
                 warm_peak / kMiB);
     std::printf("  scanner's share of the peak (peak minus RSS with the sim board alone): "
                 "%.1f = %.2fx table + frames\n",
-                (warm_peak - rss_sim) / kMiB, (warm_peak - rss_sim) / (table + held * frame_bytes));
+                (warm_peak - setup.with_sim) / kMiB,
+                (warm_peak - setup.with_sim) / (table + held * frame_bytes));
+}
+
+int run(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv))
+        return 1;
+
+    // The table is built and written before any measurement; its memory is
+    // freed and the peak reset below.
+    Context context;
+    g_context = &context;
+    {
+        const fpp::sim::Rig rig = fpp::sim::load_rig(context.board.config.sim->rig);
+        const fpp::CoefficientTable table = fpp::test::rig_truth_table(rig);
+        context.table_info = table.info();
+        fpp::write_table(context.board.table_file, table);
+    }
+    reset_peak_rss();
+    SetupMemory setup;
+    setup.start = current_rss_bytes();
+    context.sim = std::make_unique<fpp::scanner::SimBoard>(context.board.config);
+    setup.with_sim = current_rss_bytes();
+    context.scanner = std::make_unique<fpp::scanner::Scanner>(context.board.config,
+                                                              context.sim->devices(), context.log);
+    context.watch_capture();
+    setup.with_scanner = current_rss_bytes();
+    setup.peak = peak_rss_bytes();
+
+    // The first scan allocates the result images that later scans reuse.
+    const ScanRecord first = context.scan();
+    g_ply_bytes = first.ply_bytes;
+
+    register_benchmarks();
+    fpp::bench::BestTimeReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    benchmark::Shutdown();
+
+    const fpp::Size camera = context.sim->camera().size();
+    const fpp::Size projector = context.sim->display().size();
+    std::printf("\nsummary (%dx%d Mono8 camera, %dx%d projector, %d frames, %d threads; "
+                "virtual clock)\n",
+                camera.width, camera.height, projector.width, projector.height,
+                context.scanner->frames_per_scan(), fpp::ThreadPool::resolve_threads(0));
+    std::printf("scans (ms; RSS before the scan, its peak growth, and its largest growth "
+                "sampled at the flips, i.e. during the capture):\n");
+    print_row("first", first);
+    for (std::size_t i = 0; i < context.scans.size(); ++i) {
+        char label[24];
+        std::snprintf(label, sizeof label, "#%zu", i + 1);
+        print_row(label, context.scans[i]);
+    }
+    if (context.scans.empty())
+        return 0;
+    print_targets(context, reporter);
+    g_hdr_context.reset();
+    print_memory(context, setup, first);
     return 0;
 }
 

@@ -40,4 +40,15 @@ private:
     std::map<std::string, double> best_;
 };
 
+// Google Benchmark's main, keeping the best times in `reporter` for the
+// summary printed after; false (after saying so) for an unknown argument.
+inline bool run_benchmarks(int& argc, char** argv, BestTimeReporter& reporter) {
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv))
+        return false;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    benchmark::Shutdown();
+    return true;
+}
+
 } // namespace fpp::bench

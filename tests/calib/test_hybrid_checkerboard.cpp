@@ -54,10 +54,26 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Session {
+// A checkerboard session of `poses` poses (gray-xy) on the lens-defects rig,
+// its camera binned 4 x 4, in a folder of its own.
+struct BoardSession {
     sim::Rig rig;
     TempDir dir;
     fs::path session;
+    sim::SessionOptions options;
+
+    BoardSession(int poses, std::uint64_t seed)
+        : rig(sim::load_rig(sim::lens_defects_rig_path()).binned_camera(4)),
+          session(dir.path() / "boards") {
+        options.poses = poses;
+        options.seed = seed;
+        sim::write_session(session, rig, standard_sequence("gray-xy", rig.projector_size),
+                           options);
+    }
+};
+
+struct Session : BoardSession {
+    Session() : BoardSession(30, 3) {}
     calib::StereoCalibration calibration; // ours
     double focal_sigma = 0;               // its camera focal length's reported sigma, relative
     calib::StereoCalibration joint;       // the paper's procedure on the same session
@@ -66,13 +82,6 @@ struct Session {
 Session& setup() {
     static Session* s = [] {
         auto* out = new Session;
-        out->rig = sim::load_rig(sim::lens_defects_rig_path()).binned_camera(4);
-        out->session = out->dir.path() / "boards";
-        sim::SessionOptions options;
-        options.poses = 30;
-        options.seed = 3;
-        sim::write_session(out->session, out->rig,
-                           standard_sequence("gray-xy", out->rig.projector_size), options);
         calib::StereoSessionOptions ours;
         const calib::StereoResult stereo = calib::calibrate_session(out->session, ours).stereo;
         out->calibration = stereo.calibration;
@@ -201,25 +210,16 @@ TEST(HybridCheckerboard, OneSessionGivesATableTrueInShapeAndCloseToItsStereoMode
 
 // A small session and the rig's exact model as its calibration, for the
 // refusals (no stereo calibration needed to test them).
-struct Small {
-    sim::Rig rig;
-    TempDir dir;
-    fs::path session;
+struct Small : BoardSession {
+    Small() : BoardSession(6, 5) {}
     calib::StereoCalibration calibration;
 };
 
 Small& small() {
     static Small* s = [] {
         auto* out = new Small;
-        out->rig = sim::load_rig(sim::lens_defects_rig_path()).binned_camera(4);
-        out->session = out->dir.path() / "boards";
-        sim::SessionOptions options;
-        options.poses = 6;
-        options.seed = 5;
-        sim::write_session(out->session, out->rig,
-                           standard_sequence("gray-xy", out->rig.projector_size), options);
         out->calibration = calib::calibration_from_rig(out->rig);
-        out->calibration.board_square_size = options.board.square_size;
+        out->calibration.board_square_size = out->options.board.square_size;
         return out;
     }();
     return *s;

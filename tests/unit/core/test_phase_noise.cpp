@@ -13,6 +13,7 @@
 #include "fpp/point_cloud.hpp"
 #include "fpp/table_kernel.hpp"
 
+#include "synthetic_table.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -313,73 +314,26 @@ TEST(PhaseNoise, BadCameraNoiseIsRefusedNamingTheField) {
 // ---------------------------------------------------------------------------
 // The kernel's sigma_z against a finite difference of the table.
 
-constexpr fpp::Size kCamera{100, 37}; // edge tiles in both directions with 32x8 tiles
-
-double centre_of(int x, int y) {
-    return 300.0 + 7.3 * x + 0.41 * y;
-}
-double inv_half_range_of(int x) {
-    return 1.0 / (150.0 + 0.5 * (x % 5));
-}
-bool modelled(int x, int y) {
-    return (x * 7 + y * 3) % 23 != 0;
-}
-
-// Realistic cubics (Z about 800 mm, falling 120 mm over the range) and, for
-// the rational model, a denominator 1 + d t with |d| <= 0.15.
-fpp::CoefficientTable build_table(fpp::TableModel model, int tw = 32, int th = 8) {
-    fpp::TableInfo info;
-    info.camera = kCamera;
-    info.tile_width = tw;
-    info.tile_height = th;
-    info.model = model;
-    info.projector = {1280, 800};
-    fpp::CoefficientTable table(info);
-    namespace tp = fpp::table_plane;
-    for (int y = 0; y < kCamera.height; ++y)
-        for (int x = 0; x < kCamera.width; ++x) {
-            if (!modelled(x, y))
-                continue;
-            const double xn = (x - 50.0) / 120.0, yn = (y - 18.0) / 120.0;
-            const double z[4] = {800.0 + 0.2 * y, -120.0 + 0.1 * x, 6.0 - 0.01 * y,
-                                 -1.5 + 0.003 * x};
-            table.set(tp::centre, x, y, float(centre_of(x, y)));
-            table.set(tp::inv_half_range, x, y, float(inv_half_range_of(x)));
-            for (int k = 0; k < 4; ++k) {
-                if (model == fpp::TableModel::polynomial) {
-                    table.set(tp::poly_x + k, x, y, float(xn * z[k]));
-                    table.set(tp::poly_y + k, x, y, float(yn * z[k]));
-                    table.set(tp::poly_z + k, x, y, float(z[k]));
-                } else {
-                    table.set(tp::ray_z + k, x, y, float(z[k]));
-                }
-            }
-            if (model == fpp::TableModel::ray) {
-                table.set(tp::ray_xn, x, y, float(xn));
-                table.set(tp::ray_yn, x, y, float(yn));
-            } else if (model == fpp::TableModel::rational) {
-                table.set(tp::rational_d, x, y, float(0.15 - 0.006 * (x % 50)));
-                table.set(tp::rational_xn, x, y, float(xn));
-                table.set(tp::rational_yn, x, y, float(yn));
-            }
-        }
-    return table;
-}
+using fpp::test::kSyntheticCamera;
+using fpp::test::synthetic_has_model;
+using fpp::test::synthetic_pixel;
+using fpp::test::synthetic_table;
 
 // In range, except NaN, out of range, and a band of rows without any phase
 // (whole background tiles at rows 16..23).
 fpp::Image<float> make_phase() {
-    fpp::Image<float> phase(kCamera, 1);
-    for (int y = 0; y < kCamera.height; ++y)
-        for (int x = 0; x < kCamera.width; ++x) {
+    fpp::Image<float> phase(kSyntheticCamera, 1);
+    for (int y = 0; y < kSyntheticCamera.height; ++y)
+        for (int x = 0; x < kSyntheticCamera.width; ++x) {
+            const fpp::test::SyntheticPixel p = synthetic_pixel(x, y);
             const double s = std::sin(0.37 * x + 0.11 * y);
-            const double half = 1.0 / inv_half_range_of(x);
+            const double half = 1.0 / p.ihr;
             const int k = (x * 13 + y * 5) % 41;
-            float v = float(centre_of(x, y) + 0.97 * s * half);
+            float v = float(p.centre + 0.97 * s * half);
             if (k == 0 || (y >= 16 && y < 24))
                 v = kNaN;
             else if (k == 2)
-                v = float(centre_of(x, y) + 1.3 * half);
+                v = float(p.centre + 1.3 * half);
             phase.at(x, y) = v;
         }
     return phase;
@@ -387,9 +341,9 @@ fpp::Image<float> make_phase() {
 
 // Coordinate sigma 0.01 .. 0.2 px, NaN at a few decoded pixels.
 fpp::Image<float> make_sigma() {
-    fpp::Image<float> sigma(kCamera, 1);
-    for (int y = 0; y < kCamera.height; ++y)
-        for (int x = 0; x < kCamera.width; ++x)
+    fpp::Image<float> sigma(kSyntheticCamera, 1);
+    for (int y = 0; y < kSyntheticCamera.height; ++y)
+        for (int x = 0; x < kSyntheticCamera.width; ++x)
             sigma.at(x, y) = (x + y) % 37 == 5
                                  ? kNaN
                                  : float(0.01 + 0.19 * (0.5 + 0.5 * std::cos(0.21 * x - 0.3 * y)));
@@ -443,11 +397,11 @@ TEST(PhaseNoise, KernelSigmaZMatchesFiniteDifferenceOfTheTable) {
     for (const fpp::TableModel model :
          {fpp::TableModel::polynomial, fpp::TableModel::ray, fpp::TableModel::rational}) {
         SCOPED_TRACE(fpp::to_string(model));
-        const fpp::CoefficientTable table = build_table(model);
+        const fpp::CoefficientTable table = synthetic_table(model);
         fpp::PointCloud with, without;
         // A reused cloud with stale values everywhere.
-        with.xyz = fpp::Image<float>(kCamera, 3, 1.0f);
-        with.sigma_z = fpp::Image<float>(kCamera, 1, 1.0f);
+        with.xyz = fpp::Image<float>(kSyntheticCamera, 3, 1.0f);
+        with.sigma_z = fpp::Image<float>(kSyntheticCamera, 1, 1.0f);
         fpp::ThreadPool pool(2);
         const fpp::TableApplyStats s1 = fpp::apply_table(table, phase, with, &pool, &sigma);
         const fpp::TableApplyStats s2 = fpp::apply_table(table, phase, without, &pool);
@@ -455,13 +409,13 @@ TEST(PhaseNoise, KernelSigmaZMatchesFiniteDifferenceOfTheTable) {
         EXPECT_TRUE(same_bits(with.xyz, without.xyz));
         EXPECT_EQ(s1.points, s2.points);
         EXPECT_TRUE(without.sigma_z.empty());
-        ASSERT_EQ(with.sigma_z.size(), kCamera);
+        ASSERT_EQ(with.sigma_z.size(), kSyntheticCamera);
         ASSERT_EQ(with.sigma_z.channels(), 1);
 
         double worst = 0, worst_rel = 0;
         std::size_t compared = 0, unknown = 0;
-        for (int y = 0; y < kCamera.height; ++y)
-            for (int x = 0; x < kCamera.width; ++x) {
+        for (int y = 0; y < kSyntheticCamera.height; ++y)
+            for (int x = 0; x < kSyntheticCamera.width; ++x) {
                 const float sz = with.sigma_z.at(x, y);
                 if (!std::isfinite(with.xyz.at(x, y, 2))) {
                     EXPECT_TRUE(std::isnan(sz)) << x << "," << y;
@@ -501,21 +455,22 @@ TEST(PhaseNoise, KernelSigmaZIsTheSameOnAnyThreadsAndTiling) {
     for (const fpp::TableModel model : {fpp::TableModel::ray, fpp::TableModel::rational}) {
         fpp::ThreadPool one(1), four(4);
         fpp::PointCloud a, b, c;
-        fpp::apply_table(build_table(model), phase, a, &one, &sigma);
-        fpp::apply_table(build_table(model), phase, b, &four, &sigma);
-        fpp::apply_table(build_table(model, 8, 24), phase, c, &four, &sigma);
+        fpp::apply_table(synthetic_table(model), phase, a, &one, &sigma);
+        fpp::apply_table(synthetic_table(model), phase, b, &four, &sigma);
+        fpp::apply_table(synthetic_table(model, 8, 24), phase, c, &four, &sigma);
         EXPECT_TRUE(same_bits(a.sigma_z, b.sigma_z));
         EXPECT_TRUE(same_bits(a.sigma_z, c.sigma_z));
     }
     // A sigma image of another size is refused; a later call without sigma
     // leaves the cloud's sigma_z empty.
     fpp::PointCloud cloud;
-    const fpp::Image<float> wrong(kCamera.width, kCamera.height + 1, 1, 0.1f);
-    EXPECT_THROW(fpp::apply_table(build_table(fpp::TableModel::ray), phase, cloud, nullptr, &wrong),
-                 std::invalid_argument);
-    fpp::apply_table(build_table(fpp::TableModel::ray), phase, cloud, nullptr, &sigma);
+    const fpp::Image<float> wrong(kSyntheticCamera.width, kSyntheticCamera.height + 1, 1, 0.1f);
+    EXPECT_THROW(
+        fpp::apply_table(synthetic_table(fpp::TableModel::ray), phase, cloud, nullptr, &wrong),
+        std::invalid_argument);
+    fpp::apply_table(synthetic_table(fpp::TableModel::ray), phase, cloud, nullptr, &sigma);
     EXPECT_FALSE(cloud.sigma_z.empty());
-    fpp::apply_table(build_table(fpp::TableModel::ray), phase, cloud);
+    fpp::apply_table(synthetic_table(fpp::TableModel::ray), phase, cloud);
     EXPECT_TRUE(cloud.sigma_z.empty());
 }
 

@@ -6,6 +6,7 @@
 #include "fpp/parallel.hpp"
 #include "fpp/table_kernel.hpp"
 
+#include "synthetic_table.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -21,78 +22,14 @@
 
 namespace {
 
+using fpp::test::kSyntheticCamera;
+using fpp::test::synthetic_has_model;
+using fpp::test::synthetic_pixel;
+using fpp::test::synthetic_table;
+using fpp::test::SyntheticPixel;
+
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-constexpr fpp::Size kCamera{100, 37}; // edge tiles in both directions with 32x8 tiles
-constexpr double kHalfRange = 150.0;  // projector px each side of a pixel's centre
-constexpr double kU = 0x1p-24;        // unit roundoff of float
-
-// The analytic surface the tables come from (camera frame, mm): pixel (x, y)
-// sees its centre phase at a depth of ~800 mm; the cubics are smooth and of
-// realistic size (Z spans about 240 mm over the phase range).
-struct Pixel {
-    double centre, ihr;
-    double c[3][4]; // X, Y, Z coefficients (polynomial) ; Z in c[2] (ray)
-    double xn, yn;
-};
-
-Pixel analytic(int x, int y) {
-    Pixel p{};
-    p.centre = 300.0 + 7.3 * x + 0.41 * y;
-    p.ihr = 1.0 / (kHalfRange + 0.5 * (x % 5));
-    p.xn = (x - 50.0) / 120.0;
-    p.yn = (y - 18.0) / 120.0;
-    const double z[4] = {800.0 + 0.2 * y, -120.0 + 0.1 * x, 6.0 - 0.01 * y, -1.5 + 0.003 * x};
-    for (int k = 0; k < 4; ++k) {
-        p.c[2][k] = z[k];
-        // X and Y follow the ray with a small bend, as a distorted ray would.
-        p.c[0][k] = p.xn * z[k] + (k == 2 ? 0.4 : 0.0);
-        p.c[1][k] = p.yn * z[k] + (k == 3 ? -0.3 : 0.0);
-    }
-    return p;
-}
-
-bool has_model(int x, int y) {
-    return (x * 7 + y * 3) % 23 != 0;
-}
-
-fpp::CoefficientTable build_table(fpp::TableModel model, int tw = 32, int th = 8) {
-    fpp::TableInfo info;
-    info.camera = kCamera;
-    info.tile_width = tw;
-    info.tile_height = th;
-    info.model = model;
-    info.projector = {1280, 800};
-    fpp::CoefficientTable table(info);
-    namespace tp = fpp::table_plane;
-    for (int y = 0; y < kCamera.height; ++y) {
-        for (int x = 0; x < kCamera.width; ++x) {
-            if (!has_model(x, y))
-                continue;
-            const Pixel p = analytic(x, y);
-            table.set(tp::centre, x, y, float(p.centre));
-            table.set(tp::inv_half_range, x, y, float(p.ihr));
-            for (int k = 0; k < 4; ++k) {
-                if (model == fpp::TableModel::polynomial) {
-                    table.set(tp::poly_x + k, x, y, float(p.c[0][k]));
-                    table.set(tp::poly_y + k, x, y, float(p.c[1][k]));
-                    table.set(tp::poly_z + k, x, y, float(p.c[2][k]));
-                } else {
-                    table.set(tp::ray_z + k, x, y, float(p.c[2][k]));
-                }
-            }
-            if (model == fpp::TableModel::ray) {
-                table.set(tp::ray_xn, x, y, float(p.xn));
-                table.set(tp::ray_yn, x, y, float(p.yn));
-            } else if (model == fpp::TableModel::rational) {
-                // A pole outside the range, as the fit keeps it (|d| < 0.9).
-                table.set(tp::rational_d, x, y, float(0.15 - 0.004 * (x % 50)));
-                table.set(tp::rational_xn, x, y, float(p.xn));
-                table.set(tp::rational_yn, x, y, float(p.yn));
-            }
-        }
-    }
-    return table;
-}
+constexpr double kU = 0x1p-24; // unit roundoff of float
 
 // Phase per pixel, by kind: in range (|s| <= 0.97 of the half range), out of
 // range (1.02..1.5), NaN and infinite.
@@ -110,10 +47,10 @@ Kind kind_of(int x, int y) {
 }
 
 fpp::Image<float> make_phase() {
-    fpp::Image<float> phase(kCamera, 1);
-    for (int y = 0; y < kCamera.height; ++y) {
-        for (int x = 0; x < kCamera.width; ++x) {
-            const Pixel p = analytic(x, y);
+    fpp::Image<float> phase(kSyntheticCamera, 1);
+    for (int y = 0; y < kSyntheticCamera.height; ++y) {
+        for (int x = 0; x < kSyntheticCamera.width; ++x) {
+            const SyntheticPixel p = synthetic_pixel(x, y);
             const double half = 1.0 / p.ihr;
             const double s = std::sin(0.37 * x + 0.11 * y);
             float v = 0.0f;
@@ -161,8 +98,8 @@ Horner horner(const float* cf, double t) {
 fpp::TableApplyStats expected_stats(const fpp::CoefficientTable& table,
                                     const fpp::Image<float>& phase) {
     fpp::TableApplyStats s;
-    for (int y = 0; y < kCamera.height; ++y) {
-        for (int x = 0; x < kCamera.width; ++x) {
+    for (int y = 0; y < kSyntheticCamera.height; ++y) {
+        for (int x = 0; x < kSyntheticCamera.width; ++x) {
             const double p = double(phase.at(x, y));
             if (!std::isfinite(p))
                 continue;
@@ -204,12 +141,12 @@ double check_against_double(const fpp::CoefficientTable& table, const fpp::Image
     const int xn_plane = rational ? tp::rational_xn : tp::ray_xn;
     const int yn_plane = rational ? tp::rational_yn : tp::ray_yn;
     double max_error = 0.0;
-    for (int y = 0; y < kCamera.height; ++y) {
-        for (int x = 0; x < kCamera.width; ++x) {
+    for (int y = 0; y < kSyntheticCamera.height; ++y) {
+        for (int x = 0; x < kSyntheticCamera.width; ++x) {
             const float X = cloud.xyz.at(x, y, 0);
             const float Y = cloud.xyz.at(x, y, 1);
             const float Z = cloud.xyz.at(x, y, 2);
-            const bool point = kind_of(x, y) == Kind::in_range && has_model(x, y);
+            const bool point = kind_of(x, y) == Kind::in_range && synthetic_has_model(x, y);
             if (!point) {
                 EXPECT_TRUE(std::isnan(X) && std::isnan(Y) && std::isnan(Z))
                     << "pixel " << x << "," << y << " should have no point";
@@ -258,12 +195,12 @@ double check_against_double(const fpp::CoefficientTable& table, const fpp::Image
 } // namespace
 
 TEST(TableKernel, PolynomialMatchesDoubleEvaluation) {
-    const fpp::CoefficientTable table = build_table(fpp::TableModel::polynomial);
+    const fpp::CoefficientTable table = synthetic_table(fpp::TableModel::polynomial);
     const fpp::Image<float> phase = make_phase();
     fpp::PointCloud cloud;
     fpp::ThreadPool pool(2);
     const fpp::TableApplyStats stats = fpp::apply_table(table, phase, cloud, &pool);
-    ASSERT_EQ(cloud.xyz.size(), kCamera);
+    ASSERT_EQ(cloud.xyz.size(), kSyntheticCamera);
     ASSERT_EQ(cloud.xyz.channels(), 3);
     const double max_error = check_against_double(table, phase, cloud);
     // |Z| < 1024 mm: within 2.5 float ulps (6.1e-5 mm each below 1024 mm).
@@ -277,7 +214,7 @@ TEST(TableKernel, PolynomialMatchesDoubleEvaluation) {
 }
 
 TEST(TableKernel, RayModelGivesXnZAndMatchesDoubleEvaluation) {
-    const fpp::CoefficientTable table = build_table(fpp::TableModel::ray);
+    const fpp::CoefficientTable table = synthetic_table(fpp::TableModel::ray);
     const fpp::Image<float> phase = make_phase();
     fpp::PointCloud cloud;
     const fpp::TableApplyStats stats = fpp::apply_table(table, phase, cloud);
@@ -344,7 +281,7 @@ TEST(TableKernel, StatsCountEveryKindOfMissingPoint) {
 TEST(TableKernel, SameResultOnOneAndManyThreadsAndAnyTiling) {
     const fpp::Image<float> phase = make_phase();
     for (const fpp::TableModel model : {fpp::TableModel::polynomial, fpp::TableModel::ray}) {
-        const fpp::CoefficientTable table = build_table(model);
+        const fpp::CoefficientTable table = synthetic_table(model);
         fpp::ThreadPool one(1);
         fpp::ThreadPool four(4);
         fpp::PointCloud a, b, c, d;
@@ -357,7 +294,7 @@ TEST(TableKernel, SameResultOnOneAndManyThreadsAndAnyTiling) {
         expect_stats_eq(sa, sc);
         // Other tile shapes (one tile across, tall tiles): same points.
         for (const auto& [tw, th] : {std::pair{256, 64}, std::pair{8, 24}}) {
-            const fpp::CoefficientTable other = build_table(model, tw, th);
+            const fpp::CoefficientTable other = synthetic_table(model, tw, th);
             const auto sd = fpp::apply_table(other, phase, d, &four);
             EXPECT_TRUE(same_bits(a.xyz, d.xyz)) << tw << "x" << th;
             expect_stats_eq(sa, sd);
@@ -366,10 +303,10 @@ TEST(TableKernel, SameResultOnOneAndManyThreadsAndAnyTiling) {
 }
 
 TEST(TableKernel, MappedTableGivesTheSameCloud) {
-    const fpp::CoefficientTable table = build_table(fpp::TableModel::polynomial);
+    const fpp::CoefficientTable table = synthetic_table(fpp::TableModel::polynomial);
     fpp::test::TempDir dir;
     fpp::write_table(dir / "t.fpt", table);
-    const fpp::CoefficientTable mapped = fpp::load_table(dir / "t.fpt", &kCamera);
+    const fpp::CoefficientTable mapped = fpp::load_table(dir / "t.fpt", &kSyntheticCamera);
     ASSERT_TRUE(mapped.mapped());
     const fpp::Image<float> phase = make_phase();
     fpp::PointCloud a, b;
@@ -379,12 +316,12 @@ TEST(TableKernel, MappedTableGivesTheSameCloud) {
 }
 
 TEST(TableKernel, ReusedCloudIsFullyOverwritten) {
-    const fpp::CoefficientTable table = build_table(fpp::TableModel::ray);
+    const fpp::CoefficientTable table = synthetic_table(fpp::TableModel::ray);
     const fpp::Image<float> phase = make_phase();
     fpp::PointCloud fresh;
     fpp::apply_table(table, phase, fresh);
     fpp::PointCloud reused;
-    reused.xyz = fpp::Image<float>(kCamera, 3, 12345.0f);
+    reused.xyz = fpp::Image<float>(kSyntheticCamera, 3, 12345.0f);
     fpp::apply_table(table, phase, reused);
     EXPECT_TRUE(same_bits(fresh.xyz, reused.xyz));
     fpp::PointCloud wrong_size;
@@ -397,22 +334,22 @@ TEST(TableKernel, BackgroundTilesAreWrittenAsNoPoint) {
     // Phase only in x 40..69, y 10..19 (parts of six 32x8 tiles); every other
     // tile is background and is skipped, yet a reused cloud must come out
     // NaN there and the decoded part identical to a full evaluation.
-    const fpp::CoefficientTable table = build_table(fpp::TableModel::rational);
+    const fpp::CoefficientTable table = synthetic_table(fpp::TableModel::rational);
     const fpp::Image<float> full_phase = make_phase();
     fpp::PointCloud full;
     fpp::apply_table(table, full_phase, full);
-    fpp::Image<float> phase(kCamera, 1, kNaN);
+    fpp::Image<float> phase(kSyntheticCamera, 1, kNaN);
     const auto inside = [](int x, int y) { return x >= 40 && x < 70 && y >= 10 && y < 20; };
-    for (int y = 0; y < kCamera.height; ++y)
-        for (int x = 0; x < kCamera.width; ++x)
+    for (int y = 0; y < kSyntheticCamera.height; ++y)
+        for (int x = 0; x < kSyntheticCamera.width; ++x)
             if (inside(x, y))
                 phase.at(x, y) = full_phase.at(x, y);
     fpp::PointCloud reused;
-    reused.xyz = fpp::Image<float>(kCamera, 3, 12345.0f);
+    reused.xyz = fpp::Image<float>(kSyntheticCamera, 3, 12345.0f);
     const fpp::TableApplyStats stats = fpp::apply_table(table, phase, reused);
     std::size_t points = 0;
-    for (int y = 0; y < kCamera.height; ++y)
-        for (int x = 0; x < kCamera.width; ++x)
+    for (int y = 0; y < kSyntheticCamera.height; ++y)
+        for (int x = 0; x < kSyntheticCamera.width; ++x)
             for (int c = 0; c < 3; ++c) {
                 const float got = reused.xyz.at(x, y, c);
                 if (!inside(x, y)) {
@@ -429,7 +366,7 @@ TEST(TableKernel, BackgroundTilesAreWrittenAsNoPoint) {
 }
 
 TEST(TableKernel, RejectsMismatchedInput) {
-    const fpp::CoefficientTable table = build_table(fpp::TableModel::ray);
+    const fpp::CoefficientTable table = synthetic_table(fpp::TableModel::ray);
     fpp::PointCloud cloud;
     EXPECT_THROW(fpp::apply_table(table, fpp::Image<float>(99, 37, 1), cloud),
                  std::invalid_argument);
@@ -444,7 +381,7 @@ TEST(TableKernel, RejectsMismatchedInput) {
 
 // The rational model: Z = cubic(t) / (1 + d t), X = xn Z, Y = yn Z.
 TEST(TableKernel, RationalModelMatchesDoubleEvaluation) {
-    const fpp::CoefficientTable table = build_table(fpp::TableModel::rational);
+    const fpp::CoefficientTable table = synthetic_table(fpp::TableModel::rational);
     const fpp::Image<float> phase = make_phase();
     fpp::PointCloud cloud;
     fpp::ThreadPool pool(2);
