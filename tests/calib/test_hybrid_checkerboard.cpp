@@ -67,8 +67,7 @@ struct BoardSession {
           session(dir.path() / "boards") {
         options.poses = poses;
         options.seed = seed;
-        sim::write_session(session, rig, standard_sequence("gray-xy", rig.projector_size),
-                           options);
+        sim::write_session(session, rig, standard_sequence("gray-xy", rig.projector_size), options);
     }
 };
 
