@@ -2,6 +2,7 @@
 // non-finite values, sizes), atomic saving, and the foreign formats of
 // SLStudio (calibration.xml) and SLMaster (caliInfo.yml).
 
+#include "lens_expect.hpp"
 #include "test_support.hpp"
 
 #include "fpp/calib/camera_pair.hpp"
@@ -42,18 +43,7 @@ StereoCalibration sample() {
     return c;
 }
 
-void expect_lens_eq(const fpp::LensModel& a, const fpp::LensModel& b) {
-    EXPECT_EQ(a.fu, b.fu);
-    EXPECT_EQ(a.fv, b.fv);
-    EXPECT_EQ(a.cu, b.cu);
-    EXPECT_EQ(a.cv, b.cv);
-    EXPECT_EQ(a.skew, b.skew);
-    EXPECT_EQ(a.k1, b.k1);
-    EXPECT_EQ(a.k2, b.k2);
-    EXPECT_EQ(a.k3, b.k3);
-    EXPECT_EQ(a.p1, b.p1);
-    EXPECT_EQ(a.p2, b.p2);
-}
+using fpp::test::expect_same_lens;
 
 TEST(CalibrationFile, RoundTripIsExact) {
     TempDir dir;
@@ -64,8 +54,8 @@ TEST(CalibrationFile, RoundTripIsExact) {
     EXPECT_EQ(r.format, CalibrationFormat::fpp);
     EXPECT_EQ(r.camera_size, c.camera_size);
     EXPECT_EQ(r.projector_size, c.projector_size);
-    expect_lens_eq(r.camera, c.camera);
-    expect_lens_eq(r.projector, c.projector);
+    expect_same_lens(r.camera, c.camera);
+    expect_same_lens(r.projector, c.projector);
     EXPECT_EQ(r.R, c.R);
     EXPECT_EQ(r.T, c.T);
     EXPECT_EQ(r.camera_rms, c.camera_rms);
@@ -406,7 +396,7 @@ TEST(CalibrationFile, ReadsSlMasterCaliInfo) {
     sized.projector_size = {1920, 1080};
     fpp::calib::save_calibration(dir / "ours.yaml", sized);
     const StereoCalibration back = fpp::calib::load_calibration(dir / "ours.yaml");
-    expect_lens_eq(back.camera, c.camera);
+    expect_same_lens(back.camera, c.camera);
     EXPECT_EQ(back.R, c.R);
     EXPECT_EQ(back.projector_size, (fpp::Size{1920, 1080}));
 }
@@ -579,8 +569,8 @@ TEST(CalibrationFile, JsonThatOpenCvWroteReadsAsItsYaml) {
     const StereoCalibration back = fpp::calib::parse_calibration(json, "caliInfo.json");
     EXPECT_EQ(back.format, CalibrationFormat::slmaster);
     EXPECT_EQ(back.camera_size, yaml.camera_size);
-    expect_lens_eq(back.camera, yaml.camera);
-    expect_lens_eq(back.projector, yaml.projector);
+    expect_same_lens(back.camera, yaml.camera);
+    expect_same_lens(back.projector, yaml.projector);
     EXPECT_EQ(back.R, yaml.R);
     EXPECT_EQ(back.T, yaml.T);
 }
