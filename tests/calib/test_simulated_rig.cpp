@@ -5,23 +5,13 @@
 
 #include "fpp/calib/simulated_rig.hpp"
 
-#include <gtest/gtest.h>
+#include "lens_expect.hpp"
 
-#include <iterator>
+#include <gtest/gtest.h>
 
 namespace {
 
-// Every term of two lens models equal.
-void expect_same_lens(const fpp::LensModel& a, const fpp::LensModel& b) {
-    const double first[] = {a.fu, a.fv, a.cu, a.cv,    a.skew,  a.k1,   a.k2,
-                            a.k3, a.p1, a.p2, a.k4,    a.s1,    a.s2,   a.s3,
-                            a.s4, a.t1, a.t2, a.dc_k1, a.dc_k2, a.dc_x, a.dc_y};
-    const double second[] = {b.fu, b.fv, b.cu, b.cv,    b.skew,  b.k1,   b.k2,
-                             b.k3, b.p1, b.p2, b.k4,    b.s1,    b.s2,   b.s3,
-                             b.s4, b.t1, b.t2, b.dc_k1, b.dc_k2, b.dc_x, b.dc_y};
-    for (std::size_t i = 0; i < std::size(first); ++i)
-        EXPECT_EQ(first[i], second[i]) << "term " << i;
-}
+using fpp::test::expect_same_lens;
 
 TEST(SimulatedRig, TheStereoModelOfARigIsItsLensesSizesAndPose) {
     const fpp::sim::Rig rig = fpp::sim::load_rig(fpp::sim::effects_rig_path());
