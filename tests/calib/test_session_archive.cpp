@@ -24,12 +24,7 @@ using fpp::test::TempDir;
 
 namespace {
 
-std::string read_bytes(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+using fpp::test::file_bytes;
 
 // Names in `folder` that start with a dot (what a failed write leaves).
 std::vector<std::string> hidden_entries(const fs::path& folder) {
@@ -76,7 +71,7 @@ TEST(SessionArchive, EntriesThatWouldLandOutsideTheFolderAreRefusedByName) {
     write_tar(dir / "good.tar", good);
     const auto extracted = fpp::calib::extract_session_tar(dir / "good.tar", "cal", dir / "good");
     EXPECT_EQ(extracted.poses, std::vector<std::string>{"scan-1"});
-    EXPECT_EQ(read_bytes(dir / "good" / "scan-1" / "scan.json"), "{}");
+    EXPECT_EQ(file_bytes(dir / "good" / "scan-1" / "scan.json"), "{}");
 
     const std::vector<std::pair<std::string, std::string>> bad = {
         {"/etc/evil", "x"}, {"cal/../evil", "x"}, {"other/evil", "x"}, {"cal/scan-1/link", "/etc"}};

@@ -19,6 +19,8 @@
 
 namespace {
 
+using fpp::test::file_bytes;
+
 using fpp::test::shell_quote;
 using fpp::test::TempDir;
 using fpp::test::ToolRun;
@@ -128,12 +130,6 @@ TEST(CliHybrid, TableFromTheCheckerboardSessionReconstructsAScan) {
     EXPECT_GT(fpp::read_ply(cloud).size(), 90000u);
 }
 
-std::string file_text(const fs::path& path) {
-    std::stringstream read;
-    read << std::ifstream(path, std::ios::binary).rdbuf();
-    return read.str();
-}
-
 // `calibrate` does both from one reading of the session: the calibration
 // file byte for byte as `stereo` writes it, and every coefficient of the
 // table as `hybrid` fits it from that file.
@@ -150,7 +146,7 @@ TEST(CliHybrid, CalibrateWritesWhatStereoAndThenHybridWrite) {
     ASSERT_EQ(run.exit_code, 0) << run.output;
     EXPECT_TRUE(contains(run.output, "calibrated from 10 of 10 poses")) << run.output;
     EXPECT_TRUE(contains(run.output, "poses: 10 of 10 used")) << run.output;
-    EXPECT_EQ(file_text(calib), file_text(m.calib));
+    EXPECT_EQ(file_bytes(calib), file_bytes(m.calib));
     EXPECT_TRUE(fs::exists(stereo_report / "summary.md"));
     EXPECT_TRUE(fs::exists(hybrid_report / "sv-offsets.png"));
 

@@ -32,6 +32,8 @@
 
 namespace {
 
+using fpp::test::file_bytes;
+
 using fpp::test::TempDir;
 namespace fs = std::filesystem;
 
@@ -52,13 +54,6 @@ std::string quote(const std::string& s) {
 
 ToolRun run_calib(const std::string& args, const fs::path& scratch) {
     return fpp::test::run_tool(fpp::test::calib_exe(), args, scratch);
-}
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
 }
 
 bool contains(const std::string& text, const std::string& what) {
@@ -266,7 +261,7 @@ TEST(CliPaperExperiments, RunsWritesItsOutputsAndKeepsTheAccuracyRelations) {
     }
     EXPECT_FALSE(fs::exists(s.out / "sessions")); // removed without --keep-sessions
 
-    const std::string summary = read_text(s.out / "report" / "summary.md");
+    const std::string summary = file_bytes(s.out / "report" / "summary.md");
     for (const char* paper : {"0.118", "0.044", "0.076", "0.059", "1.040 s"})
         EXPECT_TRUE(contains(summary, paper)) << paper << "\n" << summary;
     for (const char* section : {"## Errors against the truth", "## Ball bar", "## Targets"})
@@ -296,7 +291,7 @@ TEST(CliPaperExperiments, ExistingOutputFolderIsRefusedAndLeftAlone) {
     EXPECT_EQ(run.exit_code, 2) << run.output;
     EXPECT_TRUE(contains(run.output, "already exists")) << run.output;
     EXPECT_EQ(listing(dir.path()), before);
-    EXPECT_EQ(read_text(out / "keep.txt"), "mine\n");
+    EXPECT_EQ(file_bytes(out / "keep.txt"), "mine\n");
 }
 
 TEST(CliPaperExperiments, BadArgumentsExitNonZeroAndWriteNothing) {

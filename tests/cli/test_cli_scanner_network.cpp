@@ -44,14 +44,9 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-constexpr const char* kToken = "fpp-test-token-0123456789abcdef";
+using fpp::test::file_bytes;
 
-std::string read_bytes(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+constexpr const char* kToken = "fpp-test-token-0123456789abcdef";
 
 void write_bytes(const fs::path& file, const std::string& bytes) {
     std::ofstream(file, std::ios::binary) << bytes;
@@ -222,7 +217,7 @@ std::map<std::string, std::string> tree(const fs::path& root) {
     std::map<std::string, std::string> files;
     for (const auto& item : fs::recursive_directory_iterator(root))
         if (item.is_regular_file())
-            files[fs::relative(item.path(), root).string()] = read_bytes(item.path());
+            files[fs::relative(item.path(), root).string()] = file_bytes(item.path());
     return files;
 }
 
@@ -363,7 +358,7 @@ TEST(ScannerNetwork, PushedTableIsInstalledAndACorruptOneChangesNothing) {
     const fs::path good = setup.dir / "good.fpt";
     fpp::write_table(good, fpp::test::rig_truth_table(
                                fpp::sim::load_rig(fpp::sim::effects_rig_path()).binned_camera(2)));
-    const std::string good_bytes = read_bytes(good);
+    const std::string good_bytes = file_bytes(good);
     const std::string good_hash = hex64(fpp::fnv1a64(good_bytes.data(), good_bytes.size()));
 
     ScannerDaemon scanner(setup.daemon_args());
@@ -376,7 +371,7 @@ TEST(ScannerNetwork, PushedTableIsInstalledAndACorruptOneChangesNothing) {
     ASSERT_EQ(status.exit_code, 0) << status.output;
     EXPECT_NE(status.output.find("\"file_fnv1a64\": \"" + good_hash + "\""), std::string::npos)
         << status.output;
-    EXPECT_EQ(read_bytes(setup.table), good_bytes);
+    EXPECT_EQ(file_bytes(setup.table), good_bytes);
 
     // Truncated: the scanner's loader refuses it, naming the field its
     // strict loader names here too, and the table in use stays.
@@ -398,7 +393,7 @@ TEST(ScannerNetwork, PushedTableIsInstalledAndACorruptOneChangesNothing) {
     ASSERT_EQ(after.exit_code, 0) << after.output;
     EXPECT_NE(after.output.find("\"file_fnv1a64\": \"" + good_hash + "\""), std::string::npos)
         << after.output;
-    EXPECT_EQ(read_bytes(setup.table), good_bytes);
+    EXPECT_EQ(file_bytes(setup.table), good_bytes);
 }
 
 TEST(ScannerNetwork, WrongTokenIsRefusedWith401) {

@@ -75,6 +75,13 @@ std::string shell_quote(const std::string& s) {
     return q + "'";
 }
 
+std::string file_bytes(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    return bytes.str();
+}
+
 std::vector<std::filesystem::path> entries_under(const std::filesystem::path& dir) {
     std::vector<std::filesystem::path> entries;
     if (std::filesystem::exists(dir))

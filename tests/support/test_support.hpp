@@ -71,6 +71,9 @@ inline std::string shell_quote(const std::filesystem::path& p) {
 ToolRun run_tool(const std::string& exe, const std::string& args,
                  const std::filesystem::path& scratch);
 
+// A file's bytes ("" when it cannot be read).
+std::string file_bytes(const std::filesystem::path& file);
+
 // Every file and folder below `dir`, recursively ({} when `dir` is not
 // there): what a failed write must not leave in a store.
 std::vector<std::filesystem::path> entries_under(const std::filesystem::path& dir);

@@ -37,17 +37,12 @@ using namespace std::chrono_literals;
 
 namespace {
 
+using fpp::test::file_bytes;
+
 // The test runs under the sanitizers alone (tests/CMakeLists.txt), where a
 // daemon start costs about 0.5 s: all 200 cuts there take about 40 s.
 constexpr int kCuts = 200;
 const std::string kToken = "0123456789abcdef0123456789abcdef";
-
-std::string read_bytes(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
 
 // fpp-scanner --board FILE, its output in `log`, killed with SIGKILL.
 class Daemon {
@@ -72,7 +67,7 @@ public:
     Daemon(const Daemon&) = delete;
     Daemon& operator=(const Daemon&) = delete;
 
-    std::string log() const { return read_bytes(log_); }
+    std::string log() const { return file_bytes(log_); }
     // The port once it listens (0 after 20 s, or when it exited).
     int wait_listening() {
         const std::string mark = "http: listening on 127.0.0.1:";
@@ -131,7 +126,7 @@ std::string check_store(const fs::path& store, const fs::path& table_dir,
     for (const auto& e : fs::directory_iterator(table_dir))
         if (e.path().filename().string().starts_with(".table.fpt"))
             return "a table temporary after the start: " + e.path().filename().string();
-    const std::string table = read_bytes(table_dir / "table.fpt");
+    const std::string table = file_bytes(table_dir / "table.fpt");
     if (table != tables[0] && table != tables[1])
         return "table.fpt is neither the old nor the new table (" + std::to_string(table.size()) +
                " bytes)";
@@ -152,7 +147,7 @@ TEST(ScannerPowerCut, KilledAtRandomMomentsTheStoreAndTableStayWhole) {
     std::vector<std::string> tables;
     for (const fpp::sim::Rig* r : {&rig, static_cast<const fpp::sim::Rig*>(&moved)}) {
         fpp::write_table(dir / "table.fpt", fpp::test::rig_truth_table(*r));
-        tables.push_back(read_bytes(dir / "table.fpt"));
+        tables.push_back(file_bytes(dir / "table.fpt"));
     }
     ASSERT_NE(tables[0], tables[1]);
     fpp::test::SimBoardYaml b;
@@ -193,7 +188,7 @@ TEST(ScannerPowerCut, KilledAtRandomMomentsTheStoreAndTableStayWhole) {
         const double length_ms = install ? install_ms : scan_ms;
         const auto cut_after = std::chrono::microseconds(
             static_cast<long>(std::uniform_real_distribution<double>(0, 1500 * length_ms)(random)));
-        const std::string current = read_bytes(dir / "table.fpt");
+        const std::string current = file_bytes(dir / "table.fpt");
         const std::string& next = current == tables[0] ? tables[1] : tables[0];
         const auto started = std::chrono::steady_clock::now();
         std::atomic<bool> done{false};

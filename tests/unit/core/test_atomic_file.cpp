@@ -27,12 +27,7 @@ using fpp::test::TempDir;
 
 namespace {
 
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+using fpp::test::file_bytes;
 
 std::vector<std::string> listing(const fs::path& folder) {
     std::vector<std::string> names;
@@ -51,9 +46,9 @@ bool contains(const std::string& text, const std::string& part) {
 TEST(AtomicFile, WritesAndReplacesWithoutLeftovers) {
     TempDir dir;
     fpp::write_file_atomically(dir / "a.txt", "first");
-    EXPECT_EQ(read_text(dir / "a.txt"), "first");
+    EXPECT_EQ(file_bytes(dir / "a.txt"), "first");
     fpp::write_file_atomically(dir / "a.txt", std::string(100000, 'x'));
-    EXPECT_EQ(read_text(dir / "a.txt"), std::string(100000, 'x'));
+    EXPECT_EQ(file_bytes(dir / "a.txt"), std::string(100000, 'x'));
     fpp::write_file_atomically(dir / "empty.txt", "");
     EXPECT_EQ(fs::file_size(dir / "empty.txt"), 0u);
     EXPECT_EQ(listing(dir.path()), (std::vector<std::string>{"a.txt", "empty.txt"}));
@@ -71,7 +66,7 @@ TEST(AtomicFile, CallbackWritesTheTemporaryFileBesideTheTarget) {
         std::ofstream(temp, std::ios::binary) << "payload";
     });
     EXPECT_FALSE(fs::exists(seen));
-    EXPECT_EQ(read_text(dir / "out.bin"), "payload");
+    EXPECT_EQ(file_bytes(dir / "out.bin"), "payload");
 }
 
 TEST(AtomicFile, ExceptionInCallbackRemovesTemporaryAndKeepsOldTarget) {
@@ -83,7 +78,7 @@ TEST(AtomicFile, ExceptionInCallbackRemovesTemporaryAndKeepsOldTarget) {
                                            throw std::runtime_error("encoder failed");
                                        }),
                  std::runtime_error);
-    EXPECT_EQ(read_text(dir / "keep.txt"), "old");
+    EXPECT_EQ(file_bytes(dir / "keep.txt"), "old");
     EXPECT_EQ(listing(dir.path()), std::vector<std::string>{"keep.txt"});
 }
 
@@ -150,7 +145,7 @@ TEST(SyncedFileWriter, PiecesArriveInOrderAcrossWritebackChunks) {
         EXPECT_THROW(out.finish(), fpp::IoError);
     }
     ASSERT_GT(expected.size(), std::size_t{16} << 20);
-    EXPECT_TRUE(read_text(path) == expected);
+    EXPECT_TRUE(file_bytes(path) == expected);
     EXPECT_EQ(listing(dir.path()), std::vector<std::string>{"pieces.bin"});
 }
 
@@ -198,7 +193,7 @@ TEST(AtomicFile, ConcurrentWritersNeverProduceAMixedFile) {
     }
     for (auto& t : threads)
         t.join();
-    const std::string result = read_text(dir / "shared");
+    const std::string result = file_bytes(dir / "shared");
     EXPECT_TRUE(result == a || result == b);
     EXPECT_EQ(listing(dir.path()), std::vector<std::string>{"shared"});
 }
@@ -297,7 +292,7 @@ TEST(AtomicFile, WritesCutShortLeaveOnlyTemporariesThatAreRemovedAtStart) {
     EXPECT_TRUE(before[2].starts_with(".scan-1.partial-")) << before[2];
     EXPECT_TRUE(before[3].starts_with(".table.fpt.tmp-")) << before[3];
     EXPECT_FALSE(fs::exists(dir / "scan-1"));
-    EXPECT_EQ(read_text(dir / "table.fpt"), "old table");
+    EXPECT_EQ(file_bytes(dir / "table.fpt"), "old table");
 
     // Only another target's: nothing of table.fpt's is touched.
     EXPECT_EQ(fpp::remove_interrupted_writes(dir.path(), "settings.yaml").size(), 0u);

@@ -21,12 +21,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string text_of(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+using fpp::test::file_bytes;
 
 // The field of the InputError that reading `text` throws, its message after
 // "FILE: FIELD: ".
@@ -59,7 +54,7 @@ TEST(SettingsFile, WrittenInTheDocumentedFormAndReadBackExactly) {
     fpp::test::TempDir dir;
     const fs::path file = dir / "settings.yaml";
     write_settings_file(file, ScannerSettings{8000});
-    EXPECT_EQ(text_of(file), "format: fpp-scanner-settings/1\nexposure_us: 8000.0\n");
+    EXPECT_EQ(file_bytes(file), "format: fpp-scanner-settings/1\nexposure_us: 8000.0\n");
     for (const double exposure : {10.0, 1e6, 2500.5, 1234.5678901234567}) {
         write_settings_file(file, ScannerSettings{exposure}); // replaces the earlier file
         const auto read = read_settings_file(file);
