@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 
 namespace {
@@ -336,6 +337,22 @@ TEST(CameraPair, RealSlMasterMonocularFileIsStillCameraProjector) {
     const auto c = fpp::calib::load_calibration(file);
     EXPECT_EQ(c.format, fpp::calib::CalibrationFormat::slmaster);
     EXPECT_NEAR(c.projector.fu, 2496.633, 1e-3);
+}
+
+// Each format's name reads back; an unknown name is refused naming them all.
+TEST(CameraPair, FormatNamesReadBack) {
+    using fpp::calib::parse_camera_pair_format, fpp::calib::to_string;
+    for (const CameraPairFormat f : {CameraPairFormat::automatic, CameraPairFormat::opencv_stereo,
+                                     CameraPairFormat::bouguet, CameraPairFormat::matlab})
+        EXPECT_EQ(parse_camera_pair_format(to_string(f)), f) << to_string(f);
+    EXPECT_STREQ(to_string(CameraPairFormat::opencv_stereo), "opencv-stereo");
+    try {
+        parse_camera_pair_format("opencv");
+        FAIL() << "no exception";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_STREQ(e.what(),
+                     "unknown camera-pair format 'opencv' (auto, opencv-stereo, bouguet, matlab)");
+    }
 }
 
 } // namespace

@@ -38,6 +38,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 namespace fpp::test {
@@ -259,6 +260,21 @@ TEST(HybridCalibrate, BadSessionsAreRefusedNamingTheProblem) {
     bad.min_poses = 3;
     EXPECT_THROW((void)calib::calibrate_hybrid(folder, setup().calibration, 1, bad),
                  std::invalid_argument);
+}
+
+// Each value's name reads back; an unknown name is refused naming them all.
+TEST(HybridCalibrate, SamplesNamesReadBack) {
+    using calib::HybridSamples, calib::parse_hybrid_samples, calib::to_string;
+    for (const HybridSamples s :
+         {HybridSamples::boards_and_model, HybridSamples::boards, HybridSamples::model})
+        EXPECT_EQ(parse_hybrid_samples(to_string(s)), s) << to_string(s);
+    EXPECT_STREQ(to_string(HybridSamples::boards_and_model), "boards+model");
+    try {
+        parse_hybrid_samples("planes");
+        FAIL() << "no exception";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_STREQ(e.what(), "unknown samples 'planes' (boards+model, boards, model)");
+    }
 }
 
 } // namespace

@@ -112,4 +112,11 @@ TEST(SessionCheck, VerdictsAndTheirReasons) {
     EXPECT_THROW(calib::check_session(session, check), std::invalid_argument);
 }
 
+// The verdicts' names (the report's and the CLI's), one each.
+TEST(SessionCheck, VerdictNames) {
+    EXPECT_STREQ(calib::to_string(calib::SessionVerdict::enough), "enough");
+    EXPECT_STREQ(calib::to_string(calib::SessionVerdict::not_yet), "not yet");
+    EXPECT_STREQ(calib::to_string(calib::SessionVerdict::too_weak), "too weak");
+}
+
 } // namespace

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
 
 namespace {
 
@@ -229,6 +230,20 @@ TEST(StereoCalibrate, RotationVectorRoundTrip) {
     }
     const Mat3 R = calib::rotation_from_vector({0, 0, 3.14159265358979323846 / 2});
     EXPECT_NEAR(R[1], -1.0, 1e-15); // Rz(90 deg): x axis to y
+}
+
+// Each procedure's name reads back; an unknown name is refused naming them all.
+TEST(StereoCalibrate, ProcedureNamesReadBack) {
+    for (const calib::StereoProcedure p :
+         {calib::StereoProcedure::camera_first, calib::StereoProcedure::joint})
+        EXPECT_EQ(calib::parse_stereo_procedure(calib::to_string(p)), p) << calib::to_string(p);
+    EXPECT_STREQ(calib::to_string(calib::StereoProcedure::camera_first), "camera-first");
+    try {
+        calib::parse_stereo_procedure("paper");
+        FAIL() << "no exception";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_STREQ(e.what(), "unknown stereo procedure 'paper' (camera-first, joint)");
+    }
 }
 
 } // namespace

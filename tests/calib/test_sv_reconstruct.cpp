@@ -29,6 +29,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 namespace {
@@ -468,6 +469,23 @@ TEST(SvReconstructSimulated, PlaneWithOneDnReadNoise) {
     EXPECT_LT(r.x.rms, 0.03);
     EXPECT_LT(r.plane_xy.rms, 0.03);
     EXPECT_NEAR(r.plane_xy.distance, 480.0, 0.01);
+}
+
+// The names --axes takes, one per value, each read back; an unknown one is
+// refused naming them all.
+TEST(SvReconstruct, AxesNamesReadBack) {
+    using fpp::calib::parse_axes, fpp::calib::to_string;
+    EXPECT_STREQ(to_string(ReconstructAxes::automatic), "auto");
+    EXPECT_STREQ(to_string(ReconstructAxes::x), "x");
+    EXPECT_STREQ(to_string(ReconstructAxes::xy), "xy");
+    for (const char* name : {"auto", "x", "xy"})
+        EXPECT_STREQ(to_string(parse_axes(name)), name);
+    try {
+        parse_axes("yx");
+        FAIL() << "no exception";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_STREQ(e.what(), "unknown axes 'yx' (auto, x, xy)");
+    }
 }
 
 } // namespace

@@ -5,6 +5,7 @@
 
 #include <fpp/drivers/device_error.hpp>
 #include <fpp/drivers/gige_frame_ids.hpp>
+#include <fpp/enum_names.hpp>
 #include <fpp/error.hpp>
 
 #include "glib_handles.hpp"
@@ -87,27 +88,19 @@ std::int64_t realtime_to_monotonic_ns(std::uint64_t realtime_ns) {
     return static_cast<std::int64_t>(realtime_ns) - offset;
 }
 
+constexpr EnumName<ArvBufferStatus> kBufferStatusTexts[] = {
+    {ARV_BUFFER_STATUS_SUCCESS, "complete"},
+    {ARV_BUFFER_STATUS_CLEARED, "cleared"},
+    {ARV_BUFFER_STATUS_TIMEOUT, "timed out while being received"},
+    {ARV_BUFFER_STATUS_MISSING_PACKETS, "missing packets"},
+    {ARV_BUFFER_STATUS_WRONG_PACKET_ID, "wrong packet id"},
+    {ARV_BUFFER_STATUS_SIZE_MISMATCH, "larger than the buffer"},
+    {ARV_BUFFER_STATUS_FILLING, "still filling"},
+    {ARV_BUFFER_STATUS_ABORTED, "aborted"},
+};
+
 const char* buffer_status_text(ArvBufferStatus status) {
-    switch (status) {
-    case ARV_BUFFER_STATUS_SUCCESS:
-        return "complete";
-    case ARV_BUFFER_STATUS_CLEARED:
-        return "cleared";
-    case ARV_BUFFER_STATUS_TIMEOUT:
-        return "timed out while being received";
-    case ARV_BUFFER_STATUS_MISSING_PACKETS:
-        return "missing packets";
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
-        return "wrong packet id";
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
-        return "larger than the buffer";
-    case ARV_BUFFER_STATUS_FILLING:
-        return "still filling";
-    case ARV_BUFFER_STATUS_ABORTED:
-        return "aborted";
-    default:
-        return "failed";
-    }
+    return name_of(kBufferStatusTexts, status, "failed");
 }
 
 // The buffer taken from the stream; goes back to it when the lease ends.

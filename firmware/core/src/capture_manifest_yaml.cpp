@@ -46,11 +46,9 @@ public:
 
     Axis axis(const YAML::Node& node, const std::string& field) const {
         const std::string text = yaml_.string_value(node, field);
-        if (text == "x")
-            return Axis::x;
-        if (text == "y")
-            return Axis::y;
-        yaml_.fail(node, field, "unknown axis '" + text + "' (x or y)");
+        if (const auto a = value_of(kAxisNames, text))
+            return *a;
+        yaml_.fail(node, field, unknown_name_message(kAxisNames, "axis", text, " or "));
     }
 
     PatternBlock block(const YAML::Node& node, const std::string& field) {
@@ -239,15 +237,11 @@ private:
         }
         if (auto v = optional(node, field, "shifting"); v.IsDefined()) {
             const std::string text = yaml_.string_value(v, child(field, "shifting"));
-            if (text == "standard") {
-                b.shifting = PhaseShifting::standard;
-            } else if (text == "two_plus_one") {
-                b.shifting = PhaseShifting::two_plus_one;
-            } else if (text == "modulated") {
-                b.shifting = PhaseShifting::modulated;
+            if (const auto shifting = value_of(kPhaseShiftingNames, text)) {
+                b.shifting = *shifting;
             } else {
                 yaml_.fail(v, child(field, "shifting"),
-                           "unknown shifting '" + text + "' (standard, two_plus_one, modulated)");
+                           unknown_name_message(kPhaseShiftingNames, "shifting", text));
             }
         }
         if (b.shifting == PhaseShifting::two_plus_one && !node["steps"].IsDefined()) {
@@ -323,12 +317,11 @@ private:
         }
         if (auto v = optional(node, field, "code"); v.IsDefined()) {
             const std::string text = yaml_.string_value(v, child(field, "code"));
-            if (text == "gray") {
-                b.code = CodeKind::gray;
-            } else if (text == "binary") {
-                b.code = CodeKind::binary;
+            if (const auto code = value_of(kCodeKindNames, text)) {
+                b.code = *code;
             } else {
-                yaml_.fail(v, child(field, "code"), "unknown code '" + text + "' (gray, binary)");
+                yaml_.fail(v, child(field, "code"),
+                           unknown_name_message(kCodeKindNames, "code", text));
             }
         }
         if (auto v = optional(node, field, "levels"); v.IsDefined()) {
@@ -336,13 +329,11 @@ private:
         }
         if (auto v = optional(node, field, "order"); v.IsDefined()) {
             const std::string text = yaml_.string_value(v, child(field, "order"));
-            if (text == "msb_first") {
-                b.order = DigitOrder::msb_first;
-            } else if (text == "lsb_first") {
-                b.order = DigitOrder::lsb_first;
+            if (const auto order = value_of(kDigitOrderNames, text)) {
+                b.order = *order;
             } else {
                 yaml_.fail(v, child(field, "order"),
-                           "unknown order '" + text + "' (msb_first, lsb_first)");
+                           unknown_name_message(kDigitOrderNames, "order", text));
             }
         }
         const YAML::Node offset = optional(node, field, "offset");
@@ -426,9 +417,9 @@ std::string block_yaml(const PatternBlock& block, bool v2) {
         line("complementary", g->complementary ? "true" : "false");
         line("inverse", g->inverse ? "true" : "false");
         if (v2) {
-            line("code", g->code == CodeKind::gray ? "gray" : "binary");
+            line("code", name_of(kCodeKindNames, g->code, "binary"));
             line("levels", std::to_string(g->levels));
-            line("order", g->order == DigitOrder::msb_first ? "msb_first" : "lsb_first");
+            line("order", name_of(kDigitOrderNames, g->order, "lsb_first"));
             line("offset", format_real(g->offset));
             if (g->wrap)
                 line("wrap", "true");

@@ -155,15 +155,7 @@ void set_bits_in_use(Set& set, const std::vector<int>& largest,
 // ---------------------------------------------------------------------------
 
 const char* to_string(BitsInUseSource source) {
-    switch (source) {
-    case BitsInUseSource::declared:
-        return "declared";
-    case BitsInUseSource::found:
-        return "found";
-    case BitsInUseSource::container:
-        break;
-    }
-    return "container";
+    return name_of(kBitsInUseSourceNames, source, "container");
 }
 
 void validate_manifest(const CaptureManifest& manifest, const std::filesystem::path& origin) {

@@ -324,25 +324,11 @@ TableInfo decode_header(const fs::path& path, const unsigned char* b, std::uint3
 } // namespace
 
 const char* to_string(TableModel model) {
-    switch (model) {
-    case TableModel::polynomial:
-        return "polynomial";
-    case TableModel::ray:
-        return "ray";
-    case TableModel::rational:
-        return "rational";
-    }
-    return "unknown";
+    return name_of(kTableModelNames, model, "unknown");
 }
 
 TableModel parse_table_model(const std::string& name) {
-    if (name == "polynomial")
-        return TableModel::polynomial;
-    if (name == "ray")
-        return TableModel::ray;
-    if (name == "rational")
-        return TableModel::rational;
-    throw std::invalid_argument("unknown table model '" + name + "' (polynomial, ray or rational)");
+    return parse_name(kTableModelNames, "table model", name, " or ");
 }
 
 int table_planes(TableModel model) {

@@ -202,7 +202,7 @@ std::string code_name(const GrayBlock& b) {
         name += "inverse-";
     if (b.complementary)
         name += "complementary-";
-    name += b.code == CodeKind::binary ? "binary" : "gray";
+    name += name_of(kCodeKindNames, b.code, "gray");
     return name;
 }
 

@@ -12,15 +12,7 @@
 namespace fpp {
 
 const char* to_string(FrameFileFormat format) {
-    switch (format) {
-    case FrameFileFormat::tiff:
-        return "TIFF";
-    case FrameFileFormat::bmp:
-        return "BMP";
-    case FrameFileFormat::png:
-        break;
-    }
-    return "PNG";
+    return name_of(kFrameFileFormatNames, format, "PNG");
 }
 
 FrameFileFormat frame_file_format(const std::filesystem::path& path) {

@@ -1,5 +1,6 @@
 #include "fpp/yaml_fields.hpp"
 
+#include "fpp/enum_names.hpp"
 #include "fpp/error.hpp"
 
 #include <algorithm>
@@ -18,20 +19,15 @@ namespace fpp::yaml_fields {
 
 namespace {
 
+constexpr EnumName<YAML::NodeType::value> kNodeTypeTexts[] = {
+    {YAML::NodeType::Null, "nothing (null)"},
+    {YAML::NodeType::Scalar, "a scalar"},
+    {YAML::NodeType::Sequence, "a list"},
+    {YAML::NodeType::Map, "a map"},
+};
+
 const char* describe_type(const YAML::Node& node) {
-    switch (node.Type()) {
-    case YAML::NodeType::Null:
-        return "nothing (null)";
-    case YAML::NodeType::Scalar:
-        return "a scalar";
-    case YAML::NodeType::Sequence:
-        return "a list";
-    case YAML::NodeType::Map:
-        return "a map";
-    case YAML::NodeType::Undefined:
-        break;
-    }
-    return "nothing";
+    return name_of(kNodeTypeTexts, node.Type(), "nothing");
 }
 
 std::string lower(std::string s) {

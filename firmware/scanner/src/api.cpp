@@ -98,11 +98,9 @@ void expect_keys(const json& body, std::initializer_list<const char*> allowed) {
 }
 
 ScanMode mode_of(const std::string& text) {
-    if (text == "scan")
-        return ScanMode::scan;
-    if (text == "capture")
-        return ScanMode::capture;
-    throw ApiError(400, "mode: must be scan or capture");
+    if (const auto mode = value_of(kScanModeNames, text))
+        return *mode;
+    throw ApiError(400, "mode: must be " + names_list(kScanModeNames, " or "));
 }
 
 // When a session was made: its board.yaml is written then, and only then.

@@ -17,7 +17,7 @@ json text_or_null(const std::string& s) {
 }
 
 const char* mode_name(ScanMode mode) {
-    return mode == ScanMode::scan ? "scan" : "capture";
+    return name_of(kScanModeNames, mode, "capture");
 }
 
 json last_scan(const std::optional<ScanEnd>& s) {

@@ -139,12 +139,11 @@ private:
                        "trigger_source", "packet_size", "buffer_count", "frame_timeout_ms",
                        "noise"});
         const std::string driver = text(n, "camera", "driver");
-        if (driver == "sim")
-            c.driver = CameraDriver::sim;
-        else if (driver == "aravis")
-            c.driver = CameraDriver::aravis;
+        if (const auto d = value_of(kCameraDriverNames, driver))
+            c.driver = *d;
         else
-            r_.fail(n["driver"], "camera.driver", "must be sim or aravis");
+            r_.fail(n["driver"], "camera.driver",
+                    "must be " + names_list(kCameraDriverNames, " or "));
         c.device = text(n, "camera", "device");
         auto& s = c.settings;
         s.pixel_format = text(n, "camera", "pixel_format");
@@ -156,12 +155,11 @@ private:
         if (!(s.exposure_us >= 1.0 && s.exposure_us <= 1e6))
             r_.fail(n["exposure_us"], "camera.exposure_us", "must be in 1..1000000");
         const std::string trigger = text(n, "camera", "trigger");
-        if (trigger == "line")
-            s.trigger = drivers::TriggerMode::line;
-        else if (trigger == "software")
-            s.trigger = drivers::TriggerMode::software;
+        if (const auto t = value_of(drivers::kTriggerModeNames, trigger))
+            s.trigger = *t;
         else
-            r_.fail(n["trigger"], "camera.trigger", "must be line or software");
+            r_.fail(n["trigger"], "camera.trigger",
+                    "must be " + names_list(drivers::kTriggerModeNames, " or "));
         s.trigger_source = non_empty(n, "camera", "trigger_source");
         s.packet_size = int_in(n, "camera", "packet_size", 0, 16384);
         s.buffer_count = int_in(n, "camera", "buffer_count", 2, 64);

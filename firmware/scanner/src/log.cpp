@@ -1,23 +1,22 @@
 #include "fpp/scanner/log.hpp"
 
+#include "fpp/enum_names.hpp"
+
 #include <cstdio>
 #include <cstdlib>
 
 namespace fpp::scanner {
 
 namespace {
+constexpr EnumName<LogLevel> kLogLevelNames[] = {
+    {LogLevel::error, "error"},
+    {LogLevel::warning, "warning"},
+    {LogLevel::info, "info"},
+    {LogLevel::debug, "debug"},
+};
+
 const char* level_name(LogLevel level) {
-    switch (level) {
-    case LogLevel::error:
-        return "error";
-    case LogLevel::warning:
-        return "warning";
-    case LogLevel::info:
-        return "info";
-    case LogLevel::debug:
-        return "debug";
-    }
-    return "info";
+    return name_of(kLogLevelNames, level, "info");
 }
 } // namespace
 

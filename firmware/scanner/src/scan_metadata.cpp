@@ -70,14 +70,14 @@ std::string scan_json(const ScanMetadata& m) {
     nlohmann::ordered_json j;
     j["format"] = "fpp-scan/1";
     j["board"] = m.board.name;
-    j["mode"] = m.mode == ScanMode::scan ? "scan" : "capture";
+    j["mode"] = name_of(kScanModeNames, m.mode, "capture");
     j["started_utc"] = m.started_utc;
     j["camera"] = {{"width", m.camera.width},
                    {"height", m.camera.height},
                    {"bit_depth", m.camera_bit_depth},
                    {"pixel_format", s.pixel_format},
                    {"exposure_us", m.settings.exposure_us},
-                   {"trigger", s.trigger == drivers::TriggerMode::line ? "line" : "software"}};
+                   {"trigger", name_of(drivers::kTriggerModeNames, s.trigger, "software")}};
     j["projector"] = {{"width", m.projector.width}, {"height", m.projector.height}};
     j["sequence"] = m.board.sequence_name.empty() ? "blocks" : m.board.sequence_name;
     j["frames"] = m.outcome.frames;

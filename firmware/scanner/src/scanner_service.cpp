@@ -322,15 +322,7 @@ void ScannerService::failed(const std::string& reason) {
 }
 
 const char* to_string(ScannerState state) {
-    switch (state) {
-    case ScannerState::idle:
-        return "idle";
-    case ScannerState::scanning:
-        return "scanning";
-    case ScannerState::error:
-        return "error";
-    }
-    return "?";
+    return name_of(kScannerStateNames, state);
 }
 
 bool ScannerService::set_state(ScannerState state, const std::string& error) {

@@ -5,6 +5,7 @@
 #include "fpp/scanner/hardware_board.hpp"
 
 #include "fpp/atomic_file.hpp"
+#include "fpp/enum_names.hpp"
 #include "fpp/error.hpp"
 #include "fpp/sim/sim_clock.hpp"
 #include "fpp/simulator/rig.hpp"
@@ -28,13 +29,11 @@ sim::SessionOptions parse_session_scene(const std::string& text) {
     const auto colon = rest.find(':');
     const std::string kind = rest.substr(0, colon);
     sim::SessionOptions o;
-    if (kind == "checkerboard")
-        o.kind = sim::SessionKind::checkerboard;
-    else if (kind == "plane")
-        o.kind = sim::SessionKind::plane;
+    if (const auto k = value_of(sim::kSessionKindNames, kind))
+        o.kind = *k;
     else
-        throw std::invalid_argument("session scene '" + text +
-                                    "': the board must be checkerboard or plane");
+        throw std::invalid_argument("session scene '" + text + "': the board must be " +
+                                    names_list(sim::kSessionKindNames, " or "));
     int poses = 0;
     const std::string count = colon == std::string::npos ? "" : rest.substr(colon + 1);
     const auto [end, ec] = std::from_chars(count.data(), count.data() + count.size(), poses);

@@ -2,6 +2,7 @@
 
 #include "fpp/calib/artefact.hpp"
 
+#include "fpp/enum_names.hpp"
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"
 
@@ -37,15 +38,17 @@ double bounded(const Reader& in, const YAML::Node& node, const std::string& fiel
     return v;
 }
 
+constexpr EnumName<ArtefactKind> kArtefactKindNames[] = {
+    {ArtefactKind::ball_bar, "ball-bar"},
+    {ArtefactKind::sphere, "sphere"},
+    {ArtefactKind::plane, "plane"},
+};
+
 ArtefactKind parse_kind(const Reader& in, const YAML::Node& node) {
     const std::string kind = in.string_value(node, "kind");
-    if (kind == "ball-bar")
-        return ArtefactKind::ball_bar;
-    if (kind == "sphere")
-        return ArtefactKind::sphere;
-    if (kind == "plane")
-        return ArtefactKind::plane;
-    in.fail(node, "kind", "unknown kind '" + kind + "' (ball-bar, sphere, plane)");
+    if (const auto k = value_of(kArtefactKindNames, kind))
+        return *k;
+    in.fail(node, "kind", unknown_name_message(kArtefactKindNames, "kind", kind));
 }
 
 void read_spheres(const Reader& in, const YAML::Node& root, Artefact& a) {
@@ -88,15 +91,7 @@ void read_plane(const Reader& in, const YAML::Node& root, Artefact& a) {
 } // namespace
 
 const char* to_string(ArtefactKind kind) {
-    switch (kind) {
-    case ArtefactKind::ball_bar:
-        return "ball-bar";
-    case ArtefactKind::sphere:
-        return "sphere";
-    case ArtefactKind::plane:
-        return "plane";
-    }
-    return "?";
+    return name_of(kArtefactKindNames, kind);
 }
 
 Artefact parse_artefact(const std::string& text, const std::filesystem::path& origin) {

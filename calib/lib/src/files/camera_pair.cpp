@@ -8,6 +8,7 @@
 #include "calibration_reader.hpp"
 #include "calibration_text.hpp"
 
+#include "fpp/enum_names.hpp"
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"
 
@@ -40,31 +41,19 @@ std::string CameraPairCalibration::summary() const {
            "), baseline " + baseline_text;
 }
 
+constexpr EnumName<CameraPairFormat> kCameraPairFormatNames[] = {
+    {CameraPairFormat::automatic, "auto"},
+    {CameraPairFormat::opencv_stereo, "opencv-stereo"},
+    {CameraPairFormat::bouguet, "bouguet"},
+    {CameraPairFormat::matlab, "matlab"},
+};
+
 CameraPairFormat parse_camera_pair_format(const std::string& name) {
-    if (name == "auto")
-        return CameraPairFormat::automatic;
-    if (name == "opencv-stereo")
-        return CameraPairFormat::opencv_stereo;
-    if (name == "bouguet")
-        return CameraPairFormat::bouguet;
-    if (name == "matlab")
-        return CameraPairFormat::matlab;
-    throw std::invalid_argument("unknown camera-pair format '" + name +
-                                "' (auto, opencv-stereo, bouguet, matlab)");
+    return parse_name(kCameraPairFormatNames, "camera-pair format", name);
 }
 
 const char* to_string(CameraPairFormat format) {
-    switch (format) {
-    case CameraPairFormat::automatic:
-        return "auto";
-    case CameraPairFormat::opencv_stereo:
-        return "opencv-stereo";
-    case CameraPairFormat::bouguet:
-        return "bouguet";
-    case CameraPairFormat::matlab:
-        return "matlab";
-    }
-    return "?";
+    return name_of(kCameraPairFormatNames, format);
 }
 
 namespace {

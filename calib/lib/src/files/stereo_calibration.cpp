@@ -6,6 +6,7 @@
 #include "calibration_reader.hpp"
 
 #include "fpp/atomic_file.hpp"
+#include "fpp/enum_names.hpp"
 #include "fpp/error.hpp"
 #include "fpp/yaml_fields.hpp"
 
@@ -51,44 +52,22 @@ CameraPairFileError::CameraPairFileError(const fs::path& file, CameraPairCalibra
                      "file), not a camera-projector table (the projector is not calibrated)"),
       pair(std::move(pair_)) {}
 
+constexpr EnumName<CalibrationFormat> kCalibrationFormatNames[] = {
+    {CalibrationFormat::automatic, "auto"},
+    {CalibrationFormat::fpp, "fpp"},
+    {CalibrationFormat::slstudio, "slstudio"},
+    {CalibrationFormat::slmaster, "slmaster"},
+    {CalibrationFormat::opencv_stereo, "opencv-stereo"},
+    {CalibrationFormat::bouguet, "bouguet"},
+    {CalibrationFormat::matlab, "matlab"},
+};
+
 CalibrationFormat parse_calibration_format(const std::string& name) {
-    if (name == "auto")
-        return CalibrationFormat::automatic;
-    if (name == "fpp")
-        return CalibrationFormat::fpp;
-    if (name == "slstudio")
-        return CalibrationFormat::slstudio;
-    if (name == "slmaster")
-        return CalibrationFormat::slmaster;
-    if (name == "opencv-stereo")
-        return CalibrationFormat::opencv_stereo;
-    if (name == "bouguet")
-        return CalibrationFormat::bouguet;
-    if (name == "matlab")
-        return CalibrationFormat::matlab;
-    throw std::invalid_argument("unknown calibration format '" + name +
-                                "' (auto, fpp, slstudio, slmaster, opencv-stereo, bouguet, "
-                                "matlab)");
+    return parse_name(kCalibrationFormatNames, "calibration format", name);
 }
 
 const char* to_string(CalibrationFormat format) {
-    switch (format) {
-    case CalibrationFormat::automatic:
-        return "auto";
-    case CalibrationFormat::fpp:
-        return "fpp";
-    case CalibrationFormat::slstudio:
-        return "slstudio";
-    case CalibrationFormat::slmaster:
-        return "slmaster";
-    case CalibrationFormat::opencv_stereo:
-        return "opencv-stereo";
-    case CalibrationFormat::bouguet:
-        return "bouguet";
-    case CalibrationFormat::matlab:
-        return "matlab";
-    }
-    return "?";
+    return name_of(kCalibrationFormatNames, format);
 }
 
 namespace {

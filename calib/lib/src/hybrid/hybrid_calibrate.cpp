@@ -5,6 +5,7 @@
 
 #include "fpp/calib/session_folder.hpp"
 #include "fpp/capture_set.hpp"
+#include "fpp/enum_names.hpp"
 #include "fpp/error.hpp"
 #include "fpp/parallel.hpp"
 #include "fpp/point_cloud.hpp"
@@ -91,24 +92,18 @@ float percentile(std::vector<float> values, double q) {
 
 } // namespace
 
+constexpr EnumName<HybridSamples> kHybridSamplesNames[] = {
+    {HybridSamples::boards_and_model, "boards+model"},
+    {HybridSamples::boards, "boards"},
+    {HybridSamples::model, "model"},
+};
+
 const char* to_string(HybridSamples samples) {
-    switch (samples) {
-    case HybridSamples::boards_and_model:
-        return "boards+model";
-    case HybridSamples::boards:
-        return "boards";
-    case HybridSamples::model:
-        return "model";
-    }
-    return "?";
+    return name_of(kHybridSamplesNames, samples);
 }
 
 HybridSamples parse_hybrid_samples(const std::string& name) {
-    for (const HybridSamples s :
-         {HybridSamples::boards_and_model, HybridSamples::boards, HybridSamples::model})
-        if (name == to_string(s))
-            return s;
-    throw std::invalid_argument("unknown samples '" + name + "' (boards+model, boards, model)");
+    return parse_name(kHybridSamplesNames, "samples", name);
 }
 
 void HybridOptions::validate() const {

@@ -5,6 +5,7 @@
 
 #include "fpp/calib/capture_import.hpp"
 
+#include "fpp/enum_names.hpp"
 #include "fpp/error.hpp"
 
 #include <cmath>
@@ -16,26 +17,18 @@ namespace fpp::calib {
 
 namespace fs = std::filesystem;
 
+constexpr EnumName<ImportTool> kImportToolNames[] = {
+    {ImportTool::slstudio, "slstudio"},
+    {ImportTool::slmaster, "slmaster"},
+    {ImportTool::opencv, "opencv"},
+};
+
 ImportTool parse_import_tool(const std::string& name) {
-    if (name == "slstudio")
-        return ImportTool::slstudio;
-    if (name == "slmaster")
-        return ImportTool::slmaster;
-    if (name == "opencv")
-        return ImportTool::opencv;
-    throw std::invalid_argument("unknown tool '" + name + "' (slstudio, slmaster, opencv)");
+    return parse_name(kImportToolNames, "tool", name);
 }
 
 const char* to_string(ImportTool tool) {
-    switch (tool) {
-    case ImportTool::slstudio:
-        return "slstudio";
-    case ImportTool::slmaster:
-        return "slmaster";
-    case ImportTool::opencv:
-        return "opencv";
-    }
-    return "?";
+    return name_of(kImportToolNames, tool);
 }
 
 namespace {

@@ -3,6 +3,7 @@
 
 #include "fpp/calib/sv_reconstruct.hpp"
 
+#include "fpp/enum_names.hpp"
 #include "fpp/parallel.hpp"
 
 #include <algorithm>
@@ -12,26 +13,18 @@
 
 namespace fpp::calib {
 
+constexpr EnumName<ReconstructAxes> kReconstructAxesNames[] = {
+    {ReconstructAxes::automatic, "auto"},
+    {ReconstructAxes::x, "x"},
+    {ReconstructAxes::xy, "xy"},
+};
+
 ReconstructAxes parse_axes(const std::string& name) {
-    if (name == "auto")
-        return ReconstructAxes::automatic;
-    if (name == "x")
-        return ReconstructAxes::x;
-    if (name == "xy")
-        return ReconstructAxes::xy;
-    throw std::invalid_argument("unknown axes '" + name + "' (auto, x, xy)");
+    return parse_name(kReconstructAxesNames, "axes", name);
 }
 
 const char* to_string(ReconstructAxes axes) {
-    switch (axes) {
-    case ReconstructAxes::automatic:
-        return "auto";
-    case ReconstructAxes::x:
-        return "x";
-    case ReconstructAxes::xy:
-        return "xy";
-    }
-    return "?";
+    return name_of(kReconstructAxesNames, axes);
 }
 
 ReconstructAxes resolve_axes(const DecodeResult& decoded, ReconstructAxes requested) {

@@ -2,6 +2,8 @@
 
 #include "fpp/calib/corner_projector.hpp"
 
+#include "fpp/enum_names.hpp"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
@@ -308,27 +310,18 @@ bool corner_homography(const DecodeResult& d, const Vec2& corner, const LocalFra
 
 } // namespace
 
+constexpr EnumName<CornerMethod> kCornerMethodNames[] = {
+    {CornerMethod::poly, "poly"},
+    {CornerMethod::bilinear, "bilinear"},
+    {CornerMethod::homography, "homography"},
+};
+
 const char* to_string(CornerMethod method) {
-    switch (method) {
-    case CornerMethod::poly:
-        return "poly";
-    case CornerMethod::bilinear:
-        return "bilinear";
-    case CornerMethod::homography:
-        return "homography";
-    }
-    return "?";
+    return name_of(kCornerMethodNames, method);
 }
 
 CornerMethod corner_method_from_string(const std::string& name) {
-    if (name == "poly")
-        return CornerMethod::poly;
-    if (name == "bilinear")
-        return CornerMethod::bilinear;
-    if (name == "homography")
-        return CornerMethod::homography;
-    throw std::invalid_argument("unknown corner method '" + name +
-                                "' (poly, bilinear, homography)");
+    return parse_name(kCornerMethodNames, "corner method", name);
 }
 
 double sample_bilinear(const Image<float>& image, double x, double y, int channel) {

@@ -15,6 +15,7 @@
 #include "fpp/calib/report_folder.hpp"
 #include "fpp/calib/stereo_session.hpp"
 #include "fpp/coefficient_table.hpp"
+#include "fpp/enum_names.hpp"
 #include "fpp/error.hpp"
 #include "fpp/fnv1a.hpp"
 #include "fpp/sequences.hpp"
@@ -346,17 +347,17 @@ PaperExperimentResult Run::finish() {
 
 } // namespace paper
 
+constexpr EnumName<SvCalibrationSource> kSvCalibrationSourceNames[] = {
+    {SvCalibrationSource::checkerboard, "checkerboard"},
+    {SvCalibrationSource::rig_model, "rig-model"},
+};
+
 const char* to_string(SvCalibrationSource source) {
-    return source == SvCalibrationSource::rig_model ? "rig-model" : "checkerboard";
+    return name_of(kSvCalibrationSourceNames, source, "checkerboard");
 }
 
 SvCalibrationSource parse_sv_calibration_source(const std::string& name) {
-    if (name == "checkerboard")
-        return SvCalibrationSource::checkerboard;
-    if (name == "rig-model")
-        return SvCalibrationSource::rig_model;
-    throw std::invalid_argument("unknown SV calibration source '" + name +
-                                "' (checkerboard, rig-model)");
+    return parse_name(kSvCalibrationSourceNames, "SV calibration source", name);
 }
 
 void PaperExperimentOptions::validate() const {

@@ -1,6 +1,7 @@
 // The paper experiments' targets and report/summary.md (see paper_run.hpp).
 
 #include "fpp/calib/plots.hpp"
+#include "fpp/enum_names.hpp"
 #include "paper_run.hpp"
 
 #include <cmath>
@@ -78,18 +79,15 @@ void add_absolute_errors(const Record& r, std::size_t m,
 
 } // namespace
 
+constexpr EnumName<Procedure> kProcedureNames[] = {
+    {Procedure::reference, "reference"},
+    {Procedure::paper, "paper"},
+    {Procedure::planes, "planes"},
+    {Procedure::boards, "boards"},
+};
+
 const char* procedure_title(Procedure p) {
-    switch (p) {
-    case Procedure::reference:
-        return "reference";
-    case Procedure::paper:
-        return "paper";
-    case Procedure::planes:
-        return "planes";
-    case Procedure::boards:
-        return "boards";
-    }
-    return "?";
+    return name_of(kProcedureNames, p);
 }
 
 std::string seconds_text(double s) {

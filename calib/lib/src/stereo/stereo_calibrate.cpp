@@ -6,6 +6,7 @@
 #include "bundle_adjustment.hpp"
 #include "stereo_stages.hpp"
 
+#include "fpp/enum_names.hpp"
 #include "fpp/parallel.hpp"
 
 #include <Eigen/Dense>
@@ -91,16 +92,17 @@ Vec3 rotation_to_vector(const Mat3& R) {
     return {w.x(), w.y(), w.z()};
 }
 
+constexpr EnumName<StereoProcedure> kStereoProcedureNames[] = {
+    {StereoProcedure::camera_first, "camera-first"},
+    {StereoProcedure::joint, "joint"},
+};
+
 const char* to_string(StereoProcedure procedure) {
-    return procedure == StereoProcedure::joint ? "joint" : "camera-first";
+    return name_of(kStereoProcedureNames, procedure, "camera-first");
 }
 
 StereoProcedure parse_stereo_procedure(const std::string& name) {
-    if (name == "camera-first")
-        return StereoProcedure::camera_first;
-    if (name == "joint")
-        return StereoProcedure::joint;
-    throw std::invalid_argument("unknown stereo procedure '" + name + "' (camera-first, joint)");
+    return parse_name(kStereoProcedureNames, "stereo procedure", name);
 }
 
 void StereoOptions::validate() const {

@@ -2,6 +2,8 @@
 
 #include "fpp/calib/session_check.hpp"
 
+#include "fpp/enum_names.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -25,16 +27,14 @@ void SessionCheckOptions::validate() const {
         bad("coverage_cells_across", "must be 1 to 256");
 }
 
+constexpr EnumName<SessionVerdict> kSessionVerdictNames[] = {
+    {SessionVerdict::enough, "enough"},
+    {SessionVerdict::not_yet, "not yet"},
+    {SessionVerdict::too_weak, "too weak"},
+};
+
 const char* to_string(SessionVerdict verdict) {
-    switch (verdict) {
-    case SessionVerdict::enough:
-        return "enough";
-    case SessionVerdict::not_yet:
-        return "not yet";
-    case SessionVerdict::too_weak:
-        return "too weak";
-    }
-    return "?";
+    return name_of(kSessionVerdictNames, verdict);
 }
 
 namespace {

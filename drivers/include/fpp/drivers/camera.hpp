@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 
+#include <fpp/enum_names.hpp>
 #include <fpp/image.hpp>
 
 namespace fpp::drivers {
@@ -17,6 +18,9 @@ enum class TriggerMode {
     software, // software_trigger() starts each exposure
     line,     // a hardware line (see CameraSettings::trigger_source) does
 };
+// The board file's and scan.json's names.
+inline constexpr EnumName<TriggerMode> kTriggerModeNames[] = {{TriggerMode::line, "line"},
+                                                              {TriggerMode::software, "software"}};
 
 struct CameraSettings {
     std::string pixel_format = "Mono8"; // GenICam PixelFormat name: Mono8, Mono10, Mono12, Mono16

@@ -5,6 +5,8 @@
 // levels. Errors at run time throw DeviceError.
 #include <chrono>
 
+#include <fpp/enum_names.hpp>
+
 namespace fpp::drivers {
 
 // Camera trigger output: a positive (logical) pulse starts an exposure.
@@ -42,6 +44,12 @@ protected:
 };
 
 enum class LedState { off, ready, scanning, error };
+inline constexpr EnumName<LedState> kLedStateNames[] = {
+    {LedState::off, "off"},
+    {LedState::ready, "ready"},
+    {LedState::scanning, "scanning"},
+    {LedState::error, "error"},
+};
 
 // The status LED. How a state looks (steady, blinking) is the board's business.
 // An implementation may keep set() from throwing (the hardware LED does: a
@@ -60,17 +68,7 @@ protected:
 
 // "off", "ready", "scanning", "error" (log lines).
 inline const char* to_string(LedState state) {
-    switch (state) {
-    case LedState::off:
-        return "off";
-    case LedState::ready:
-        return "ready";
-    case LedState::scanning:
-        return "scanning";
-    case LedState::error:
-        return "error";
-    }
-    return "?";
+    return name_of(kLedStateNames, state);
 }
 
 } // namespace fpp::drivers

@@ -22,6 +22,7 @@
 // absolute frame paths or paths with "..", duplicate frame names, an empty
 // sequence, and truth files listed but missing.
 
+#include "fpp/enum_names.hpp"
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
 
@@ -67,6 +68,11 @@ enum class BitsInUseSource {
     container, // 8-bit frames, no bit_depth: 8
     declared,  // `bit_depth` in capture.yaml (checked against every frame)
     found,     // 16-bit frames, no bit_depth: from the largest value of the frames read
+};
+inline constexpr EnumName<BitsInUseSource> kBitsInUseSourceNames[] = {
+    {BitsInUseSource::container, "container"},
+    {BitsInUseSource::declared, "declared"},
+    {BitsInUseSource::found, "found"},
 };
 const char* to_string(BitsInUseSource source); // "container", "declared", "found"
 

@@ -33,6 +33,7 @@
 // order, so a kernel streams a tile with unit-stride loads. The file layout
 // (header, per-tile CRC-32, alignment): firmware/core/formats/coefficient-table.md.
 
+#include "fpp/enum_names.hpp"
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
 
@@ -45,6 +46,11 @@
 namespace fpp {
 
 enum class TableModel : std::uint32_t { polynomial = 1, ray = 2, rational = 3 };
+inline constexpr EnumName<TableModel> kTableModelNames[] = {
+    {TableModel::polynomial, "polynomial"},
+    {TableModel::ray, "ray"},
+    {TableModel::rational, "rational"},
+};
 
 // "polynomial", "ray", "rational"; parse throws std::invalid_argument otherwise.
 const char* to_string(TableModel model);

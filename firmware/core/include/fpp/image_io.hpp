@@ -8,6 +8,7 @@
 // IoError for operating-system failures (permission, full disk) and
 // std::invalid_argument for an image they cannot represent.
 
+#include "fpp/enum_names.hpp"
 #include "fpp/image.hpp"
 
 #include <cstdint>
@@ -30,6 +31,11 @@ PngInfo read_png_info(const std::filesystem::path& path);
 // Camera frames: 8- or 16-bit single-channel grey images in any format a
 // capture set allows.
 enum class FrameFileFormat { png, tiff, bmp };
+inline constexpr EnumName<FrameFileFormat> kFrameFileFormatNames[] = {
+    {FrameFileFormat::png, "PNG"},
+    {FrameFileFormat::tiff, "TIFF"},
+    {FrameFileFormat::bmp, "BMP"},
+};
 const char* to_string(FrameFileFormat format); // "PNG", "TIFF", "BMP"
 struct FrameInfo {
     FrameFileFormat format = FrameFileFormat::png;

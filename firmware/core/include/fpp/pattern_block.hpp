@@ -4,6 +4,8 @@
 // capture order. Fields marked "v2" exist only in fpp-capture/2 files; their
 // defaults are what a version-1 file means.
 
+#include "fpp/enum_names.hpp"
+
 #include <string>
 #include <variant>
 #include <vector>
@@ -11,9 +13,10 @@
 namespace fpp {
 
 enum class Axis { x, y };
+inline constexpr EnumName<Axis> kAxisNames[] = {{Axis::x, "x"}, {Axis::y, "y"}};
 
 inline const char* to_string(Axis a) {
-    return a == Axis::x ? "x" : "y";
+    return name_of(kAxisNames, a, "y");
 }
 
 // Projector full on (texture image): 1 frame.
@@ -33,17 +36,15 @@ enum class PhaseShifting {
                   // (modulated phase shifting, Chen et al. 2008)
 };
 
+inline constexpr EnumName<PhaseShifting> kPhaseShiftingNames[] = {
+    {PhaseShifting::standard, "standard"},
+    {PhaseShifting::two_plus_one, "two_plus_one"},
+    {PhaseShifting::modulated, "modulated"},
+};
+
 // The spec's name: "standard", "two_plus_one", "modulated".
 inline const char* to_string(PhaseShifting s) {
-    switch (s) {
-    case PhaseShifting::two_plus_one:
-        return "two_plus_one";
-    case PhaseShifting::modulated:
-        return "modulated";
-    case PhaseShifting::standard:
-        break;
-    }
-    return "standard";
+    return name_of(kPhaseShiftingNames, s, "standard");
 }
 
 // Phase shifting: `steps` frames (standard),
@@ -78,6 +79,10 @@ struct MicroPhaseBlock {
 
 enum class CodeKind { gray, binary };           // v2: binary = natural binary
 enum class DigitOrder { msb_first, lsb_first }; // v2
+inline constexpr EnumName<CodeKind> kCodeKindNames[] = {{CodeKind::gray, "gray"},
+                                                        {CodeKind::binary, "binary"}};
+inline constexpr EnumName<DigitOrder> kDigitOrderNames[] = {{DigitOrder::msb_first, "msb_first"},
+                                                            {DigitOrder::lsb_first, "lsb_first"}};
 
 // Code planes (Gray by default), MSB first (see the spec for complementary,
 // inverse, and the v2 fields). A block whose period matches a phase block on

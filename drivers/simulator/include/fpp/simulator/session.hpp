@@ -15,6 +15,7 @@
 // faces it. Inner corner (i, j) is at ((i - (cols-1)/2) s, (j - (rows-1)/2) s, 0)
 // about the board centre (fpp::sim::Checkerboard).
 
+#include "fpp/enum_names.hpp"
 #include "fpp/image.hpp"
 #include "fpp/pattern_block.hpp"
 #include "fpp/simulator/rig.hpp"
@@ -29,6 +30,8 @@
 namespace fpp::sim {
 
 enum class SessionKind { checkerboard, plane };
+inline constexpr EnumName<SessionKind> kSessionKindNames[] = {
+    {SessionKind::checkerboard, "checkerboard"}, {SessionKind::plane, "plane"}};
 
 // The session checkerboard: 11 x 8 inner corners of 15 mm (12 x 9 squares,
 // 180 x 135 mm) printed in the middle of a flat white board with a 120 mm

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <fpp/drivers/camera.hpp>
+#include <fpp/enum_names.hpp>
 #include <fpp/pattern_block.hpp>
 #include <fpp/phase_noise.hpp>
 
@@ -40,6 +41,8 @@ struct GpioConfig {
 };
 
 enum class CameraDriver { sim, aravis };
+inline constexpr EnumName<CameraDriver> kCameraDriverNames[] = {{CameraDriver::sim, "sim"},
+                                                                {CameraDriver::aravis, "aravis"}};
 
 struct CameraConfig {
     CameraDriver driver = CameraDriver::sim;

@@ -20,6 +20,7 @@
 #include <fpp/drivers/clock.hpp>
 #include <fpp/drivers/display.hpp>
 #include <fpp/drivers/gpio.hpp>
+#include <fpp/enum_names.hpp>
 #include <fpp/exposure_fusion.hpp>
 #include <fpp/patterns.hpp>
 #include <fpp/phase_noise.hpp>
@@ -42,6 +43,9 @@ struct Devices {
 };
 
 enum class ScanMode { scan, capture }; // capture also writes the raw capture set
+// The API's and scan.json's names.
+inline constexpr EnumName<ScanMode> kScanModeNames[] = {{ScanMode::scan, "scan"},
+                                                        {ScanMode::capture, "capture"}};
 
 // A scan stopped by a stop request (SIGTERM).
 class ScanAborted : public std::runtime_error {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <fpp/coefficient_table.hpp>
+#include <fpp/enum_names.hpp>
 #include <fpp/scanner/scan_verdict.hpp>
 #include <fpp/scanner/scanner.hpp>
 #include <fpp/scanner/settings_file.hpp>
@@ -21,6 +22,11 @@ namespace fpp::scanner {
 // a camera that does not answer, a button whose GPIO chip went away; the
 // error's reason beside it).
 enum class ScannerState { idle, scanning, error };
+inline constexpr EnumName<ScannerState> kScannerStateNames[] = {
+    {ScannerState::idle, "idle"},
+    {ScannerState::scanning, "scanning"},
+    {ScannerState::error, "error"},
+};
 const char* to_string(ScannerState state); // "idle", "scanning", "error"
 
 struct StateNow {
