@@ -9,19 +9,13 @@
 #include "fpp/scanner/http_server.hpp"
 
 #include "fpp/error.hpp"
-#include "fpp/unique_fd.hpp"
+#include "loopback_http.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -51,33 +45,10 @@ std::string lower(std::string s) {
     return s;
 }
 
-// Sends `request` as it is on a connection of its own and reads the answer
-// to the end (the requests below say Connection: close).
+// The answer to `request`, sent as it is (raw_exchange: the requests below
+// say Connection: close), its head parsed and its body de-chunked.
 Reply exchange(int port, const std::string& request) {
-    UniqueFd fd(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0));
-    sockaddr_in at{};
-    at.sin_family = AF_INET;
-    at.sin_port = htons(static_cast<std::uint16_t>(port));
-    at.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (!fd.valid() || ::connect(fd.get(), reinterpret_cast<const sockaddr*>(&at), sizeof at) != 0)
-        throw IoError("127.0.0.1:" + std::to_string(port), std::strerror(errno));
-    for (std::size_t sent = 0; sent < request.size();) {
-        const ssize_t n =
-            ::send(fd.get(), request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
-        if (n <= 0)
-            break; // the server may answer and close before taking everything
-        sent += static_cast<std::size_t>(n);
-    }
-    std::string data;
-    char buffer[4096];
-    for (;;) {
-        const ssize_t n = ::recv(fd.get(), buffer, sizeof buffer, 0);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            break;
-        data.append(buffer, static_cast<std::size_t>(n));
-    }
+    const std::string data = fpp::test::raw_exchange(port, request);
     Reply r;
     const std::size_t head_end = data.find("\r\n\r\n");
     if (data.rfind("HTTP/1.1 ", 0) != 0 || head_end == std::string::npos)
